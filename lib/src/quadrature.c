@@ -3,6 +3,7 @@
 #include "varmesh/quadrature.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <string.h>
 
 /* tri: the element itself */
@@ -29,7 +30,8 @@ static const vm_qnode prism_corner[6] = {
 static vm_qnode hex_corner[8];
 static vm_qnode hex_geom[64];
 static vm_qnode prism_geom[12];
-static int tables_ready;
+/* set (release) only after the tables and the rule array are complete */
+static atomic_int tables_ready;
 
 /* hex vertex of unit-cube corner (i, j, k), VTK order */
 static int hexv(int i, int j, int k) {
@@ -90,18 +92,17 @@ static void build_tables(void) {
         q->tail[2] = (signed char)s;
         q->beta = (l1 == l2 ? 1.0 / 3 : 1.0 / 6) / 3;
       }
-  tables_ready = 1;
 }
 
 const vm_qrule *vm_qrule_get(int type, int rule) {
   static vm_qrule rules[VM_NTYPES][2];
   if (type < 0 || type >= VM_NTYPES) return NULL;
-  if (!tables_ready) {
+  if (!atomic_load_explicit(&tables_ready, memory_order_acquire)) {
 #ifdef _OPENMP
 #pragma omp critical(vm_qrule_init)
 #endif
     {
-      if (!tables_ready) {
+      if (!atomic_load_explicit(&tables_ready, memory_order_relaxed)) {
         build_tables();
         rules[VM_TRI][0] = (vm_qrule){VM_TRI, VM_RULE_CORNER, 2, 1, 0.5, tri_nodes};
         rules[VM_QUAD][0] = (vm_qrule){VM_QUAD, VM_RULE_CORNER, 2, 4, 1.0, quad_nodes};
@@ -114,6 +115,7 @@ const vm_qrule *vm_qrule_get(int type, int rule) {
         rules[VM_PRISM][1] =
             (vm_qrule){VM_PRISM, VM_RULE_GEOMETRIC, 3, 12, 0.5, prism_geom};
         rules[VM_HEX][1] = (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC, 3, 64, 1.0, hex_geom};
+        atomic_store_explicit(&tables_ready, 1, memory_order_release);
       }
     }
   }

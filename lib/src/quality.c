@@ -1,2 +1,256 @@
-/* lib/src/quality.c: quality figures. */
-typedef int vm_quality_placeholder;
+/* lib/src/quality.c: Table 1 quality figures (M, phi_min, psi_min) and
+ * scaled Jacobians over the quadrature nodes of every element. */
+#include "varmesh/quality.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double det3(const double *A) {
+  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+         A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
+static int inv3(const double *A, double *B) {
+  double d = det3(A);
+  if (d == 0) return 1;
+  B[0] = (A[4] * A[8] - A[5] * A[7]) / d;
+  B[1] = (A[2] * A[7] - A[1] * A[8]) / d;
+  B[2] = (A[1] * A[5] - A[2] * A[4]) / d;
+  B[3] = (A[5] * A[6] - A[3] * A[8]) / d;
+  B[4] = (A[0] * A[8] - A[2] * A[6]) / d;
+  B[5] = (A[2] * A[3] - A[0] * A[5]) / d;
+  B[6] = (A[3] * A[7] - A[4] * A[6]) / d;
+  B[7] = (A[1] * A[6] - A[0] * A[7]) / d;
+  B[8] = (A[0] * A[4] - A[1] * A[3]) / d;
+  return 0;
+}
+
+static void cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+/* Columns of a node's edge matrix in 3D from element coordinates x[i*3+r]. */
+static void node_cols(const vm_qnode *q, int d, const double *x, double col[3][3]) {
+  for (int k = 0; k < d; k++)
+    for (int r = 0; r < 3; r++) col[k][r] = x[q->head[k] * 3 + r] - x[q->tail[k] * 3 + r];
+}
+
+/* Per node: signed det of E, s = |E T^{-1}|^2, det of E T^{-1}, corner
+ * scaled-Jacobian value. `Tinv` maps target to reference edges; `nrm` is the
+ * reference normal for 2D elements (NULL for 3D). */
+typedef struct {
+  double det_c, s, sj_raw;
+} node_val;
+
+static node_val eval_node(const vm_qnode *q, int d, const double *x, const double *Tinv,
+                          const double *nrm) {
+  double col[3][3];
+  node_cols(q, d, x, col);
+  node_val r;
+  if (d == 3) {
+    double E[9];
+    for (int i = 0; i < 3; i++)
+      for (int k = 0; k < 3; k++) E[i * 3 + k] = col[k][i];
+    double C[9] = {0};
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 3; k++) C[i * 3 + j] += E[i * 3 + k] * Tinv[k * 3 + j];
+    double dE = det3(E);
+    r.det_c = det3(C);
+    r.s = 0;
+    for (int i = 0; i < 9; i++) r.s += C[i] * C[i];
+    double l = norm3(col[0]) * norm3(col[1]) * norm3(col[2]);
+    r.sj_raw = l > 0 ? dE / l : 0;
+  } else {
+    double c[3];
+    cross(col[0], col[1], c);
+    double dE = c[0] * nrm[0] + c[1] * nrm[1] + c[2] * nrm[2];
+    /* C = E T^{-1} in the tangent frame: s from the 3x2 product, det scaled */
+    double s = 0;
+    for (int rr = 0; rr < 3; rr++)
+      for (int j = 0; j < 2; j++) {
+        double v = col[0][rr] * Tinv[0 * 2 + j] + col[1][rr] * Tinv[1 * 2 + j];
+        s += v * v;
+      }
+    double dT = Tinv[0] * Tinv[3] - Tinv[1] * Tinv[2];
+    r.det_c = dE * dT;
+    r.s = s;
+    double l = norm3(col[0]) * norm3(col[1]);
+    r.sj_raw = l > 0 ? dE / l : 0;
+  }
+  return r;
+}
+
+/* T^{-1} for every node of a rule from reference coordinates `ref` (scaled
+ * by `h`); d x d row-major, Tinv[q*9 ..]. */
+static void rule_tinv(const vm_qrule *R, const double *ref, double h, double *Tinv) {
+  for (int n = 0; n < R->nnodes; n++) {
+    double col[3][3];
+    node_cols(&R->nodes[n], R->dim, ref, col);
+    if (R->dim == 3) {
+      double T[9];
+      for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) T[i * 3 + k] = h * col[k][i];
+      inv3(T, Tinv + 9 * n);
+    } else {
+      /* ideal 2D elements lie in the xy plane */
+      double a = h * col[0][0], b = h * col[1][0], c = h * col[0][1], dd = h * col[1][1];
+      double det = a * dd - b * c;
+      double *o = Tinv + 9 * n;
+      o[0] = dd / det;
+      o[1] = -b / det;
+      o[2] = -c / det;
+      o[3] = a / det;
+    }
+  }
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static void tq_init(vm_type_quality *t) {
+  memset(t, 0, sizeof *t);
+  t->phi_min = t->psi_min = t->sj_min = INFINITY;
+}
+
+int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q) {
+  vm_ctx *ctx = m->ctx;
+  vm_quality_opts o = {VM_RULE_CORNER, 0};
+  if (opts) o = *opts;
+  memset(q, 0, sizeof *q);
+  for (int t = 0; t < VM_NTYPES; t++) tq_init(&q->type[t]);
+  tq_init(&q->all);
+  q->min_det = INFINITY;
+  int64_t counts[VM_NTYPES];
+  q->top_dim = vm_mesh_count_types(m, counts);
+  const vm_field *tsz = vm_mesh_find_field(m, "target_size", VM_FIELD_ELEMENT);
+  if (tsz && tsz->type != VM_FIELD_F64) tsz = NULL;
+  int have_size = o.target_size > 0 || tsz;
+
+  /* per type: node rules, target inverse at unit size, ideal SJ normalizer */
+  double tinv[VM_NTYPES][64 * 9];
+  double sj_ideal[VM_NTYPES];
+  const vm_qrule *rules[VM_NTYPES], *corner[VM_NTYPES];
+  double tinv_c[VM_NTYPES][8 * 9];
+  for (int t = 0; t < VM_NTYPES; t++) {
+    double ref[VM_MAX_ELEM_VERTS * 3];
+    vm_elem_ideal(t, ref);
+    rules[t] = vm_qrule_get(t, o.rule);
+    corner[t] = vm_qrule_get(t, VM_RULE_CORNER);
+    rule_tinv(rules[t], ref, 1.0, tinv[t]);
+    rule_tinv(corner[t], ref, 1.0, tinv_c[t]);
+    static const double zn[3] = {0, 0, 1};
+    sj_ideal[t] = INFINITY;
+    for (int n = 0; n < corner[t]->nnodes; n++) {
+      node_val v = eval_node(&corner[t]->nodes[n], corner[t]->dim, ref, tinv_c[t] + 9 * n, zn);
+      if (v.sj_raw < sj_ideal[t]) sj_ideal[t] = v.sj_raw;
+    }
+  }
+
+  double *sj = vm_alloc_array(ctx, (size_t)(m->ne ? m->ne : 1), sizeof *sj);
+  if (!sj) return VM_ERR_NOMEM;
+  int64_t nsj = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int t = m->etype[e];
+    int d = vm_elem_dim(t);
+    if (d != q->top_dim) {
+      q->skipped++;
+      continue;
+    }
+    int k = vm_elem_nverts(t);
+    double x[VM_MAX_ELEM_VERTS * 3];
+    for (int i = 0; i < k; i++) {
+      const double *p = m->xyz + 3 * m->conn[m->eoff[e] + i];
+      x[3 * i] = p[0];
+      x[3 * i + 1] = p[1];
+      x[3 * i + 2] = m->dim == 2 ? 0 : p[2];
+    }
+    double nrm[3] = {0, 0, 1};
+    if (d == 2 && m->dim == 3) {
+      /* Newell normal */
+      nrm[0] = nrm[1] = nrm[2] = 0;
+      for (int i = 0; i < k; i++) {
+        const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % k);
+        nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+      }
+      double l = norm3(nrm);
+      if (l > 0)
+        for (int i = 0; i < 3; i++) nrm[i] /= l;
+    }
+    double h = o.target_size > 0 ? o.target_size : tsz ? ((double *)tsz->data)[e * tsz->ncomp] : 1;
+    double scale = pow(h, -d); /* det C at size h = det C at unit size / h^d */
+    double s_scale = 1.0 / (h * h);
+    vm_type_quality *tq = &q->type[t];
+    tq->count++;
+    int inv = 0;
+    const vm_qrule *R = rules[t];
+    for (int n = 0; n < R->nnodes; n++) {
+      node_val v = eval_node(&R->nodes[n], d, x, tinv[t] + 9 * n, nrm);
+      double detc = v.det_c * scale, s = v.s * s_scale;
+      tq->nodes++;
+      if (detc <= 0) {
+        tq->inverted_nodes++;
+        inv = 1;
+      }
+      double phi = s > 0 ? detc / (d == 3 ? pow(s / 3, 1.5) : s / 2) : -INFINITY;
+      if (phi < tq->phi_min) tq->phi_min = phi;
+      if (have_size) {
+        double psi = 2 * detc / (1 + detc * detc);
+        if (psi < tq->psi_min) tq->psi_min = psi;
+        if (detc < q->min_det) q->min_det = detc;
+      } else if (v.det_c < q->min_det) {
+        q->min_det = v.det_c;
+      }
+    }
+    double sjm = INFINITY;
+    const vm_qrule *Cr = corner[t];
+    for (int n = 0; n < Cr->nnodes; n++) {
+      node_val v = eval_node(&Cr->nodes[n], d, x, tinv_c[t] + 9 * n, nrm);
+      if (v.sj_raw < sjm) sjm = v.sj_raw;
+    }
+    sjm /= sj_ideal[t];
+    if (sjm > 1) sjm = 1; /* rounding above the ideal */
+    if (sjm < tq->sj_min) tq->sj_min = sjm;
+    sj[nsj++] = sjm;
+    if (inv) tq->inverted_elems++;
+  }
+  for (int t = 0; t < VM_NTYPES; t++) {
+    vm_type_quality *tq = &q->type[t];
+    if (!have_size) tq->psi_min = NAN;
+    q->all.count += tq->count;
+    q->all.nodes += tq->nodes;
+    q->all.inverted_nodes += tq->inverted_nodes;
+    q->all.inverted_elems += tq->inverted_elems;
+    if (tq->count) {
+      if (tq->phi_min < q->all.phi_min) q->all.phi_min = tq->phi_min;
+      if (have_size && tq->psi_min < q->all.psi_min) q->all.psi_min = tq->psi_min;
+      if (tq->sj_min < q->all.sj_min) q->all.sj_min = tq->sj_min;
+    }
+  }
+  if (!have_size) q->all.psi_min = NAN;
+  q->measured = nsj;
+  qsort(sj, (size_t)nsj, sizeof *sj, cmp_double);
+  if (nsj) {
+    q->sj_p01 = sj[(nsj - 1) / 100];
+    q->sj_p05 = sj[(nsj - 1) * 5 / 100];
+    q->sj_p25 = sj[(nsj - 1) / 4];
+    q->sj_p50 = sj[(nsj - 1) / 2];
+  }
+  for (int64_t i = 0; i < nsj; i++) {
+    int b = (int)floor((sj[i] + 1) / 2 * VM_QUALITY_NBINS);
+    if (b < 0) b = 0;
+    if (b >= VM_QUALITY_NBINS) b = VM_QUALITY_NBINS - 1;
+    q->sj_hist[b]++;
+  }
+  vm_free(ctx, sj);
+  return VM_OK;
+}

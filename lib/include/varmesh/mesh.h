@@ -16,7 +16,9 @@ extern "C" {
  *  QUAD 0-1-2-3 around;
  *  TET 0-1-2 base, 3 on the side where (1-0)x(2-0) points;
  *  PYRAMID 0-1-2-3 base, 4 apex on the side of (1-0)x(3-0);
- *  PRISM 0-1-2 bottom, 3-4-5 top above 0-1-2 (VTK: (1-0)x(2-0) points to the top);
+ *  PRISM 0-1-2 bottom, 3-4-5 top above 0-1-2, (1-0)x(2-0) pointing to the top
+ *    (Gmsh's prism and VTK's wedge as VTK computes it: its parametric
+ *    coordinates put 3-4-5 at +z; the vtkWedge header comment says otherwise);
  *  HEX 0-1-2-3 bottom, 4-5-6-7 top (VTK_HEXAHEDRON). */
 typedef enum {
   VM_TRI = 0,

@@ -1,0 +1,98 @@
+/* apps/cli.c: shared command-line plumbing for the vm-* programs. */
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "varmesh/surface_io.h"
+
+static void log_stderr(void *user, int level, const char *msg) {
+  const vm_cli *cli = user;
+  if (level == VM_LOG_ERROR) return; /* errors are printed by the caller, once */
+  if (cli->quiet && level >= VM_LOG_INFO) return;
+  if (level == VM_LOG_DEBUG && !cli->verbose) return;
+  fprintf(stderr, "%s: %s%s\n", cli->prog, level == VM_LOG_WARN ? "warning: " : "", msg);
+}
+
+void vm_cli_init(vm_cli *cli, const char *prog) {
+  memset(cli, 0, sizeof *cli);
+  cli->prog = prog;
+  if (vm_ctx_create(&cli->ctx) != VM_OK) {
+    fprintf(stderr, "%s: error: out of memory\n", prog);
+    exit(VM_EXIT_INPUT);
+  }
+  vm_ctx_set_log(cli->ctx, log_stderr, cli);
+  vm_surface_register_formats(cli->ctx);
+}
+
+void vm_cli_finish(vm_cli *cli) { vm_ctx_destroy(&cli->ctx); }
+
+void vm_cli_error(const vm_cli *cli, const char *fmt, ...) {
+  char buf[1200];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(buf, sizeof buf, fmt, ap);
+  va_end(ap);
+  fprintf(stderr, "%s: error: %s\n", cli->prog, buf);
+}
+
+int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...) {
+  char buf[1200];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(buf, sizeof buf, fmt, ap);
+  va_end(ap);
+  fprintf(stderr, "%s: error: %s (see %s --help)\n", cli->prog, buf, cli->prog);
+  return VM_EXIT_USAGE;
+}
+
+int vm_cli_double(const vm_cli *cli, const char *opt, const char *s, double lo, double hi,
+                  double *out) {
+  char *e;
+  errno = 0;
+  double x = s ? strtod(s, &e) : NAN;
+  if (!s || !*s || *e || errno || !(x >= lo && x <= hi)) {
+    vm_cli_usage_error(cli, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi,
+                       s ? s : "");
+    return 1;
+  }
+  *out = x;
+  return 0;
+}
+
+int vm_cli_int(const vm_cli *cli, const char *opt, const char *s, long lo, long hi, long *out) {
+  char *e;
+  errno = 0;
+  long x = s ? strtol(s, &e, 10) : 0;
+  if (!s || !*s || *e || errno || x < lo || x > hi) {
+    vm_cli_usage_error(cli, "%s expects an integer in [%ld, %ld], got '%s'", opt, lo, hi,
+                       s ? s : "");
+    return 1;
+  }
+  *out = x;
+  return 0;
+}
+
+void vm_json_double(FILE *f, double x) {
+  if (isfinite(x))
+    fprintf(f, "%.17g", x);
+  else
+    fputs("null", f);
+}
+
+void vm_json_string(FILE *f, const char *s) {
+  fputc('"', f);
+  for (; *s; s++) {
+    unsigned char c = (unsigned char)*s;
+    if (c == '"' || c == '\\')
+      fprintf(f, "\\%c", c);
+    else if (c < 0x20)
+      fprintf(f, "\\u%04x", c);
+    else
+      fputc(c, f);
+  }
+  fputc('"', f);
+}

@@ -1,0 +1,246 @@
+/* apps/vm-quality.c: judge a mesh: per element type and overall counts, M
+ * (inverted quadrature simplices), phi_min, psi_min, scaled Jacobians. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+#include "varmesh/io.h"
+#include "varmesh/quality.h"
+#include "varmesh/verify.h"
+
+static const char usage[] =
+    "usage: vm-quality [options] MESH\n"
+    "Quality of every element of the mesh's top dimension (docs/cli.md):\n"
+    "M = inverted quadrature simplices, phi = det C/(tr C^T C/d)^(d/2),\n"
+    "psi = 2 det C/(1 + det C^2) (needs a target size), scaled Jacobian.\n"
+    "  --rule corner|geometric   quadrature simplices to measure (default corner)\n"
+    "  --target-size H           ideal element edge length for psi\n"
+    "  --format F                input format (default: from the extension)\n"
+    "  --json                    machine-readable summary on stdout\n"
+    "  --require-valid           exit 3 if any quadrature simplex is inverted (M > 0)\n"
+    "  --min-sj X                exit 3 if the minimum scaled Jacobian is below X\n"
+    "  --verify                  exact checks (CGAL predicates), exit 3 on failure: every\n"
+    "                            quadrature simplex of --rule positively oriented; if there\n"
+    "                            are prisms, their outer (top) faces neither intersect\n"
+    "                            each other nor cross the wall (bottom faces)\n"
+    "  -q, --quiet               no warnings\n"
+    "  --help, --version\n"
+    "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n";
+
+static void print_text(const char *path, const vm_mesh *m, const vm_quality *q) {
+  printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path,
+         (long long)m->nv, (long long)q->measured, q->top_dim);
+  if (q->skipped) printf(", %lld lower-dimensional elements not measured", (long long)q->skipped);
+  printf("\n%-8s %10s %10s %10s %10s %12s %12s %10s\n", "type", "elements", "simplices", "M",
+         "inv.elems", "phi_min", "psi_min", "sj_min");
+  for (int t = 0; t <= VM_NTYPES; t++) {
+    const vm_type_quality *tq = t < VM_NTYPES ? &q->type[t] : &q->all;
+    if (t < VM_NTYPES && !tq->count) continue;
+    printf("%-8s %10lld %10lld %10lld %10lld %12.4e %12.4e %10.4f\n",
+           t < VM_NTYPES ? vm_elem_name(t) : "all", (long long)tq->count, (long long)tq->nodes,
+           (long long)tq->inverted_nodes, (long long)tq->inverted_elems, tq->phi_min,
+           tq->psi_min, tq->sj_min);
+  }
+  if (!q->measured) return;
+  printf("scaled Jacobian: min %.4f  p1 %.4f  p5 %.4f  p25 %.4f  median %.4f\n", q->all.sj_min,
+         q->sj_p01, q->sj_p05, q->sj_p25, q->sj_p50);
+  int64_t mx = 1;
+  for (int b = 0; b < VM_QUALITY_NBINS; b++)
+    if (q->sj_hist[b] > mx) mx = q->sj_hist[b];
+  for (int b = 0; b < VM_QUALITY_NBINS; b++) {
+    double lo = -1 + 2.0 * b / VM_QUALITY_NBINS, hi = lo + 2.0 / VM_QUALITY_NBINS;
+    int bar = (int)((q->sj_hist[b] * 50 + mx - 1) / mx);
+    printf("  [%5.2f,%5.2f) %10lld |", lo, hi, (long long)q->sj_hist[b]);
+    for (int i = 0; i < bar; i++) putchar('#');
+    putchar('\n');
+  }
+}
+
+static void json_tq(const vm_type_quality *tq) {
+  printf("{\"elements\": %lld, \"simplices\": %lld, \"M\": %lld, \"inverted_elements\": %lld, "
+         "\"phi_min\": ",
+         (long long)tq->count, (long long)tq->nodes, (long long)tq->inverted_nodes,
+         (long long)tq->inverted_elems);
+  vm_json_double(stdout, tq->phi_min);
+  printf(", \"psi_min\": ");
+  vm_json_double(stdout, tq->psi_min);
+  printf(", \"sj_min\": ");
+  vm_json_double(stdout, tq->sj_min);
+  printf("}");
+}
+
+static void print_json(const char *path, const vm_mesh *m, const vm_quality *q) {
+  printf("{\"file\": ");
+  vm_json_string(stdout, path);
+  printf(", \"vertices\": %lld, \"dimension\": %d, \"skipped\": %lld, \"types\": {",
+         (long long)m->nv, q->top_dim, (long long)q->skipped);
+  int first = 1;
+  for (int t = 0; t < VM_NTYPES; t++) {
+    if (!q->type[t].count) continue;
+    printf("%s\"%s\": ", first ? "" : ", ", vm_elem_name(t));
+    json_tq(&q->type[t]);
+    first = 0;
+  }
+  printf("}, \"all\": ");
+  json_tq(&q->all);
+  printf(", \"sj_percentiles\": {\"p1\": ");
+  vm_json_double(stdout, q->sj_p01);
+  printf(", \"p5\": ");
+  vm_json_double(stdout, q->sj_p05);
+  printf(", \"p25\": ");
+  vm_json_double(stdout, q->sj_p25);
+  printf(", \"p50\": ");
+  vm_json_double(stdout, q->sj_p50);
+  printf("}, \"sj_histogram\": [");
+  for (int b = 0; b < VM_QUALITY_NBINS; b++)
+    printf("%s%lld", b ? ", " : "", (long long)q->sj_hist[b]);
+  printf("]}\n");
+}
+
+/* --verify: exact orientation of every quadrature simplex, then the prism
+ * layer's outer faces. One line on stdout (text mode) when all is well, one
+ * line on stderr naming the first bad element otherwise. */
+static int verify_mesh(const vm_cli *cli, const char *path, const vm_mesh *m, int rule,
+                       int text) {
+  int64_t bn, be, first, ip, wc, fp[2], counts[VM_NTYPES];
+  const char *rname = rule == VM_RULE_GEOMETRIC ? "geometric" : "corner";
+  if (vm_verify_orientation(m, rule, &bn, &be, &first) < 0) {
+    vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+    return VM_EXIT_INPUT;
+  }
+  if (bn > 0) {
+    vm_cli_error(cli,
+                 "%s: verify: element %lld (%s) has a quadrature simplex (%s rule) that is not "
+                 "positively oriented; %lld such simplices in %lld elements (exact test)",
+                 path, (long long)first, vm_elem_name(m->etype[first]), rname, (long long)bn,
+                 (long long)be);
+    return VM_EXIT_CHECK;
+  }
+  vm_mesh_count_types(m, counts);
+  if (counts[VM_PRISM]) {
+    if (vm_verify_prism_layer(m, &ip, &wc, fp) < 0) {
+      vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+      return VM_EXIT_INPUT;
+    }
+    if (ip > 0 || wc > 0) {
+      vm_cli_error(cli,
+                   "%s: verify: prisms %lld and %lld: %s; %lld intersecting pairs of outer "
+                   "faces, %lld outer faces crossing the wall (exact test)",
+                   path, (long long)fp[0], (long long)fp[1],
+                   ip > 0 ? "outer faces intersect" : "an outer face crosses the wall",
+                   (long long)ip, (long long)wc);
+      return VM_EXIT_CHECK;
+    }
+  }
+  if (text)
+    printf("verify: every quadrature simplex (%s rule) positively oriented%s (exact)\n", rname,
+           counts[VM_PRISM] ? "; prism layer: outer faces intersect neither each other nor the "
+                              "wall"
+                            : "");
+  return VM_EXIT_OK;
+}
+
+int main(int argc, char **argv) {
+  vm_cli cli;
+  vm_cli_init(&cli, "vm-quality");
+  const char *path = NULL;
+  int json = 0, require_valid = 0, verify = 0, fin = VM_FMT_AUTO;
+  double min_sj = -INFINITY;
+  vm_quality_opts qo = {VM_RULE_CORNER, 0};
+  int rc = VM_EXIT_OK;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
+    if (!strcmp(a, "--help")) {
+      fputs(usage, stdout);
+      goto done;
+    } else if (!strcmp(a, "--version")) {
+      printf("vm-quality (varmesh) %s\n", vm_version());
+      goto done;
+    } else if (!strcmp(a, "--json")) {
+      json = 1;
+    } else if (!strcmp(a, "--require-valid")) {
+      require_valid = 1;
+    } else if (!strcmp(a, "--verify")) {
+      verify = 1;
+    } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+      cli.quiet = 1;
+    } else if (!strcmp(a, "--rule")) {
+      i++;
+      if (val && !strcmp(val, "corner"))
+        qo.rule = VM_RULE_CORNER;
+      else if (val && !strcmp(val, "geometric"))
+        qo.rule = VM_RULE_GEOMETRIC;
+      else {
+        rc = vm_cli_usage_error(&cli, "--rule expects corner or geometric");
+        goto done;
+      }
+    } else if (!strcmp(a, "--target-size")) {
+      i++;
+      if (vm_cli_double(&cli, a, val, 1e-300, 1e300, &qo.target_size)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+    } else if (!strcmp(a, "--min-sj")) {
+      i++;
+      if (vm_cli_double(&cli, a, val, -1, 1, &min_sj)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+    } else if (!strcmp(a, "--format")) {
+      i++;
+      fin = val ? vm_format_from_name(val) : VM_FMT_AUTO;
+      if (fin == VM_FMT_AUTO) {
+        rc = vm_cli_usage_error(&cli, "unknown format '%s'", val ? val : "");
+        goto done;
+      }
+    } else if (a[0] == '-' && a[1]) {
+      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
+      goto done;
+    } else if (!path) {
+      path = a;
+    } else {
+      rc = vm_cli_usage_error(&cli, "too many arguments");
+      goto done;
+    }
+  }
+  if (!path) {
+    rc = vm_cli_usage_error(&cli, "need a MESH file");
+    goto done;
+  }
+  vm_mesh *m = NULL;
+  if (vm_mesh_read(cli.ctx, path, fin, &m) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  vm_quality q;
+  if (vm_mesh_quality(m, &qo, &q) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+  } else {
+    if (json)
+      print_json(path, m, &q);
+    else
+      print_text(path, m, &q);
+    if (require_valid && q.all.inverted_nodes > 0) {
+      vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", path,
+                   (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);
+      rc = VM_EXIT_CHECK;
+    }
+    if (q.measured && q.all.sj_min < min_sj) {
+      vm_cli_error(&cli, "%s: minimum scaled Jacobian %.4f is below %.4f", path, q.all.sj_min,
+                   min_sj);
+      rc = VM_EXIT_CHECK;
+    }
+    if (verify) {
+      int vrc = verify_mesh(&cli, path, m, qo.rule, !json);
+      if (vrc != VM_EXIT_OK) rc = vrc;
+    }
+  }
+  vm_mesh_destroy(&m);
+done:
+  vm_cli_finish(&cli);
+  return rc;
+}

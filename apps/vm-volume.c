@@ -1,0 +1,288 @@
+/* apps/vm-volume.c: the volume stage: untangle and optimize a tet, hex,
+ * prism, pyramid or mixed mesh in place of its vertices, connectivity and
+ * boundary kept. */
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "varmesh/io.h"
+#include "varmesh/quality.h"
+#include "varmesh/topology.h"
+#include "varmesh/untangle.h"
+
+static const char usage[] =
+    "usage: vm-volume [options] IN OUT\n"
+    "Untangle (Section 5 of the paper) and optimize a volume mesh; fixed vertices\n"
+    "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
+    "never move. OUT is written in the format of its extension, else IN's.\n"
+    "  --untangle penalty|oneway|barrier   untangling method (default penalty, (35))\n"
+    "  --solver implicit|explicit          global solver (default implicit)\n"
+    "  --measure balanced|shape|shape-alt  optimization measure (default balanced)\n"
+    "  --theta T            volumetric weight of the balanced measure (default 0.8)\n"
+    "  --rule corner|geometric   quadrature (default corner; geometric: 64 per hex)\n"
+    "  --target-size H      ideal element edge length (default: total volume kept)\n"
+    "  --max-iter N         untangling iterations (default 20000)\n"
+    "  --opt-iter N         optimization iterations once valid (default 100)\n"
+    "  --qi-steps N         quasi-isometric continuation steps (default 0)\n"
+    "  --local-threshold N  untangle locally below N inverted simplices (default 100)\n"
+    "  --time-limit S       seconds for the whole run\n"
+    "  --threads N          OpenMP threads (results do not depend on it)\n"
+    "  --free-boundary      do not fix the boundary (only 'fixed' vertices stay)\n"
+    "  --format F           output format\n"
+    "  --binary             binary output where the format has both\n"
+    "  --progress-every N   a progress line every N iterations (default 10)\n"
+    "  --json               JSON summary on stdout\n"
+    "  -q, --quiet          no progress\n"
+    "  --help, --version\n"
+    "exit: 0 valid result; 1 bad input or I/O; 2 usage; 3 inverted elements remain\n"
+    "(the best mesh is still written); 4 interrupted (best valid-so-far mesh written;\n"
+    "a second interrupt exits at once without writing)\n";
+
+static volatile int interrupted;
+
+static void on_signal(int sig) {
+  (void)sig;
+  if (interrupted) _exit(128 + sig);
+  interrupted = 1;
+}
+
+typedef struct {
+  vm_cli *cli;
+  int every;
+  const char *last_phase;
+} progress_state;
+
+static void progress(void *user, const vm_volume_progress *p) {
+  progress_state *ps = user;
+  if (ps->cli->quiet) return;
+  int first = !ps->last_phase || strcmp(ps->last_phase, p->phase);
+  ps->last_phase = p->phase;
+  if (!first && p->iter % ps->every) return;
+  fprintf(stderr, "%-9s it %6d  F %.6e  M %8lld  min det %+.3e  %s %.2e  tau %.2e  pcg %4d  %7.2fs\n",
+          p->phase, p->iter, p->F, (long long)p->inverted, p->min_det,
+          strcmp(p->phase, "quasi-iso") ? "eps" : "t  ", p->eps, p->tau, p->pcg_iters,
+          p->elapsed);
+}
+
+static int pick(const char *v, const char *const *names, int n) {
+  for (int i = 0; v && i < n; i++)
+    if (!strcmp(v, names[i])) return i;
+  return -1;
+}
+
+int main(int argc, char **argv) {
+  vm_cli cli;
+  vm_cli_init(&cli, "vm-volume");
+  vm_volume_opts o = vm_volume_opts_default();
+  vm_write_opts wo = vm_write_opts_default();
+  const char *in = NULL, *out = NULL;
+  int json = 0, free_boundary = 0, fout = VM_FMT_AUTO;
+  long every = 10, lv;
+  int rc = VM_EXIT_OK;
+  vm_mesh *m = NULL;
+  static const char *const methods[] = {"penalty", "oneway", "barrier"};
+  static const char *const solvers[] = {"explicit", "implicit"};
+  static const char *const rules[] = {"corner", "geometric"};
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+    int k;
+    if (!strcmp(a, "--help")) {
+      fputs(usage, stdout);
+      goto done;
+    } else if (!strcmp(a, "--version")) {
+      printf("vm-volume (varmesh) %s\n", vm_version());
+      goto done;
+    } else if (!strcmp(a, "--json")) {
+      json = 1;
+    } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+      cli.quiet = 1;
+    } else if (!strcmp(a, "--free-boundary")) {
+      free_boundary = 1;
+    } else if (!strcmp(a, "--binary")) {
+      wo.binary = 1;
+    } else if (!strcmp(a, "--untangle")) {
+      i++;
+      if ((k = pick(val, methods, 3)) < 0) {
+        rc = vm_cli_usage_error(&cli, "--untangle expects penalty, oneway or barrier");
+        goto done;
+      }
+      o.method = (vm_untangle_method)k;
+    } else if (!strcmp(a, "--solver")) {
+      i++;
+      if ((k = pick(val, solvers, 2)) < 0) {
+        rc = vm_cli_usage_error(&cli, "--solver expects implicit or explicit");
+        goto done;
+      }
+      o.solver = (vm_minimizer_kind)k;
+    } else if (!strcmp(a, "--rule")) {
+      i++;
+      if ((k = pick(val, rules, 2)) < 0) {
+        rc = vm_cli_usage_error(&cli, "--rule expects corner or geometric");
+        goto done;
+      }
+      o.rule = (vm_rule)k;
+    } else if (!strcmp(a, "--measure")) {
+      i++;
+      const vm_measure_ops *ops = val ? vm_measure_by_name(val) : NULL;
+      if (!ops || (ops->kind != VM_MEASURE_BALANCED && ops->kind != VM_MEASURE_SHAPE &&
+                   ops->kind != VM_MEASURE_SHAPE_ALT)) {
+        rc = vm_cli_usage_error(&cli, "--measure expects balanced, shape or shape-alt");
+        goto done;
+      }
+      o.measure = ops->kind;
+    } else if (!strcmp(a, "--theta") || !strcmp(a, "--target-size") ||
+               !strcmp(a, "--time-limit")) {
+      i++;
+      double x;
+      double lo = !strcmp(a, "--theta") ? 0 : 1e-300, hi = !strcmp(a, "--theta") ? 0.999 : 1e300;
+      if (vm_cli_double(&cli, a, val, lo, hi, &x)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+      if (!strcmp(a, "--theta"))
+        o.theta = x;
+      else if (!strcmp(a, "--target-size"))
+        o.target_size = x;
+      else
+        o.time_limit = x;
+    } else if (!strcmp(a, "--max-iter") || !strcmp(a, "--opt-iter") ||
+               !strcmp(a, "--qi-steps") || !strcmp(a, "--local-threshold") ||
+               !strcmp(a, "--threads") || !strcmp(a, "--progress-every")) {
+      i++;
+      if (vm_cli_int(&cli, a, val, !strcmp(a, "--progress-every") ? 1 : 0, 100000000, &lv)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+      if (!strcmp(a, "--max-iter"))
+        o.max_iter = (int)lv;
+      else if (!strcmp(a, "--opt-iter"))
+        o.opt_iter = (int)lv;
+      else if (!strcmp(a, "--qi-steps"))
+        o.qi_steps = (int)lv;
+      else if (!strcmp(a, "--local-threshold"))
+        o.local_threshold = (int)lv;
+      else if (!strcmp(a, "--threads"))
+        vm_ctx_set_threads(cli.ctx, (int)lv);
+      else
+        every = lv;
+    } else if (!strcmp(a, "--format")) {
+      i++;
+      fout = val ? vm_format_from_name(val) : VM_FMT_AUTO;
+      if (fout == VM_FMT_AUTO) {
+        rc = vm_cli_usage_error(&cli, "unknown format '%s'", val ? val : "");
+        goto done;
+      }
+    } else if (a[0] == '-' && a[1]) {
+      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
+      goto done;
+    } else if (!in) {
+      in = a;
+    } else if (!out) {
+      out = a;
+    } else {
+      rc = vm_cli_usage_error(&cli, "too many arguments");
+      goto done;
+    }
+  }
+  if (!in || !out) {
+    rc = vm_cli_usage_error(&cli, "need IN and OUT");
+    goto done;
+  }
+  if (fout == VM_FMT_AUTO && vm_format_from_path(out) == VM_FMT_AUTO)
+    fout = vm_format_from_path(in);
+  if (vm_mesh_read(cli.ctx, in, VM_FMT_AUTO, &m) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  int64_t counts[VM_NTYPES];
+  if (vm_mesh_count_types(m, counts) != 3) {
+    vm_cli_error(&cli, "%s: no volume elements (tet, pyramid, prism, hex) to optimize", in);
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  int64_t nfixed = vm_mesh_apply_fixed_field(m), nbnd = 0;
+  if (!free_boundary && vm_mesh_mark_boundary(m, VM_VERTEX_FIXED, &nbnd) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  int64_t nfree = 0;
+  for (int64_t v = 0; v < m->nv; v++) nfree += m->vflag[v] == VM_VERTEX_FREE;
+  if (!cli.quiet)
+    fprintf(stderr, "vm-volume: %s: %lld vertices (%lld free; %lld fixed by field, %lld on the "
+            "boundary), %lld elements\n", in, (long long)m->nv, (long long)nfree,
+            (long long)nfixed, (long long)nbnd, (long long)m->ne);
+  progress_state ps = {&cli, (int)every, NULL};
+  o.progress = progress;
+  o.user = &ps;
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  vm_ctx_set_interrupt(cli.ctx, &interrupted);
+  vm_volume_report rep;
+  int st = vm_volume_run(cli.ctx, m, NULL, &o, &rep);
+  if (st < 0 && st != VM_ERR_INTERRUPTED) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  /* an independent check of the result: every corner simplex (and the
+   * geometric rule's simplices if that rule was used) */
+  vm_quality q, qg;
+  vm_quality_opts qo = {VM_RULE_CORNER, o.target_size};
+  vm_mesh_quality(m, &qo, &q);
+  qo.rule = VM_RULE_GEOMETRIC;
+  vm_mesh_quality(m, &qo, &qg);
+  int64_t bad = q.all.inverted_nodes + (o.rule == VM_RULE_GEOMETRIC ? qg.all.inverted_nodes : 0);
+  int wst = vm_mesh_write(cli.ctx, m, out, fout, &wo);
+  if (wst < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  if (st == VM_ERR_INTERRUPTED)
+    rc = VM_EXIT_INTERRUPTED;
+  else if (bad > 0 || !rep.valid)
+    rc = VM_EXIT_CHECK;
+  if (!cli.quiet) {
+    fprintf(stderr, "vm-volume: %s: M %lld -> %lld (max %lld), %d untangling + %d local + %d "
+            "optimization iterations, %.2f s (untangled after %.2f s)\n", out,
+            (long long)rep.M_init, (long long)rep.M_final, (long long)rep.M_max,
+            rep.iter_untangle, rep.iter_local, rep.iter_opt, rep.time_total, rep.time_untangle);
+    fprintf(stderr, "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
+            "corner tets %lld in %lld elements%s\n", rep.phi_min, rep.psi_min, q.all.sj_min,
+            (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems,
+            rc == VM_EXIT_CHECK ? "  -- NOT VALID" : rc == VM_EXIT_INTERRUPTED ? "  -- interrupted" : "");
+  }
+  if (json) {
+    printf("{\"input\": ");
+    vm_json_string(stdout, in);
+    printf(", \"output\": ");
+    vm_json_string(stdout, out);
+    printf(", \"valid\": %s, \"interrupted\": %s, \"method\": \"%s\", \"rule\": \"%s\", "
+           "\"nodes\": %lld, \"M_init\": %lld, \"M_max\": %lld, \"M_final\": %lld, "
+           "\"inverted_corner_tets\": %lld, \"inverted_elements\": %lld, \"iter_untangle\": %d, "
+           "\"iter_local\": %d, \"iter_opt\": %d, \"time_untangle\": %.3f, \"time_total\": %.3f, "
+           "\"phi_min\": ",
+           rc == VM_EXIT_OK ? "true" : "false", st == VM_ERR_INTERRUPTED ? "true" : "false",
+           vm_untangle_method_name(o.method), rules[o.rule], (long long)rep.nodes,
+           (long long)rep.M_init, (long long)rep.M_max, (long long)rep.M_final,
+           (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems, rep.iter_untangle,
+           rep.iter_local, rep.iter_opt, rep.time_untangle, rep.time_total);
+    vm_json_double(stdout, rep.phi_min);
+    printf(", \"psi_min\": ");
+    vm_json_double(stdout, rep.psi_min);
+    printf(", \"sj_min\": ");
+    vm_json_double(stdout, q.all.sj_min);
+    printf(", \"t_reached\": ");
+    vm_json_double(stdout, rep.t_reached);
+    printf("}\n");
+  }
+done:
+  vm_mesh_destroy(&m);
+  vm_cli_finish(&cli);
+  return rc;
+}

@@ -1,0 +1,140 @@
+/* bench/bench_prism.c: the prism stage on plane.stl and the generated
+ * aircraft at T = 5% and 20% of the model's length, 20 layers: per case
+ * prisms, time, columns at full thickness, achieved/requested thickness,
+ * inverted prisms, minimum scaled Jacobian, deviation from the wall normal,
+ * intersecting pairs (Embree and, independently, CGAL's exact check) and
+ * the largest growth ratio.
+ * usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N]
+ *                    [--only plane|aircraft] [--frac F] [--verbose] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "varmesh/aircraft.h"
+#include "varmesh/io.h"
+#include "varmesh/prism.h"
+#include "varmesh/quadrature.h"
+#include "varmesh/surface_io.h"
+#include "varmesh/verify.h"
+
+static void progress(void *user, const vm_prism_progress *pg) {
+  (void)user;
+  fprintf(stderr, "  [%6.2f s] %-10s %4d  %.6g  %lld\n", pg->elapsed, vm_prism_phase_name(pg->phase),
+          pg->step, pg->value, (long long)pg->count);
+}
+
+static double model_length(const vm_mesh *m) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int64_t v = 0; v < m->nv; v++)
+    for (int k = 0; k < 3; k++) {
+      lo[k] = fmin(lo[k], m->xyz[3 * v + k]);
+      hi[k] = fmax(hi[k], m->xyz[3 * v + k]);
+    }
+  return fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
+}
+
+static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac, int layers,
+                    double growth, int verbose) {
+  vm_prism_opts o = vm_prism_opts_default();
+  o.thickness = frac * model_length(w);
+  o.nlayers = layers;
+  o.growth = growth;
+  if (verbose) {
+    o.progress = progress;
+  }
+  vm_prism *p = NULL;
+  int st = vm_prism_create(ctx, w, &o, &p);
+  if (st) {
+    fprintf(stderr, "%s: %s\n", name, vm_ctx_error(ctx));
+    return 1;
+  }
+  st = vm_prism_run(p);
+  if (st < 0) fprintf(stderr, "%s: run: %s\n", name, vm_ctx_error(ctx));
+  vm_prism_report r;
+  vm_prism_get_report(p, &r);
+  vm_mesh *res = NULL;
+  int64_t emb = -1, cg_pairs = -1, cg_wall = -1, cg_bad = -1;
+  if (vm_prism_result(p, &res) == VM_OK) {
+    uint8_t *wall = calloc((size_t)res->nv, 1);
+    for (int64_t v = 0; v < r.wall_vertices; v++) wall[v] = 1;
+    vm_prism_mesh_intersections(ctx, res, wall, &emb);
+    free(wall);
+    vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
+    vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
+  }
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f "
+         "| %lld / %lld+%lld | %.3f | %d%s |\n",
+         name, 100 * frac, (long long)r.prisms, r.time_total, 100 * r.full_fraction, r.thick_min,
+         r.thick_mean, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
+         (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
+         st ? " (warn)" : "");
+  fflush(stdout);
+  if (verbose) {
+    fprintf(stderr, "  phases:");
+    for (int k = 0; k < VM_PRISM_NPHASES; k++)
+      fprintf(stderr, " %s %.2f s", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
+    fprintf(stderr, "; implicit iterations %d, cut rounds %d (%lld pairs first)\n",
+            r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
+  }
+  vm_mesh_destroy(&res);
+  vm_prism_destroy(&p);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  const char *data = NULL, *only = NULL;
+  int layers = 20, res = 4, verbose = 0;
+  double growth = 1.2, fracs[2] = {0.05, 0.20};
+  int nfrac = 2;
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "--data") && i + 1 < argc) data = argv[++i];
+    else if (!strcmp(argv[i], "--layers") && i + 1 < argc) layers = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--growth") && i + 1 < argc) growth = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--res") && i + 1 < argc) res = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
+    else if (!strcmp(argv[i], "--frac") && i + 1 < argc) {
+      fracs[0] = atof(argv[++i]);
+      nfrac = 1;
+    } else if (!strcmp(argv[i], "--verbose")) verbose = 1;
+    else {
+      fprintf(stderr, "usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N] "
+                      "[--only plane|aircraft] [--frac F] [--verbose]\n");
+      return 2;
+    }
+  }
+  char path[4096];
+  if (data) snprintf(path, sizeof path, "%s/plane.stl", data);
+  else if (getenv("VM_SOURCE_ROOT"))
+    snprintf(path, sizeof path, "%s/../shared/data/plane.stl", getenv("VM_SOURCE_ROOT"));
+  else snprintf(path, sizeof path, "../shared/data/plane.stl");
+  vm_ctx *ctx = NULL;
+  if (vm_ctx_create(&ctx)) return 1;
+  vm_surface_register_formats(ctx);
+  printf("| case | T/L | prisms | time s | full | thick min / mean | inverted (own / CGAL) "
+         "| min SJ | max normal dev deg | intersecting pairs (Embree / CGAL outer+wall) | max "
+         "growth | layers |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  if (!only || !strcmp(only, "plane")) {
+    vm_mesh *m = NULL;
+    if (vm_mesh_read(ctx, path, VM_FMT_AUTO, &m)) {
+      fprintf(stderr, "plane: %s (skipped)\n", vm_ctx_error(ctx));
+    } else {
+      for (int f = 0; f < nfrac; f++) run_case(ctx, "plane.stl", m, fracs[f], layers, growth, verbose);
+      vm_mesh_destroy(&m);
+    }
+  }
+  if (!only || !strcmp(only, "aircraft")) {
+    vm_aircraft_opts ao = vm_aircraft_opts_default();
+    ao.resolution = res;
+    vm_mesh *m = NULL;
+    if (vm_gen_aircraft(ctx, &ao, &m)) {
+      fprintf(stderr, "aircraft: %s\n", vm_ctx_error(ctx));
+    } else {
+      for (int f = 0; f < nfrac; f++) run_case(ctx, "aircraft", m, fracs[f], layers, growth, verbose);
+      vm_mesh_destroy(&m);
+    }
+  }
+  vm_ctx_destroy(&ctx);
+  return 0;
+}

@@ -1,0 +1,135 @@
+/* varmesh/problem.h: the discrete functional (13)/(20) on a mesh: measure,
+ * quadrature rule, targets (G_xi), metric (G_x), weights (12), and the
+ * assembly of F, its gradient and Hessian blocks over all quadrature nodes. */
+#ifndef VARMESH_PROBLEM_H
+#define VARMESH_PROBLEM_H
+
+#include <stdint.h>
+
+#include "varmesh/ctx.h"
+#include "varmesh/measure.h"
+#include "varmesh/mesh.h"
+#include "varmesh/quadrature.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_problem vm_problem;
+
+/* Create a problem on mesh m (not copied: m must outlive the problem; its
+ * connectivity must not change, its coordinates are the unknowns).
+ * The active elements are those of the highest topological dimension in
+ * the mesh (lower-dimensional elements, e.g. boundary triangles of a tet
+ * mesh, are ignored by the functional). Defaults: balanced measure,
+ * theta 0.8, corner rule, ideal targets of automatic size, identity
+ * metric, unit weights.
+ * 2D elements: if m->dim == 2 they are measured in the xy plane; if
+ * m->dim == 3 (surfaces) each element is measured in its own tangent frame
+ * with a reference unit normal n_e (see vm_problem_update_normals):
+ *   det = n_e . (e1 x e2) / det T,  s = |E T^{-1}|_F^2. */
+int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out);
+void vm_problem_destroy(vm_problem **p);
+
+int vm_problem_set_measure(vm_problem *p, vm_measure_kind kind, const vm_measure_params *prm);
+/* Change only the parameters (eps, t, theta) during continuation. */
+int vm_problem_set_params(vm_problem *p, const vm_measure_params *prm);
+const vm_measure_params *vm_problem_params(const vm_problem *p);
+int vm_problem_set_rule(vm_problem *p, vm_rule rule);
+
+/* Targets: T of each node from the ideal element (vm_elem_ideal) scaled to
+ * edge length `size` (size <= 0: chosen so the total target volume equals
+ * the mesh's total |volume|); from reference vertex coordinates xyz_ref
+ * (3*nv, copied; e.g. the untangled Cartesian mesh); or from a per-element
+ * f64 field of nverts*3 components holding the target element's vertex
+ * coordinates (copied). Each fails with VM_ERR_ARG if a target is
+ * degenerate or inverted. For 2D elements in 3D, T of each node is taken in
+ * that node's own plane (T^T T is the Gram matrix of its target edges),
+ * oriented by the target element's normal. */
+int vm_problem_set_target_ideal(vm_problem *p, double size);
+int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref);
+int vm_problem_set_target_field(vm_problem *p, const char *field_name);
+
+/* Metric G_x of (13)/(20): NULL for identity; else per-vertex values
+ * averaged over each element's vertices: scalar g > 0 (G_x = g I, used by
+ * the surface stage with g = 1 + c|H|), or a symmetric positive definite
+ * tensor (6 per vertex: xx yy zz xy yz xz). Copied. */
+int vm_problem_set_metric_scalar(vm_problem *p, const double *g);
+int vm_problem_set_metric_tensor(vm_problem *p, const double *G);
+/* Weights w of (12), one per element (NULL: all 1). Copied. */
+int vm_problem_set_weights(vm_problem *p, const double *w);
+/* Reference normals of 2D elements in 3D: from unit vertex normals
+ * (3*nv, averaged per element) or, with NULL, from the current geometry. */
+int vm_problem_update_normals(vm_problem *p, const double *vertex_normals);
+
+/* Sizes. */
+int64_t vm_problem_num_nodes(const vm_problem *p); /* quadrature nodes */
+int vm_problem_dim(const vm_problem *p);            /* 2 or 3 */
+const vm_mesh *vm_problem_mesh(const vm_problem *p);
+/* Sum of w beta kappa det T over all nodes: the value of F where W = 1
+ * everywhere (the total target volume, or area, for unit weights). */
+double vm_problem_target_volume(const vm_problem *p);
+/* Edge length of the ideal targets in use (the automatic size after
+ * vm_problem_set_target_ideal(p, 0)); 0 for other targets. */
+double vm_problem_target_size(const vm_problem *p);
+
+/* Assembly at coordinates x (3*nv; pass m->xyz for the mesh's own).
+ * What is computed is chosen by the non-NULL outputs:
+ *   F       the functional (sum of w beta kappa det T W over all nodes);
+ *   grad    3*nv, dF/dx;
+ *   hdiag   9*nv, the 3x3 diagonal blocks H_vv, row-major;
+ *   hoff    the off-diagonal blocks' diagonal entries (H_uv)_mm, m = 0..2,
+ *           3 per entry of the vertex graph (vm_problem_graph), u != v.
+ * Results are identical bit for bit for any number of threads. Not
+ * reentrant on one problem (it keeps scratch space). The first call with
+ * hoff builds a table of hoff positions (VM_ERR_NOMEM if that fails).
+ * For plane meshes (dim 2) the z rows and columns are zero.
+ * Returns 0 when every node is inside the measure's domain; otherwise
+ * VM_WARN_INVERTED with *F = +INFINITY (gradients undefined). */
+typedef struct vm_eval {
+  double *F;
+  double *grad;
+  double *hdiag;
+  double *hoff;
+} vm_eval;
+int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out);
+
+/* F only, stopping early at the first node outside the domain (for line
+ * searches). Same value as vm_problem_eval's F. */
+int vm_problem_value(vm_problem *p, const double *x, double *F);
+
+/* The symmetric vertex graph in CSR form without the diagonal: neighbours
+ * of v are adj[rowptr[v] .. rowptr[v+1]), sorted; two vertices are
+ * neighbours if they share an active element. */
+void vm_problem_graph(const vm_problem *p, const int64_t **rowptr, const int32_t **adj);
+
+/* Statistics over all quadrature nodes at x: the number of nodes with
+ * det C <= 0 (M of Table 1), the minimum det C, phi_min = min det/(s/d)^{d/2}
+ * and psi_min = min 2 det/(1 + det^2). Any output may be NULL. */
+typedef struct vm_node_stats {
+  int64_t inverted;
+  double min_det;
+  double phi_min;
+  double psi_min;
+} vm_node_stats;
+int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st);
+
+/* det C of every node at x (num_nodes values; node order: element by
+ * element, rule order). Used by untangling (35), (39) and local subdomains. */
+int vm_problem_node_dets(vm_problem *p, const double *x, double *det);
+/* Element of each node (num_nodes values), for mapping nodes to elements. */
+const int32_t *vm_problem_node_elements(const vm_problem *p);
+
+/* Restrict assembly to a subset of active elements (mask[e] != 0 over all
+ * mesh elements; NULL restores all): local untangling of a subdomain.
+ * The graph is unchanged; vertices outside the subset get zero rows. */
+int vm_problem_set_active(vm_problem *p, const uint8_t *mask);
+
+/* Per-node epsilon for the one-way penalty variant: if eps_node != NULL
+ * (num_nodes values, copied), node q uses eps_node[q] instead of params.eps. */
+int vm_problem_set_node_eps(vm_problem *p, const double *eps_node);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

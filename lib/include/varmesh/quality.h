@@ -1,0 +1,55 @@
+/* varmesh/quality.h: mesh quality figures of the paper's Table 1 (M,
+ * phi_min, psi_min) and the scaled Jacobian, per element type and overall. */
+#ifndef VARMESH_QUALITY_H
+#define VARMESH_QUALITY_H
+
+#include <stdint.h>
+
+#include "varmesh/mesh.h"
+#include "varmesh/quadrature.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_quality_opts {
+  int rule;           /* VM_RULE_CORNER (default) or VM_RULE_GEOMETRIC */
+  double target_size; /* > 0: edge length of the ideal target element, for
+                         psi = 2 det C/(1 + det C^2); <= 0: use an element
+                         f64 field "target_size" if present, else no psi */
+} vm_quality_opts;
+
+#define VM_QUALITY_NBINS 20 /* scaled-Jacobian histogram over [-1, 1] */
+
+typedef struct vm_type_quality {
+  int64_t count;           /* elements of this type */
+  int64_t nodes;           /* quadrature nodes measured */
+  int64_t inverted_nodes;  /* nodes with det C <= 0 */
+  int64_t inverted_elems;  /* elements with at least one such node */
+  double phi_min;          /* min det C/(tr C^T C/d)^{d/2} */
+  double psi_min;          /* min 2 det C/(1 + det C^2), NAN without a target size */
+  double sj_min;           /* min scaled Jacobian */
+} vm_type_quality;
+
+typedef struct vm_quality {
+  int top_dim;             /* elements of this dimension are measured */
+  int64_t measured;        /* elements measured */
+  int64_t skipped;         /* lower-dimensional elements, not measured */
+  vm_type_quality type[VM_NTYPES];
+  vm_type_quality all;
+  double min_det;          /* min det C over nodes (target-scaled if a size is known) */
+  double sj_p01, sj_p05, sj_p25, sj_p50; /* scaled-Jacobian percentiles */
+  int64_t sj_hist[VM_QUALITY_NBINS];
+} vm_quality;
+
+/* Quality of every element of the top dimension. The scaled Jacobian of an
+ * element is the minimum over its corner nodes of det E/(|e1||e2||e3|)
+ * (2D: det E/(|e1||e2|)), normalized to 1 on the ideal element. 2D elements
+ * of a mesh with dim == 3 are measured against their own (Newell) normal, so
+ * a lone triangle cannot be inverted. opts may be NULL. */
+int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

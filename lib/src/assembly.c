@@ -1,0 +1,658 @@
+/* lib/src/assembly.c: F of (13)/(20), its gradient and Hessian blocks over
+ * all quadrature nodes, parallel over an element colouring, with the same
+ * bits for any number of threads; node statistics and determinants. */
+#include <math.h>
+#include <string.h>
+
+#include "problem_private.h"
+#include "varmesh/problem.h"
+
+#if defined(__GNUC__)
+#define VM_INLINE static inline __attribute__((always_inline))
+#else
+#define VM_INLINE static inline
+#endif
+
+/* Per-element accumulators: gradient and diagonal blocks by local vertex,
+ * off-diagonal block diagonals by element pair (problem->pair). */
+typedef struct {
+  double g[VM_MAX_ELEM_VERTS][3];
+  double h[VM_MAX_ELEM_VERTS][6]; /* symmetric block: xx yy zz xy yz xz */
+  double o[VM_MAX_PAIRS][3];
+} elem_acc;
+
+/* What one element's nodes need besides the rule. */
+typedef struct {
+  double x[VM_MAX_ELEM_VERTS][3];
+  int t, nv, diag;
+  const vm_qrule *R;
+  const double *S, *wb;
+  double w, g, dq;
+  const double *G; /* tensor metric (6) or NULL */
+  double n[3];     /* reference normal (2D elements) */
+  int64_t n0;
+} elem_ctx;
+
+static void elem_setup(const vm_problem *p, int64_t i, const double *xyz, elem_ctx *ec) {
+  const vm_mesh *m = p->m;
+  int32_t e = p->ael[i];
+  int t = m->etype[e];
+  const int32_t *cv = m->conn + m->eoff[e];
+  int nv = (int)(m->eoff[e + 1] - m->eoff[e]);
+  ec->t = t;
+  ec->nv = nv;
+  ec->R = p->qr[t];
+  ec->n0 = p->noff[i];
+  int dd = p->tdim * p->tdim;
+  ec->S = p->Snode ? p->Snode + dd * ec->n0 : p->Sid[t];
+  ec->diag = !p->Snode && p->sdiag[t];
+  ec->wb = p->wnode ? p->wnode + ec->n0 : p->wid[t];
+  ec->w = p->wel[i];
+  ec->g = p->metric == VM_METRIC_SCALAR ? p->mg[i] : 1.0;
+  ec->dq = p->metric == VM_METRIC_IDENTITY ? 1.0 : p->mdq[i];
+  ec->G = p->metric == VM_METRIC_TENSOR ? p->mG + 6 * i : NULL;
+  if (p->kind == VM_PK_SURF) {
+    ec->n[0] = p->nrm[3 * i];
+    ec->n[1] = p->nrm[3 * i + 1];
+    ec->n[2] = p->nrm[3 * i + 2];
+  } else {
+    ec->n[0] = ec->n[1] = 0;
+    ec->n[2] = 1;
+  }
+  for (int a = 0; a < nv; a++) {
+    const double *s = xyz + 3 * (int64_t)cv[a];
+    ec->x[a][0] = s[0];
+    ec->x[a][1] = s[1];
+    ec->x[a][2] = p->kind == VM_PK_PLANE ? 0 : s[2];
+  }
+}
+
+/* y = G v for the symmetric G = (xx yy zz xy yz xz). */
+VM_INLINE void symv(const double *G, const double *v, double *y) {
+  y[0] = G[0] * v[0] + G[3] * v[1] + G[5] * v[2];
+  y[1] = G[3] * v[0] + G[1] * v[1] + G[4] * v[2];
+  y[2] = G[5] * v[0] + G[4] * v[1] + G[2] * v[2];
+}
+
+/* Invariants of one 3D node: M = E S, C = Q M, s = |C|^2 = tr(M^T G M),
+ * det C = det Q det M; cof M (all of it when full, else row 0); G M. */
+typedef struct {
+  double M[9], cof[9], GM[9];
+  double s, det;
+} node3;
+
+VM_INLINE void node3_eval(const elem_ctx *ec, const vm_qnode *q, const double *S, int diag,
+                          int full, node3 *v) {
+  const double *h0 = ec->x[q->head[0]], *t0 = ec->x[q->tail[0]];
+  const double *h1 = ec->x[q->head[1]], *t1 = ec->x[q->tail[1]];
+  const double *h2 = ec->x[q->head[2]], *t2 = ec->x[q->tail[2]];
+  double E[9] = {h0[0] - t0[0], h1[0] - t1[0], h2[0] - t2[0], h0[1] - t0[1], h1[1] - t1[1],
+                 h2[1] - t2[1], h0[2] - t0[2], h1[2] - t1[2], h2[2] - t2[2]};
+  double *M = v->M, *c = v->cof;
+  if (diag) {
+    /* S diagonal (ideal hexes): the products with its zeros dropped */
+    for (int r = 0; r < 3; r++) {
+      M[3 * r] = E[3 * r] * S[0];
+      M[3 * r + 1] = E[3 * r + 1] * S[4];
+      M[3 * r + 2] = E[3 * r + 2] * S[8];
+    }
+  } else {
+    for (int r = 0; r < 3; r++)
+      for (int l = 0; l < 3; l++)
+        M[3 * r + l] = E[3 * r] * S[l] + E[3 * r + 1] * S[3 + l] + E[3 * r + 2] * S[6 + l];
+  }
+  c[0] = M[4] * M[8] - M[5] * M[7];
+  c[1] = M[5] * M[6] - M[3] * M[8];
+  c[2] = M[3] * M[7] - M[4] * M[6];
+  if (full) {
+    c[3] = M[7] * M[2] - M[8] * M[1];
+    c[4] = M[8] * M[0] - M[6] * M[2];
+    c[5] = M[6] * M[1] - M[7] * M[0];
+    c[6] = M[1] * M[5] - M[2] * M[4];
+    c[7] = M[2] * M[3] - M[0] * M[5];
+    c[8] = M[0] * M[4] - M[1] * M[3];
+  }
+  double s;
+  if (ec->G) {
+    s = 0;
+    for (int l = 0; l < 3; l++) {
+      double col[3] = {M[l], M[3 + l], M[6 + l]}, y[3];
+      symv(ec->G, col, y);
+      v->GM[l] = y[0];
+      v->GM[3 + l] = y[1];
+      v->GM[6 + l] = y[2];
+    }
+    for (int k = 0; k < 9; k++) s += M[k] * v->GM[k];
+  } else {
+    s = ((M[0] * M[0] + M[1] * M[1] + M[2] * M[2]) + (M[3] * M[3] + M[4] * M[4] + M[5] * M[5]) +
+         (M[6] * M[6] + M[7] * M[7] + M[8] * M[8])) *
+        ec->g;
+  }
+  v->s = s;
+  v->det = ec->dq * (M[0] * c[0] + M[1] * c[1] + M[2] * c[2]);
+}
+
+/* Invariants of one 2D node: M = E S (3 x 2, columns m0, m1),
+ * det = det Q n.(m0 x m1), s = tr(M^T G M); B = d det/dM (columns). */
+typedef struct {
+  double m[2][3], GM[2][3], B[2][3];
+  double s, det;
+} node2;
+
+VM_INLINE void cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+VM_INLINE void node2_eval(const elem_ctx *ec, const vm_qnode *q, const double *S, int full,
+                              node2 *v) {
+  double e[2][3];
+  for (int k = 0; k < 2; k++)
+    for (int r = 0; r < 3; r++) e[k][r] = ec->x[q->head[k]][r] - ec->x[q->tail[k]][r];
+  for (int l = 0; l < 2; l++)
+    for (int r = 0; r < 3; r++) v->m[l][r] = e[0][r] * S[l] + e[1][r] * S[2 + l];
+  double c[3];
+  cross(v->m[0], v->m[1], c);
+  const double *n = ec->n;
+  double s = 0;
+  if (ec->G) {
+    symv(ec->G, v->m[0], v->GM[0]);
+    symv(ec->G, v->m[1], v->GM[1]);
+    for (int l = 0; l < 2; l++)
+      for (int r = 0; r < 3; r++) s += v->m[l][r] * v->GM[l][r];
+  } else {
+    for (int l = 0; l < 2; l++)
+      for (int r = 0; r < 3; r++) s += v->m[l][r] * v->m[l][r];
+    s *= ec->g;
+  }
+  v->s = s;
+  v->det = ec->dq * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]);
+  if (full) {
+    /* d/dm0 n.(m0 x m1) = m1 x n, d/dm1 = n x m0 */
+    double b0[3], b1[3];
+    cross(v->m[1], n, b0);
+    cross(n, v->m[0], b1);
+    for (int r = 0; r < 3; r++) {
+      v->B[0][r] = ec->dq * b0[r];
+      v->B[1][r] = ec->dq * b1[r];
+    }
+  }
+}
+
+static inline const vm_measure_params *node_params(const vm_problem *p, int64_t node,
+                                                   vm_measure_params *tmp) {
+  if (!p->eps_node) return &p->prm;
+  *tmp = p->prm;
+  tmp->eps = p->eps_node[node];
+  return tmp;
+}
+
+/* Hessian pieces of one node, both dimensions: for the node's local
+ * vertices u, gs_u = (ds/dM) b_u and gd_u = (d det/dM) b_u with
+ * b_u = S^T a_u; the d2 det/dM2 term has a zero diagonal in every block
+ * H_uv and vanishes for u = v, so it never enters hdiag or hoff. */
+VM_INLINE void node_hess(const vm_nodepat *pt, int d, double gs[6][3], double gd[6][3],
+                         double b[6][3], const double *f, double wq, double g, const double *G,
+                         elem_acc *acc) {
+  double al = wq * f[3], be = wq * f[4], ga = wq * f[5], fs2 = 2 * wq * f[1];
+  double Gd[6];
+  if (G) {
+    for (int c = 0; c < 6; c++) Gd[c] = G[c];
+  } else {
+    Gd[0] = Gd[1] = Gd[2] = g;
+    Gd[3] = Gd[4] = Gd[5] = 0;
+  }
+  double u1[6][3], u2[6][3];
+  for (int u = 0; u < pt->nloc; u++) {
+    for (int r = 0; r < 3; r++) {
+      u1[u][r] = al * gs[u][r] + be * gd[u][r];
+      u2[u][r] = be * gs[u][r] + ga * gd[u][r];
+    }
+    double kuu = 0;
+    for (int l = 0; l < d; l++) kuu += b[u][l] * b[u][l];
+    kuu *= fs2;
+    double *h = acc->h[pt->loc[u]];
+    h[0] += u1[u][0] * gs[u][0] + u2[u][0] * gd[u][0] + kuu * Gd[0];
+    h[1] += u1[u][1] * gs[u][1] + u2[u][1] * gd[u][1] + kuu * Gd[1];
+    h[2] += u1[u][2] * gs[u][2] + u2[u][2] * gd[u][2] + kuu * Gd[2];
+    h[3] += u1[u][0] * gs[u][1] + u2[u][0] * gd[u][1] + kuu * Gd[3];
+    h[4] += u1[u][1] * gs[u][2] + u2[u][1] * gd[u][2] + kuu * Gd[4];
+    h[5] += u1[u][0] * gs[u][2] + u2[u][0] * gd[u][2] + kuu * Gd[5];
+  }
+  int k = 0;
+  for (int u = 0; u < pt->nloc; u++)
+    for (int v = u + 1; v < pt->nloc; v++, k++) {
+      double kuv = 0;
+      for (int l = 0; l < d; l++) kuv += b[u][l] * b[v][l];
+      kuv *= fs2;
+      double *o = acc->o[pt->pidx[k]];
+      for (int r = 0; r < 3; r++)
+        o[r] += u1[u][r] * gs[v][r] + u2[u][r] * gd[v][r] + kuv * Gd[r];
+    }
+}
+
+/* b_u = S^T a_u for the node's local vertices. */
+VM_INLINE void node_b(const vm_nodepat *pt, int d, const double *S, double b[6][3]) {
+  for (int u = 0; u < pt->nloc; u++) {
+    const double *a = pt->ad[u];
+    if (d == 3) {
+      b[u][0] = a[0] * S[0] + a[1] * S[3] + a[2] * S[6];
+      b[u][1] = a[0] * S[1] + a[1] * S[4] + a[2] * S[7];
+      b[u][2] = a[0] * S[2] + a[1] * S[5] + a[2] * S[8];
+    } else {
+      b[u][0] = a[0] * S[0] + a[1] * S[2];
+      b[u][1] = a[0] * S[1] + a[1] * S[3];
+    }
+  }
+}
+
+/* One 3D element: F contribution into *Fe; with order >= 1 the gradient,
+ * with order 2 the Hessian pieces, into acc. Nonzero if a node is outside
+ * the measure's domain. `order` and `diag` are constants in each caller.
+ * All nodes' invariants and measure values come first, so the latencies of
+ * the measure's roots and divisions overlap; then the derivative work. */
+VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag, double *Fe,
+                    elem_acc *acc) {
+  const vm_qrule *R = ec->R;
+  const vm_nodepat *pats = p->pat[ec->t];
+  vm_measure_scalar_fn scalar = p->ops->scalar;
+  int nn = R->nnodes;
+  double F = 0;
+  node3 nv[64];
+  double fv[64][6];
+  for (int j = 0; j < nn; j++) {
+    node3 *v = order ? &nv[j] : &nv[0];
+    double *f = order ? fv[j] : fv[0];
+    node3_eval(ec, &R->nodes[j], ec->S + 9 * j, diag, order > 0, v);
+    vm_measure_params tmp;
+    if (scalar(node_params(p, ec->n0 + j, &tmp), 3, v->s, v->det, order, f)) return 1;
+    F += ec->w * ec->wb[j] * f[0];
+  }
+  *Fe = F;
+  if (!order) return 0;
+  for (int j = 0; j < nn; j++) {
+    const double *S = ec->S + 9 * j, *f = fv[j];
+    const node3 *v = &nv[j];
+    double wq = ec->w * ec->wb[j];
+    /* dW/dM = 2 f_s G M + f_d det Q cof M; dW/dE = (dW/dM) S^T */
+    const double *A = ec->G ? v->GM : v->M;
+    double cs = 2 * wq * f[1] * (ec->G ? 1.0 : ec->g), cd = wq * f[2] * ec->dq;
+    double P[9], Rm[9];
+    for (int k = 0; k < 9; k++) P[k] = cs * A[k] + cd * v->cof[k];
+    if (diag) {
+      for (int r = 0; r < 3; r++) {
+        Rm[3 * r] = P[3 * r] * S[0];
+        Rm[3 * r + 1] = P[3 * r + 1] * S[4];
+        Rm[3 * r + 2] = P[3 * r + 2] * S[8];
+      }
+    } else {
+      for (int r = 0; r < 3; r++)
+        for (int k = 0; k < 3; k++)
+          Rm[3 * r + k] =
+              P[3 * r] * S[3 * k] + P[3 * r + 1] * S[3 * k + 1] + P[3 * r + 2] * S[3 * k + 2];
+    }
+    /* vertex u gets sum_k a_uk (dW/dE)_k, one update per vertex */
+    const vm_nodepat *pt = &pats[j];
+    for (int u = 0; u < pt->nloc; u++) {
+      const double *a = pt->ad[u];
+      double *gu = acc->g[pt->loc[u]];
+      gu[0] += a[0] * Rm[0] + a[1] * Rm[1] + a[2] * Rm[2];
+      gu[1] += a[0] * Rm[3] + a[1] * Rm[4] + a[2] * Rm[5];
+      gu[2] += a[0] * Rm[6] + a[1] * Rm[7] + a[2] * Rm[8];
+    }
+    if (order < 2) continue;
+    double b[6][3], gs[6][3], gd[6][3];
+    node_b(pt, 3, S, b);
+    double a2 = ec->G ? 2.0 : 2.0 * ec->g;
+    for (int u = 0; u < pt->nloc; u++)
+      for (int r = 0; r < 3; r++) {
+        gs[u][r] = a2 * (A[3 * r] * b[u][0] + A[3 * r + 1] * b[u][1] + A[3 * r + 2] * b[u][2]);
+        gd[u][r] = ec->dq * (v->cof[3 * r] * b[u][0] + v->cof[3 * r + 1] * b[u][1] +
+                             v->cof[3 * r + 2] * b[u][2]);
+      }
+    node_hess(pt, 3, gs, gd, b, f, wq, ec->g, ec->G, acc);
+  }
+  return 0;
+}
+
+/* One 2D element (plane or surface), as elem3. */
+VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, double *Fe,
+                    elem_acc *acc) {
+  const vm_qrule *R = ec->R;
+  const vm_nodepat *pats = p->pat[ec->t];
+  double F = 0;
+  for (int j = 0; j < R->nnodes; j++) {
+    const vm_qnode *q = &R->nodes[j];
+    const double *S = ec->S + 4 * j;
+    node2 v;
+    node2_eval(ec, q, S, order > 0, &v);
+    vm_measure_params tmp;
+    double f[6];
+    if (p->ops->scalar(node_params(p, ec->n0 + j, &tmp), 2, v.s, v.det, order, f)) return 1;
+    double wq = ec->w * ec->wb[j];
+    F += wq * f[0];
+    if (!order) continue;
+    double(*A)[3] = ec->G ? v.GM : v.m;
+    double cs = 2 * wq * f[1] * (ec->G ? 1.0 : ec->g), cd = wq * f[2];
+    double P[2][3];
+    for (int l = 0; l < 2; l++)
+      for (int r = 0; r < 3; r++) P[l][r] = cs * A[l][r] + cd * v.B[l][r];
+    double Rm[2][3];
+    for (int k = 0; k < 2; k++)
+      for (int r = 0; r < 3; r++) Rm[k][r] = P[0][r] * S[2 * k] + P[1][r] * S[2 * k + 1];
+    const vm_nodepat *pt = &pats[j];
+    for (int u = 0; u < pt->nloc; u++) {
+      const double *a = pt->ad[u];
+      double *gu = acc->g[pt->loc[u]];
+      for (int r = 0; r < 3; r++) gu[r] += a[0] * Rm[0][r] + a[1] * Rm[1][r];
+    }
+    if (order < 2) continue;
+    double b[6][3], gs[6][3], gd[6][3];
+    node_b(pt, 2, S, b);
+    double a2 = ec->G ? 2.0 : 2.0 * ec->g;
+    for (int u = 0; u < pt->nloc; u++)
+      for (int r = 0; r < 3; r++) {
+        gs[u][r] = a2 * (A[0][r] * b[u][0] + A[1][r] * b[u][1]);
+        gd[u][r] = v.B[0][r] * b[u][0] + v.B[1][r] * b[u][1];
+      }
+    node_hess(pt, 2, gs, gd, b, f, wq, ec->g, ec->G, acc);
+  }
+  *Fe = F;
+  return 0;
+}
+
+/* The element kernels specialized by order (and diagonal S in 3D). */
+static int elem3_o0(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return ec->diag ? elem3(p, ec, 0, 1, Fe, acc) : elem3(p, ec, 0, 0, Fe, acc);
+}
+static int elem3_o1(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return ec->diag ? elem3(p, ec, 1, 1, Fe, acc) : elem3(p, ec, 1, 0, Fe, acc);
+}
+static int elem3_o2(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem3(p, ec, 2, 0, Fe, acc);
+}
+static int elem2_o0(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem2(p, ec, 0, Fe, acc);
+}
+static int elem2_o1(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem2(p, ec, 1, Fe, acc);
+}
+static int elem2_o2(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem2(p, ec, 2, Fe, acc);
+}
+
+static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order, double *Fe,
+                     elem_acc *acc) {
+  elem_ctx ec;
+  elem_setup(p, i, x, &ec);
+  if (order) {
+    memset(acc->g, 0, sizeof acc->g[0] * (size_t)ec.nv);
+    if (order > 1) {
+      memset(acc->h, 0, sizeof acc->h[0] * (size_t)ec.nv);
+      memset(acc->o, 0, sizeof acc->o[0] * (size_t)p->npair[ec.t]);
+    }
+  }
+  if (p->tdim == 3)
+    return order == 0 ? elem3_o0(p, &ec, Fe, acc)
+                      : order == 1 ? elem3_o1(p, &ec, Fe, acc) : elem3_o2(p, &ec, Fe, acc);
+  return order == 0 ? elem2_o0(p, &ec, Fe, acc)
+                    : order == 1 ? elem2_o1(p, &ec, Fe, acc) : elem2_o2(p, &ec, Fe, acc);
+}
+
+/* Position of v in the sorted neighbour list of u. */
+VM_INLINE int64_t graph_pos(const vm_problem *p, int32_t u, int32_t v) {
+  const int32_t *a = p->adj + p->rowptr[u];
+  int64_t n = p->rowptr[u + 1] - p->rowptr[u], lo = 0;
+  while (n > 1) {
+    int64_t half = n / 2;
+    lo = a[lo + half] <= v ? lo + half : lo;
+    n -= half;
+  }
+  return p->rowptr[u] + lo;
+}
+
+static void scatter(const vm_problem *p, int64_t i, const elem_acc *acc, const vm_eval *out) {
+  const vm_mesh *m = p->m;
+  int32_t e = p->ael[i];
+  int t = m->etype[e];
+  const int32_t *cv = m->conn + m->eoff[e];
+  int nv = (int)(m->eoff[e + 1] - m->eoff[e]);
+  if (out->grad)
+    for (int a = 0; a < nv; a++) {
+      double *g = out->grad + 3 * (int64_t)cv[a];
+      g[0] += acc->g[a][0];
+      g[1] += acc->g[a][1];
+      g[2] += acc->g[a][2];
+    }
+  if (out->hdiag)
+    for (int a = 0; a < nv; a++) {
+      double *H = out->hdiag + 9 * (int64_t)cv[a];
+      const double *h = acc->h[a];
+      H[0] += h[0];
+      H[1] += h[3];
+      H[2] += h[5];
+      H[3] += h[3];
+      H[4] += h[1];
+      H[5] += h[4];
+      H[6] += h[5];
+      H[7] += h[4];
+      H[8] += h[2];
+    }
+  const uint8_t *pp = p->ppos_stride > 0 ? p->ppos + (int64_t)p->ppos_stride * i : NULL;
+  if (out->hoff)
+    for (int k = 0; k < p->npair[t]; k++) {
+      int32_t u = cv[p->pair[t][k][0]], v = cv[p->pair[t][k][1]];
+      const double *o = acc->o[k];
+      int64_t xu = pp ? p->rowptr[u] + pp[2 * k] : graph_pos(p, u, v);
+      int64_t yv = pp ? p->rowptr[v] + pp[2 * k + 1] : graph_pos(p, v, u);
+      double *x = out->hoff + 3 * xu;
+      double *y = out->hoff + 3 * yv;
+      x[0] += o[0];
+      x[1] += o[1];
+      x[2] += o[2];
+      y[0] += o[0];
+      y[1] += o[1];
+      y[2] += o[2];
+    }
+}
+
+/* The hoff position table (problem->ppos), once per rule. */
+static int build_ppos(vm_problem *p) {
+  int64_t nv = p->m->nv;
+  int stride = 0;
+  for (int64_t v = 0; v < nv; v++)
+    if (p->rowptr[v + 1] - p->rowptr[v] > 255) {
+      p->ppos_stride = -1;
+      return VM_OK;
+    }
+  for (int t = 0; t < VM_NTYPES; t++)
+    if (vm_elem_dim(t) == p->tdim && 2 * p->npair[t] > stride) stride = 2 * p->npair[t];
+  uint8_t *pp = vm_alloc_array(p->ctx, (size_t)p->nae, (size_t)(stride ? stride : 1));
+  if (!pp) return VM_ERR_NOMEM;
+#pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
+  for (int64_t i = 0; i < p->nae; i++) {
+    int32_t e = p->ael[i];
+    int t = p->m->etype[e];
+    const int32_t *cv = p->m->conn + p->m->eoff[e];
+    for (int k = 0; k < p->npair[t]; k++) {
+      int32_t u = cv[p->pair[t][k][0]], v = cv[p->pair[t][k][1]];
+      pp[stride * i + 2 * k] = (uint8_t)(graph_pos(p, u, v) - p->rowptr[u]);
+      pp[stride * i + 2 * k + 1] = (uint8_t)(graph_pos(p, v, u) - p->rowptr[v]);
+    }
+  }
+  p->ppos = pp;
+  p->ppos_stride = stride;
+  return VM_OK;
+}
+
+/* Sum of the per-element F values of block b, in element order. */
+static double block_sum(const vm_problem *p, int64_t b) {
+  int64_t i0 = b * VM_PROBLEM_FBLOCK, i1 = i0 + VM_PROBLEM_FBLOCK;
+  if (i1 > p->nae) i1 = p->nae;
+  double s = 0;
+  for (int64_t i = i0; i < i1; i++)
+    if (!p->amask || p->amask[i]) s += p->Fe[i];
+  return s;
+}
+
+int vm_problem_value(vm_problem *p, const double *x, double *F) {
+  if (!p || !x || !F) return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_value: NULL argument")
+                               : VM_ERR_ARG;
+  int bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(vm_problem_threads(p))
+  for (int64_t b = 0; b < p->nblock; b++) {
+    int stop;
+#pragma omp atomic read
+    stop = bad;
+    if (stop) continue;
+    int64_t i0 = b * VM_PROBLEM_FBLOCK, i1 = i0 + VM_PROBLEM_FBLOCK;
+    if (i1 > p->nae) i1 = p->nae;
+    double s = 0;
+    for (int64_t i = i0; i < i1; i++) {
+      if (p->amask && !p->amask[i]) continue;
+      double fe;
+      if (elem_eval(p, i, x, 0, &fe, NULL)) {
+#pragma omp atomic write
+        bad = 1;
+        break;
+      }
+      s += fe;
+    }
+    p->part[b] = s;
+  }
+  if (bad) {
+    *F = INFINITY;
+    return VM_WARN_INVERTED;
+  }
+  double s = 0;
+  for (int64_t b = 0; b < p->nblock; b++) s += p->part[b];
+  *F = s;
+  return VM_OK;
+}
+
+int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
+  if (!p || !x || !out)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval: NULL argument") : VM_ERR_ARG;
+  int order = out->hdiag || out->hoff ? 2 : out->grad ? 1 : 0;
+  if (!order) return out->F ? vm_problem_value(p, x, out->F) : VM_OK;
+  int64_t nv = p->m->nv, nnz = p->rowptr[nv];
+  if (out->hoff && !p->ppos_stride) {
+    int st = build_ppos(p);
+    if (st) return st;
+  }
+  int bad = 0;
+#pragma omp parallel num_threads(vm_problem_threads(p))
+  {
+    elem_acc acc;
+    if (out->grad) {
+#pragma omp for schedule(static) nowait
+      for (int64_t k = 0; k < 3 * nv; k++) out->grad[k] = 0;
+    }
+    if (out->hdiag) {
+#pragma omp for schedule(static) nowait
+      for (int64_t k = 0; k < 9 * nv; k++) out->hdiag[k] = 0;
+    }
+    if (out->hoff) {
+#pragma omp for schedule(static) nowait
+      for (int64_t k = 0; k < 3 * nnz; k++) out->hoff[k] = 0;
+    }
+#pragma omp barrier
+    for (int c = 0; c < p->ncolor; c++) {
+#pragma omp for schedule(dynamic, 1)
+      for (int64_t k = p->coff[c]; k < p->coff[c + 1]; k++) {
+        int64_t i0 = p->clist[k] * p->chunk, i1 = i0 + p->chunk;
+        if (i1 > p->nae) i1 = p->nae;
+        for (int64_t i = i0; i < i1; i++) {
+          int stop;
+#pragma omp atomic read
+          stop = bad;
+          if (stop) break;
+          if (p->amask && !p->amask[i]) continue;
+          if (elem_eval(p, i, x, order, &p->Fe[i], &acc)) {
+#pragma omp atomic write
+            bad = 1;
+            break;
+          }
+          scatter(p, i, &acc, out);
+        }
+      }
+    }
+    if (out->F) {
+#pragma omp for schedule(static)
+      for (int64_t b = 0; b < p->nblock; b++) p->part[b] = block_sum(p, b);
+    }
+  }
+  if (bad) {
+    if (out->F) *out->F = INFINITY;
+    return VM_WARN_INVERTED;
+  }
+  if (out->F) {
+    double s = 0;
+    for (int64_t b = 0; b < p->nblock; b++) s += p->part[b];
+    *out->F = s;
+  }
+  return VM_OK;
+}
+
+/* s and det C of every node of active element i into s[], det[]. */
+static void elem_sd(const vm_problem *p, int64_t i, const double *x, double *s, double *det) {
+  elem_ctx ec;
+  elem_setup(p, i, x, &ec);
+  for (int j = 0; j < ec.R->nnodes; j++) {
+    if (p->tdim == 3) {
+      node3 v;
+      node3_eval(&ec, &ec.R->nodes[j], ec.S + 9 * j, ec.diag, 0, &v);
+      s[j] = v.s;
+      det[j] = v.det;
+    } else {
+      node2 v;
+      node2_eval(&ec, &ec.R->nodes[j], ec.S + 4 * j, 0, &v);
+      s[j] = v.s;
+      det[j] = v.det;
+    }
+  }
+}
+
+int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
+  if (!p || !x) return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_stats: NULL argument")
+                         : VM_ERR_ARG;
+  int64_t inv = 0;
+  double mind = INFINITY, phimin = INFINITY, psimin = INFINITY;
+  int d = p->tdim;
+#pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p)) \
+    reduction(+ : inv) reduction(min : mind, phimin, psimin)
+  for (int64_t i = 0; i < p->nae; i++) {
+    double s[64], det[64];
+    elem_sd(p, i, x, s, det);
+    int nn = (int)(p->noff[i + 1] - p->noff[i]);
+    for (int j = 0; j < nn; j++) {
+      double dt = det[j], sd = s[j] / d;
+      if (dt <= 0) inv++;
+      if (dt < mind) mind = dt;
+      /* phi = det/(s/d)^{d/2} */
+      double phi = sd > 0 ? dt / (d == 3 ? sd * sqrt(sd) : sd) : -INFINITY;
+      if (phi < phimin) phimin = phi;
+      double psi = 2 * dt / (1 + dt * dt);
+      if (psi < psimin) psimin = psi;
+    }
+  }
+  if (st) {
+    st->inverted = inv;
+    st->min_det = mind;
+    st->phi_min = phimin;
+    st->psi_min = psimin;
+  }
+  return VM_OK;
+}
+
+int vm_problem_node_dets(vm_problem *p, const double *x, double *det) {
+  if (!p || !x || !det)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_dets: NULL argument") : VM_ERR_ARG;
+#pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
+  for (int64_t i = 0; i < p->nae; i++) {
+    double s[64];
+    elem_sd(p, i, x, s, det + p->noff[i]);
+  }
+  return VM_OK;
+}

@@ -1,0 +1,404 @@
+/* lib/src/minimize.c: the minimizer interface and driver: projected
+ * gradient (30), line search on tau (33), (37), stopping rules, monitor. */
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "linsolve_private.h"
+#include "minimize_private.h"
+
+/* F differences below this fraction of |F| are treated as rounding noise:
+ * the line search then judges a step by the directional derivative. */
+#define LS_NOISE 1e-10
+/* Approximate Armijo condition of Hager and Zhang, delta = 0.1. */
+#define LS_APPROX_DELTA 0.1
+#define LS_MIN_TAU 1e-14
+
+vm_minimize_options vm_minimize_options_default(void) {
+  vm_minimize_options o;
+  memset(&o, 0, sizeof o);
+  o.max_iter = 200;
+  o.time_limit = 0;
+  o.rel_decrease_tol = 1e-10;
+  o.rel_decrease_count = 2;
+  o.grad_atol = 0;
+  o.grad_rtol = 1e-10;
+  o.armijo = 1e-4;
+  o.ls_max_evals = 40;
+  o.ls_extrapolate = 2;
+  o.pcg_rtol = 1e-2;
+  o.pcg_maxit = 100;
+  o.precond = VM_PRECOND_AMG;
+  o.amg = vm_amg_options_default();
+  o.amg.update_coarse = 0;
+  o.amg_rebuild_every = 4;
+  o.stats_every = 1;
+  return o;
+}
+
+const char *vm_stop_reason_name(vm_stop_reason r) {
+  switch (r) {
+  case VM_STOP_REL_DECREASE: return "rel-decrease";
+  case VM_STOP_GRAD_NORM: return "grad-norm";
+  case VM_STOP_MAX_ITER: return "max-iter";
+  case VM_STOP_TIME: return "time-limit";
+  case VM_STOP_LINE_SEARCH: return "line-search";
+  case VM_STOP_INTERRUPTED: return "interrupted";
+  case VM_STOP_CALLBACK: return "callback";
+  default: return "none";
+  }
+}
+
+int vm_minimizer_create(vm_ctx *ctx, vm_problem *problem, vm_minimizer_kind kind,
+                        vm_minimizer **out) {
+  static const vm_minimizer_ops *const table[] = {&vm_minimizer_explicit_ops,
+                                                  &vm_minimizer_implicit_ops};
+  if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: out is NULL");
+  *out = NULL;
+  if (!problem) return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: problem is NULL");
+  if ((int)kind < 0 || (int)kind > 1)
+    return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: unknown kind %d", (int)kind);
+  vm_minimizer *m = vm_calloc(ctx, 1, sizeof *m);
+  if (!m) return VM_ERR_NOMEM;
+  m->ctx = ctx;
+  m->prob = problem;
+  m->kind = kind;
+  m->ops = table[kind];
+  m->opt = vm_minimize_options_default();
+  *out = m;
+  return VM_OK;
+}
+
+void vm_minimizer_destroy(vm_minimizer **p) {
+  if (!p || !*p) return;
+  vm_minimizer *m = *p;
+  m->ops->end(m);
+  vm_bc_destroy(&m->bc);
+  vm_free(m->ctx, m);
+  *p = NULL;
+}
+
+int vm_minimizer_set_options(vm_minimizer *m, const vm_minimize_options *o) {
+  if (!m || !o) return VM_ERR_ARG;
+  if (o->max_iter < 0 || !(o->armijo > 0 && o->armijo < 0.5) || o->ls_max_evals < 1 ||
+      !(o->pcg_rtol > 0 && o->pcg_rtol < 1) || o->pcg_maxit < 1 || o->rel_decrease_tol < 0 ||
+      o->grad_atol < 0 || o->grad_rtol < 0 || o->amg_rebuild_every < 1 ||
+      (int)o->precond < 0 || (int)o->precond > VM_PRECOND_AMG || o->stats_every < 0 ||
+      o->ls_extrapolate < 0)
+    return vm_error(m->ctx, VM_ERR_ARG, "vm_minimizer_set_options: invalid option value");
+  m->opt = *o;
+  if (m->opt.rel_decrease_count < 1) m->opt.rel_decrease_count = 1;
+  return VM_OK;
+}
+
+const vm_minimize_options *vm_minimizer_options(const vm_minimizer *m) { return &m->opt; }
+
+int vm_minimizer_set_surfaces(vm_minimizer *m, const vm_surface_ops *surf) {
+  if (!m) return VM_ERR_ARG;
+  m->has_surf = surf != NULL;
+  if (surf) m->surf = *surf;
+  return VM_OK;
+}
+
+const char *vm_minimizer_name(const vm_minimizer *m) { return m->ops->name; }
+
+/* Work arrays of one run. xa/xb are trial buffers whose fixed-vertex
+ * entries equal x from the start and are never written. */
+typedef struct {
+  double *g, *hdiag, *hoff, *d, *xa, *xb, *gt;
+  int64_t nhoff;
+} run_bufs;
+
+static void free_bufs(vm_ctx *ctx, run_bufs *b) {
+  vm_free(ctx, b->g);
+  vm_free(ctx, b->hdiag);
+  vm_free(ctx, b->hoff);
+  vm_free(ctx, b->d);
+  vm_free(ctx, b->xa);
+  vm_free(ctx, b->xb);
+  vm_free(ctx, b->gt);
+  memset(b, 0, sizeof *b);
+}
+
+/* Copy the non-fixed vertices of src into x. */
+static void commit(const vm_minimizer *m, const double *src, double *x) {
+  int nt = vm_nthreads(m->ctx);
+  const int64_t nv = m->nv;
+#pragma omp parallel for num_threads(nt) schedule(static) if (nv >= VM_PAR_MIN)
+  for (int64_t v = 0; v < nv; v++)
+    if (vm_bc_class(m->bc, v) != VM_VERTEX_FIXED)
+      memcpy(x + 3 * v, src + 3 * v, 3 * sizeof *x);
+}
+
+/* F at V(x + tau d) into *F (+INFINITY outside the domain or when a
+ * projection fails). Returns VM_OK or a hard error. */
+static int trial_value(vm_minimizer *m, const double *x, const double *d, double tau,
+                       double *xt, double *F) {
+  int st = vm_bc_step(m->bc, x, d, tau, xt);
+  if (st < 0) {
+    *F = INFINITY;
+    return VM_OK;
+  }
+  st = vm_problem_value(m->prob, xt, F);
+  if (st < 0) return st;
+  if (st > 0 || !isfinite(*F)) *F = INFINITY;
+  return VM_OK;
+}
+
+typedef struct {
+  int accepted;
+  double tau, F;
+  int evals, infeasible;
+  double *x; /* buffer holding the accepted point */
+} ls_result;
+
+/* Backtracking line search on tau from 1 with the Armijo condition,
+ * quadratic interpolation, the approximate Armijo test when F is at its
+ * rounding level, and up to ls_extrapolate longer tries after a full step. */
+static int line_search(vm_minimizer *m, const double *x, const double *d, double F0, double gd,
+                       run_bufs *b, ls_result *out) {
+  const vm_minimize_options *o = &m->opt;
+  const int64_t n3 = 3 * m->nv;
+  double noise = LS_NOISE * fabs(F0);
+  double tau = 1.0, F = INFINITY;
+  double *xt = b->xa, *xs = b->xb;
+  memset(out, 0, sizeof *out);
+  int st, approx = 0;
+  for (int k = 0; k < o->ls_max_evals; k++) {
+    st = trial_value(m, x, d, tau, xt, &F);
+    if (st) return st;
+    out->evals++;
+    if (isfinite(F)) {
+      int ok = F <= F0 + o->armijo * tau * gd;
+      if (!ok && F <= F0 + noise) {
+        approx = 1;
+        vm_eval ev = {NULL, b->gt, NULL, NULL};
+        double Ft;
+        ev.F = &Ft;
+        st = vm_problem_eval(m->prob, xt, &ev);
+        if (st < 0) return st;
+        if (st == VM_OK) {
+          vm_bc_apply(m->bc, b->gt);
+          double gtd = vm_dot(m->ctx, n3, b->gt, d);
+          ok = gtd <= (2 * LS_APPROX_DELTA - 1) * gd;
+        }
+      }
+      if (ok) {
+        out->accepted = 1;
+        break;
+      }
+      double den = 2 * (F - F0 - gd * tau);
+      double tq = den > 0 ? -gd * tau * tau / den : 0.5 * tau;
+      tau = tq < 0.1 * tau ? 0.1 * tau : tq > 0.5 * tau ? 0.5 * tau : tq;
+    } else {
+      out->infeasible++;
+      tau *= 0.25;
+    }
+    if (tau < LS_MIN_TAU) break;
+  }
+  if (!out->accepted) return VM_OK;
+  out->tau = tau;
+  out->F = F;
+  out->x = xt;
+  if (tau != 1.0 || approx) return VM_OK;
+  for (int e = 0; e < o->ls_extrapolate && out->evals < o->ls_max_evals; e++) {
+    double t = out->tau, Ft = out->F;
+    double den = 2 * (Ft - F0 - gd * t);
+    double tq = den > 0 ? -gd * t * t / den : 4 * t;
+    if (tq < 1.5 * t) break;
+    if (tq > 4 * t) tq = 4 * t;
+    double Fe;
+    st = trial_value(m, x, d, tq, xs, &Fe);
+    if (st) return st;
+    out->evals++;
+    if (!isfinite(Fe)) out->infeasible++;
+    if (!(Fe < out->F) || !(Fe <= F0 + o->armijo * tq * gd)) break;
+    out->tau = tq;
+    out->F = Fe;
+    out->x = xs;
+    double *sw = xs;
+    xs = xt;
+    xt = sw;
+  }
+  return VM_OK;
+}
+
+/* Diagonally scaled projected gradient, used when the member's direction
+ * is not a descent direction (a numerical breakdown). */
+static void fallback_direction(const vm_minimizer *m, const double *g, const double *hdiag,
+                               double *d) {
+  for (int64_t v = 0; v < m->nv; v++) {
+    const double *H = hdiag + 9 * v;
+    double s = (H[0] + H[4] + H[8]) / m->sdim;
+    if (!(s > 0) || !isfinite(s)) s = 1;
+    for (int k = 0; k < 3; k++) d[3 * v + k] = -g[3 * v + k] / s;
+  }
+  vm_bc_apply(m->bc, d);
+}
+
+static void node_stats(vm_minimizer *m, const double *x, int64_t *inv, double *mindet) {
+  vm_node_stats st;
+  if (vm_problem_node_stats(m->prob, x, &st) >= 0) {
+    *inv = st.inverted;
+    *mindet = st.min_det;
+  } else {
+    *inv = -1;
+    *mindet = NAN;
+  }
+}
+
+int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
+  if (!m || !x) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  const vm_minimize_options *o = &m->opt;
+  double t0 = omp_get_wtime();
+  const vm_mesh *mesh = vm_problem_mesh(m->prob);
+  vm_minimize_result r;
+  memset(&r, 0, sizeof r);
+  r.inverted = -1;
+  r.min_det = NAN;
+  r.F = r.F_initial = NAN;
+  if (res) *res = r;
+  m->nv = mesh->nv;
+  m->sdim = mesh->dim == 2 ? 2 : 3;
+  run_bufs b;
+  memset(&b, 0, sizeof b);
+  vm_bc_destroy(&m->bc);
+  int st = vm_bc_create(ctx, mesh, m->has_surf ? &m->surf : NULL, &m->bc);
+  if (st) return st;
+  const size_t n3 = (size_t)(3 * m->nv > 0 ? 3 * m->nv : 1);
+  if (m->ops->needs_hoff) {
+    const int64_t *rp;
+    const int32_t *adj;
+    vm_problem_graph(m->prob, &rp, &adj);
+    b.nhoff = 3 * rp[m->nv];
+    b.hoff = vm_alloc_array(ctx, b.nhoff > 0 ? (size_t)b.nhoff : 1, sizeof *b.hoff);
+    if (!b.hoff) st = VM_ERR_NOMEM;
+  }
+  b.g = vm_alloc_array(ctx, n3, sizeof *b.g);
+  b.hdiag = vm_alloc_array(ctx, 3 * n3, sizeof *b.hdiag);
+  b.d = vm_alloc_array(ctx, n3, sizeof *b.d);
+  b.xa = vm_alloc_array(ctx, n3, sizeof *b.xa);
+  b.xb = vm_alloc_array(ctx, n3, sizeof *b.xb);
+  b.gt = vm_alloc_array(ctx, n3, sizeof *b.gt);
+  if (st || !b.g || !b.hdiag || !b.d || !b.xa || !b.xb || !b.gt) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  st = vm_bc_project(m->bc, x);
+  if (st) goto done;
+  memcpy(b.xa, x, (size_t)m->nv * 3 * sizeof *x);
+  memcpy(b.xb, x, (size_t)m->nv * 3 * sizeof *x);
+  st = m->ops->begin(m);
+  if (st) goto done;
+
+  double g0 = -1, F = NAN;
+  int stall = 0;
+  const int64_t nn3 = 3 * m->nv;
+  for (int iter = 1;; iter++) {
+    if (vm_ctx_interrupted(ctx)) {
+      r.reason = VM_STOP_INTERRUPTED;
+      st = vm_error(ctx, VM_ERR_INTERRUPTED, "minimizer interrupted at iteration %d", iter);
+      break;
+    }
+    if (iter > o->max_iter) {
+      r.reason = VM_STOP_MAX_ITER;
+      st = VM_WARN_MAXITER;
+      break;
+    }
+    if (o->time_limit > 0 && omp_get_wtime() - t0 >= o->time_limit) {
+      r.reason = VM_STOP_TIME;
+      st = VM_WARN_TIME;
+      break;
+    }
+    if (o->before_iteration) {
+      int h = o->before_iteration(o->user, iter, x);
+      if (h > 0) {
+        r.reason = VM_STOP_CALLBACK;
+        st = VM_OK;
+        break;
+      }
+      if (h < 0) {
+        st = h;
+        break;
+      }
+    }
+    vm_eval ev = {&F, b.g, b.hdiag, m->ops->needs_hoff ? b.hoff : NULL};
+    st = vm_problem_eval(m->prob, x, &ev);
+    if (st < 0) break;
+    if (st > 0 || !isfinite(F)) {
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "iteration %d starts outside the measure's domain (F = %g)", iter, F);
+      break;
+    }
+    if (iter == 1) r.F_initial = F;
+    r.F = F;
+    vm_bc_apply(m->bc, b.g);
+    double gn = sqrt(vm_dot(ctx, nn3, b.g, b.g));
+    if (g0 < 0) g0 = gn;
+    r.grad_norm = gn;
+    if (!isfinite(gn)) {
+      st = vm_error(ctx, VM_ERR_NUMERIC, "non-finite gradient at iteration %d", iter);
+      break;
+    }
+    if (gn == 0 || gn <= o->grad_atol || gn <= o->grad_rtol * g0) {
+      r.reason = VM_STOP_GRAD_NORM;
+      st = VM_OK;
+      break;
+    }
+    int lin = 0;
+    st = m->ops->direction(m, iter, b.g, b.hdiag, b.hoff, b.d, &lin);
+    if (st < 0) break;
+    r.pcg_iterations += lin;
+    double gd = vm_dot(ctx, nn3, b.g, b.d);
+    if (!(gd < 0)) {
+      fallback_direction(m, b.g, b.hdiag, b.d);
+      gd = vm_dot(ctx, nn3, b.g, b.d);
+    }
+    ls_result ls;
+    st = line_search(m, x, b.d, F, gd, &b, &ls);
+    if (st < 0) break;
+    if (!ls.accepted) {
+      r.reason = VM_STOP_LINE_SEARCH;
+      st = VM_OK;
+      break;
+    }
+    commit(m, ls.x, x);
+    st = vm_bc_refresh(m->bc, x);
+    if (st) break;
+    r.iterations = iter;
+    r.F = ls.F;
+    vm_iter_info info;
+    info.iter = iter;
+    info.F = ls.F;
+    info.F_before = F;
+    info.grad_norm = gn;
+    info.tau = ls.tau;
+    info.ls_evals = ls.evals;
+    info.ls_infeasible = ls.infeasible;
+    info.pcg_iters = lin;
+    info.inverted = -1;
+    info.min_det = NAN;
+    if (o->stats_every > 0 && iter % o->stats_every == 0)
+      node_stats(m, x, &info.inverted, &info.min_det);
+    info.elapsed = omp_get_wtime() - t0;
+    if (o->monitor) o->monitor(o->user, &info);
+    if (F - ls.F <= o->rel_decrease_tol * fabs(ls.F)) {
+      if (++stall >= o->rel_decrease_count) {
+        r.reason = VM_STOP_REL_DECREASE;
+        st = VM_OK;
+        break;
+      }
+    } else {
+      stall = 0;
+    }
+  }
+  node_stats(m, x, &r.inverted, &r.min_det);
+done:
+  m->ops->end(m);
+  free_bufs(ctx, &b);
+  vm_bc_destroy(&m->bc);
+  r.elapsed = omp_get_wtime() - t0;
+  if (res) *res = r;
+  return st;
+}

@@ -1,0 +1,129 @@
+/* lib/src/problem_private.h: the layout of vm_problem, shared by its setup
+ * (problem.c) and its assembly (assembly.c); lib/ only. */
+#ifndef VARMESH_PROBLEM_PRIVATE_H
+#define VARMESH_PROBLEM_PRIVATE_H
+
+#include <stdint.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "varmesh/problem.h"
+
+/* How the active elements are measured. */
+enum {
+  VM_PK_VOL3 = 0,  /* 3D elements in 3D */
+  VM_PK_PLANE = 1, /* 2D elements of a 2D mesh: xy components */
+  VM_PK_SURF = 2   /* 2D elements in 3D: tangent frame with reference normal */
+};
+
+enum { VM_TGT_IDEAL = 0, VM_TGT_REFERENCE = 1, VM_TGT_FIELD = 2 };
+enum { VM_METRIC_IDENTITY = 0, VM_METRIC_SCALAR = 1, VM_METRIC_TENSOR = 2 };
+
+/* Below this many active elements the assembly runs on one thread: the
+ * per-colour barriers would cost more than the work. */
+#define VM_PROBLEM_MIN_PARALLEL 1024
+
+/* Elements per block of the fixed-order sum of F. */
+#define VM_PROBLEM_FBLOCK 512
+
+/* A rule node's distinct local vertices u and their coefficients a_u in the
+ * columns of E (+1 head, -1 tail): E = sum_u x_u a_u^T; pidx[k] is the
+ * element pair index of the k-th pair (u, v), u < v, in loop order. */
+typedef struct vm_nodepat {
+  int nloc;
+  signed char loc[6];
+  signed char a[6][3];
+  signed char pidx[15];
+  double ad[6][3]; /* a as doubles */
+} vm_nodepat;
+
+#define VM_MAX_PAIRS 28
+
+struct vm_problem {
+  vm_ctx *ctx;
+  vm_mesh *m;
+  int tdim; /* 2 or 3: dimension of the active elements (d) */
+  int kind; /* VM_PK_* */
+
+  const vm_measure_ops *ops;
+  vm_measure_params prm;
+
+  /* quadrature rule per element type, node patterns, and the pairs of
+   * local vertices (a < b) coupled by some node of the rule */
+  int rule;
+  const vm_qrule *qr[VM_NTYPES];
+  vm_nodepat pat[VM_NTYPES][64];
+  int npair[VM_NTYPES];
+  signed char pair[VM_NTYPES][VM_MAX_PAIRS][2];
+
+  /* active elements (highest dimension, mesh order) and their nodes */
+  int64_t nae;
+  int32_t *ael;   /* mesh element of active element i */
+  int64_t *noff;  /* nae + 1: first node of active element i */
+  int64_t nn;
+  int32_t *nelem; /* mesh element of each node */
+
+  /* targets: node S = T^{-1} (d x d row-major) and wb = beta kappa det T,
+   * shared per element type for ideal targets, per node otherwise */
+  int tgt;
+  double tgt_size;  /* edge length of the ideal targets */
+  double *tgt_ref;  /* VM_TGT_REFERENCE: 3*nv copy */
+  double *tgt_fld;  /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
+  double *Snode;    /* nn*d*d or NULL */
+  double *wnode;    /* nn or NULL */
+  double Sid[VM_NTYPES][64 * 9];
+  double wid[VM_NTYPES][64];
+  int sdiag[VM_NTYPES]; /* ideal S of every node of the type is diagonal */
+  double tvol;      /* sum of w beta kappa det T over all nodes */
+
+  /* metric G_x per active element: g (scalar), G (tensor: xx yy zz xy yz xz;
+   * plane meshes use xx yy xy with zz = yz = xz = 0) and det Q */
+  int metric;
+  double *mg;
+  double *mG;
+  double *mdq;
+
+  double *wel; /* nae weights (12) */
+  double *nrm; /* VM_PK_SURF: nae reference unit normals */
+
+  /* vertex graph (CSR, no diagonal, sorted) */
+  int64_t *rowptr;
+  int32_t *adj;
+  /* hoff positions of every element pair (u, v) and (v, u), offsets within
+   * the rows, built at the first Hessian assembly when every row has at
+   * most 255 entries; ppos_stride bytes per active element (0: not built
+   * yet, -1: rows too long, binary search instead) */
+  uint8_t *ppos;
+  int ppos_stride;
+
+  /* greedy colouring of chunks of `chunk` consecutive active elements: no
+   * two chunks of a colour share a vertex, so threads scatter without races
+   * and every vertex sums its contributions in the same order for any
+   * thread count. Colour c holds chunks clist[coff[c] .. coff[c+1]). */
+  int64_t chunk, nchunk;
+  int ncolor;
+  int64_t *coff;
+  int32_t *clist;
+  uint8_t *amask; /* nae or NULL: the active subset */
+
+  double *eps_node; /* nn or NULL */
+
+  /* scratch for the fixed-order sum of F */
+  double *Fe;   /* nae */
+  double *part; /* blocks of VM_PROBLEM_FBLOCK elements */
+  int64_t nblock;
+};
+
+/* Threads for an OpenMP region of this problem (the context's setting,
+ * else the OpenMP default). */
+static inline int vm_problem_threads(const vm_problem *p) {
+  int nt = vm_ctx_threads(p->ctx);
+#ifdef _OPENMP
+  if (nt <= 0) nt = omp_get_max_threads();
+#endif
+  return nt > 0 && p->nae >= VM_PROBLEM_MIN_PARALLEL ? nt : 1;
+}
+
+#endif

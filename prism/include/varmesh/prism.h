@@ -1,0 +1,171 @@
+/* varmesh/prism.h: thick multi-layer prismatic meshes on a closed
+ * triangulated wall by the method of the paper's Section 6.2: a thin layer
+ * along blended vertex normals, elastic springback to the requested
+ * thickness (implicit solver, per-prism targets), cutting of
+ * self-intersections found with Embree, restoration of thickness with
+ * Laplace-Beltrami smoothing, and the marching split into sublayers
+ * (explicit solver, orthogonalizing weights). Every prism of every layer
+ * stays valid (all quadrature simplices of the geometric rule positive,
+ * hence every corner tet positive) at every step. */
+#ifndef VARMESH_PRISM_H
+#define VARMESH_PRISM_H
+
+#include <stdint.h>
+
+#include "varmesh/ctx.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Names used on the output mesh. */
+#define VM_PRISM_FIELD_LAYER "layer"           /* i32 per element: 0 at the wall; -1 on faces */
+#define VM_PRISM_FIELD_THICKNESS "thickness"   /* f64 per vertex: achieved column thickness */
+#define VM_PRISM_FIELD_PHYS "gmsh:physical"    /* i32 per element: family tag below */
+enum {
+  VM_PRISM_TAG_WALL = 1,   /* wall triangles (the input surface) */
+  VM_PRISM_TAG_OUTER = 2,  /* outer boundary triangles */
+  VM_PRISM_TAG_VOLUME = 3  /* the prisms */
+};
+
+/* Phases, in order (progress and timings). */
+typedef enum {
+  VM_PRISM_PHASE_THIN = 0,
+  VM_PRISM_PHASE_SPRINGBACK = 1,
+  VM_PRISM_PHASE_CUT = 2,
+  VM_PRISM_PHASE_RESTORE = 3,
+  VM_PRISM_PHASE_MARCH = 4,
+  VM_PRISM_NPHASES = 5
+} vm_prism_phase;
+
+/* Name of a phase ("thin", "springback", "cut", "restore", "march"). */
+const char *vm_prism_phase_name(vm_prism_phase ph);
+
+typedef struct vm_prism_progress {
+  vm_prism_phase phase;
+  int step;          /* solver iteration, cutting round, smoothing pass or layer */
+  double value;      /* phase-specific: F (solves), intersecting pairs (cut),
+                        mean thickness / T (restore), layer height (march) */
+  int64_t count;     /* phase-specific: inverted nodes (solves), prisms to cut */
+  double elapsed;    /* seconds since the layer was created */
+} vm_prism_progress;
+
+typedef void (*vm_prism_progress_fn)(void *user, const vm_prism_progress *p);
+
+typedef struct vm_prism_opts {
+  double thickness;     /* T, absolute, > 0 (required) */
+  int nlayers;          /* N >= 1 (default 20) */
+  double first_height;  /* h1 > 0, or <= 0: from growth (default 0) */
+  double growth;        /* ratio r >= 1 of successive heights, or <= 0: from
+                           first_height (default 1.2); if both are given, the
+                           growth law is kept and the layer count may drop */
+  double theta;         /* of the balanced measure (default 0.8) */
+  double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
+  int springback_iter;  /* implicit iterations of the first springback (default 60) */
+  int resolve_iter;     /* implicit iterations after each cutting round (default 15) */
+  int max_cut_rounds;   /* default 80 */
+  int smooth_iter;      /* restoration / smoothing passes (default 30) */
+  int march_iter;       /* explicit iterations per split (default 8) */
+  double ortho_weight;  /* weight (12) of the inner sublayer in marching (default 10) */
+  double drop_quality;  /* drop the outermost remainder if its minimum scaled
+                           Jacobian is below this (default 0: never) */
+  double full_tol;      /* a column is at full thickness if >= (1 - full_tol) T
+                           (default 0.01) */
+  double time_limit;    /* seconds for the whole run, <= 0: none */
+  vm_prism_progress_fn progress;
+  void *user;
+} vm_prism_opts;
+
+vm_prism_opts vm_prism_opts_default(void);
+
+/* The summary of a run (every figure is measured, not assumed). */
+typedef struct vm_prism_report {
+  int64_t wall_vertices, wall_triangles, prisms;
+  int layers_requested, layers;  /* layers is less if the remainder was dropped */
+  double thickness;              /* T */
+  double first_height, growth;   /* of the schedule used */
+  double thin_min, thin_max;     /* heights of the thin layer */
+  int springback_iter;           /* implicit iterations, all solves */
+  int cut_rounds;
+  int64_t cut_pairs_first;       /* intersecting pairs found in the first round */
+  int64_t intersections;         /* pairs left at the end (0 unless limits hit) */
+  double full_fraction;          /* columns at full thickness */
+  double thick_min, thick_mean;  /* achieved / requested thickness over columns */
+  int64_t inverted;              /* corner tets with det <= 0 in the final mesh */
+  double sj_min;                 /* minimum scaled Jacobian of the prisms */
+  double normal_dev_max;         /* degrees: first-layer side edges vs the wall's
+                                    vertex normal, at smooth vertices */
+  double normal_dev_mean;
+  int64_t smooth_vertices;       /* vertices where normal_dev is measured */
+  double growth_max;             /* max h_{k+1}/h_k over columns */
+  double time[VM_PRISM_NPHASES]; /* seconds per phase */
+  double time_total;
+} vm_prism_report;
+
+typedef struct vm_prism vm_prism;
+
+/* Create the layer builder for a wall: the triangles (VM_TRI; quads are
+ * split into two) of `wall` with outward orientation, the layer grows on
+ * the side the normals point to. Other element types are ignored. The wall
+ * is copied. Vertices not used by a triangle are dropped (the output wall
+ * keeps the used ones in their original order).
+ * Errors: VM_ERR_ARG (no triangles, bad options, a degenerate triangle, a
+ * vertex where no direction sees every incident face), VM_ERR_NOMEM. */
+int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
+                    vm_prism **out);
+void vm_prism_destroy(vm_prism **p);
+
+/* The phases, to be called in this order (vm_prism_run calls them all).
+ * Each returns VM_OK, a warning (VM_WARN_MAXITER: a limit stopped it with
+ * a valid layer; VM_WARN_TIME) or an error. After each of them the current
+ * single layer is valid. */
+int vm_prism_thin(vm_prism *p);
+int vm_prism_springback(vm_prism *p);
+int vm_prism_cut(vm_prism *p);
+int vm_prism_restore(vm_prism *p);
+int vm_prism_march(vm_prism *p);
+int vm_prism_run(vm_prism *p);
+
+/* The current single layer (before marching) as a prism mesh: vertices
+ * 0..nw-1 the wall (FIXED), nw..2nw-1 the outer surface; one prism per
+ * wall triangle. Owned by p; valid until the next call on p. */
+const vm_mesh *vm_prism_layer(const vm_prism *p);
+
+/* The result: N-layer prism mesh (after vm_prism_march) with vertices
+ * column by column in layers (vertex k*nw + v is level k of column v), the
+ * prisms layer by layer, then the wall triangles and the outer triangles as
+ * boundary faces; fields VM_PRISM_FIELD_LAYER, VM_PRISM_FIELD_THICKNESS,
+ * VM_PRISM_FIELD_PHYS and attributes "gmsh:physical_name:2:1" = "wall",
+ * "gmsh:physical_name:2:2" = "outer", "gmsh:physical_name:3:3" = "layer".
+ * Wall vertices are FIXED and bit-identical to the input. Free with
+ * vm_mesh_destroy. Before marching, the single layer is returned. */
+int vm_prism_result(vm_prism *p, vm_mesh **out);
+
+/* Figures of the run so far (final figures after vm_prism_march). */
+int vm_prism_get_report(vm_prism *p, vm_prism_report *r);
+
+/* ---- intersection detection (Embree BVH, exact-sign tests in double) ---- */
+
+/* Pairs of intersecting triangles among `ntri` triangles (3 vertex indices
+ * each into xyz). Triangles sharing an edge are never reported; triangles
+ * sharing one vertex are reported if their opposite edges cross the other;
+ * if `group` is not NULL, pairs with group[a] == group[b] >= 0 are skipped
+ * (e.g. the wall against itself). Output: *npairs pairs (a < b), sorted,
+ * in *pairs (2 per pair, vm_malloc; may be NULL to count only).
+ * The result does not depend on thread timing. */
+int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
+                                const int32_t *tri, const int32_t *group, int64_t *npairs,
+                                int64_t **pairs);
+
+/* Boundary-face intersections of a volume mesh: its boundary triangles
+ * (quads split) against each other, except pairs that both lie on `wall`
+ * vertices only (wall[v] != 0 for wall vertices; NULL: no exception).
+ * *npairs counts intersecting pairs. */
+int vm_prism_mesh_intersections(vm_ctx *ctx, const vm_mesh *m, const uint8_t *wall,
+                                int64_t *npairs);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

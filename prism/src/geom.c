@@ -1,0 +1,207 @@
+/* prism/src/geom.c: prism validity and quality over quadrature simplices,
+ * blended column directions, and per-prism target shapes. */
+#include <math.h>
+#include <string.h>
+
+#include "prism_private.h"
+#include "varmesh/quadrature.h"
+
+static double node_ratio(const vm_qnode *q, const double *x) {
+  double c[3][3];
+  for (int k = 0; k < 3; k++)
+    for (int r = 0; r < 3; r++) c[k][r] = x[3 * q->head[k] + r] - x[3 * q->tail[k] + r];
+  double cr[3];
+  pr_cross(c[1], c[2], cr);
+  double det = pr_dot(c[0], cr);
+  double l = pr_norm(c[0]) * pr_norm(c[1]) * pr_norm(c[2]);
+  if (!(l > 0)) return det > 0 ? 1 : -1;
+  return det / l;
+}
+
+double pr_prism_quality(const double *x) {
+  const vm_qrule *R = vm_qrule_get(VM_PRISM, VM_RULE_GEOMETRIC);
+  double q = INFINITY;
+  for (int j = 0; j < R->nnodes; j++) {
+    double v = node_ratio(&R->nodes[j], x);
+    if (v < q) q = v;
+  }
+  return q / (sqrt(3.0) / 2);
+}
+
+double pr_prism_corner_quality(const double *x, int *inverted) {
+  const vm_qrule *R = vm_qrule_get(VM_PRISM, VM_RULE_CORNER);
+  double q = INFINITY;
+  int bad = 0;
+  for (int j = 0; j < R->nnodes; j++) {
+    const vm_qnode *nd = &R->nodes[j];
+    double c[3][3];
+    for (int k = 0; k < 3; k++)
+      for (int r = 0; r < 3; r++) c[k][r] = x[3 * nd->head[k] + r] - x[3 * nd->tail[k] + r];
+    double cr[3];
+    pr_cross(c[1], c[2], cr);
+    if (!(pr_dot(c[0], cr) > 0)) bad++;
+    double v = node_ratio(nd, x);
+    if (v < q) q = v;
+  }
+  if (inverted) *inverted = bad;
+  return q / (sqrt(3.0) / 2);
+}
+
+int64_t pr_count_invalid(const vm_mesh *m, double *qmin) {
+  int64_t bad = 0;
+  double qm = INFINITY;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_PRISM) continue;
+    double x[18];
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+    double q = pr_prism_quality(x);
+    if (!(q > 0)) bad++;
+    if (q < qm) qm = q;
+  }
+  if (qmin) *qmin = qm;
+  return bad;
+}
+
+/* min over the incident faces of n . f */
+static double min_visibility(const vm_prism *p, int64_t v, const double *fn, const double *n) {
+  double m = INFINITY;
+  for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
+    double d = pr_dot(n, fn + 3 * (int64_t)p->vt[k]);
+    if (d < m) m = d;
+  }
+  return m;
+}
+
+/* Direction maximizing the minimum of n . f over the incident faces: the
+ * centre of the smallest spherical cap holding them (Badoiu-Clarkson). */
+static double best_visible(const vm_prism *p, int64_t v, const double *fn, double *n) {
+  double best[3] = {n[0], n[1], n[2]};
+  double bm = min_visibility(p, v, fn, n);
+  double c[3] = {n[0], n[1], n[2]};
+  for (int it = 1; it <= 200; it++) {
+    double wm = INFINITY;
+    int32_t wt = -1;
+    for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
+      double d = pr_dot(c, fn + 3 * (int64_t)p->vt[k]);
+      if (d < wm) {
+        wm = d;
+        wt = p->vt[k];
+      }
+    }
+    if (wm > bm) {
+      bm = wm;
+      memcpy(best, c, sizeof best);
+    }
+    if (wt < 0) break;
+    for (int k = 0; k < 3; k++) c[k] += (fn[3 * (int64_t)wt + k] - c[k]) / (it + 1);
+    double u[3] = {c[0], c[1], c[2]};
+    if (pr_normalize(u) == 0) break;
+    double d = min_visibility(p, v, fn, u);
+    if (d > bm) {
+      bm = d;
+      memcpy(best, u, sizeof best);
+    }
+  }
+  memcpy(n, best, sizeof best);
+  return bm;
+}
+
+int64_t pr_surface_dirs(const vm_prism *p, const double *xyz, double *fn, double *vnrm,
+                        double *dir, int blend_passes) {
+  int64_t nw = p->nw, nt = p->nt;
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *c = p->tri + 3 * t;
+    const double *a = xyz + 3 * (int64_t)c[0], *b = xyz + 3 * (int64_t)c[1],
+                 *d = xyz + 3 * (int64_t)c[2];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+      e1[k] = b[k] - a[k];
+      e2[k] = d[k] - a[k];
+    }
+    pr_cross(e1, e2, fn + 3 * t);
+    pr_normalize(fn + 3 * t);
+  }
+  memset(dir, 0, (size_t)(3 * nw) * sizeof *dir);
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *c = p->tri + 3 * t;
+    for (int i = 0; i < 3; i++) {
+      const double *x0 = xyz + 3 * (int64_t)c[i], *x1 = xyz + 3 * (int64_t)c[(i + 1) % 3],
+                   *x2 = xyz + 3 * (int64_t)c[(i + 2) % 3];
+      double u[3], w[3];
+      for (int k = 0; k < 3; k++) {
+        u[k] = x1[k] - x0[k];
+        w[k] = x2[k] - x0[k];
+      }
+      double cu = pr_dot(u, w) / (pr_norm(u) * pr_norm(w));
+      double ang = acos(cu < -1 ? -1 : cu > 1 ? 1 : cu);
+      for (int k = 0; k < 3; k++) dir[3 * (int64_t)c[i] + k] += ang * fn[3 * t + k];
+    }
+  }
+  int64_t blind = 0;
+  for (int64_t v = 0; v < nw; v++) {
+    double *n = dir + 3 * v;
+    if (pr_normalize(n) == 0) n[2] = 1;
+    if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
+    if (min_visibility(p, v, fn, n) < 0.2 && best_visible(p, v, fn, n) <= 0) blind++;
+  }
+  /* blend near sharp edges: Jacobi averaging with the neighbours, kept only
+   * where every incident face still sees the new direction well */
+  double *tmp = vm_alloc_array(p->ctx, (size_t)(3 * nw), sizeof *tmp);
+  if (!tmp) return blind;
+  for (int pass = 0; pass < blend_passes; pass++) {
+    memcpy(tmp, dir, (size_t)(3 * nw) * sizeof *tmp);
+    for (int64_t v = 0; v < nw; v++) {
+      double m0 = min_visibility(p, v, fn, dir + 3 * v);
+      int sharp = m0 < 0.94;
+      for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1] && !sharp; k++)
+        sharp = min_visibility(p, p->vv[k], fn, dir + 3 * (int64_t)p->vv[k]) < 0.94;
+      if (!sharp) continue;
+      double s[3] = {dir[3 * v], dir[3 * v + 1], dir[3 * v + 2]};
+      for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++)
+        for (int c = 0; c < 3; c++) s[c] += 0.5 * dir[3 * (int64_t)p->vv[k] + c] /
+                                           (double)(p->vv_off[v + 1] - p->vv_off[v]);
+      if (pr_normalize(s) == 0) continue;
+      double m1 = min_visibility(p, v, fn, s);
+      if (m1 >= 0.3 || m1 >= m0) memcpy(tmp + 3 * v, s, sizeof s);
+    }
+    memcpy(dir, tmp, (size_t)(3 * nw) * sizeof *tmp);
+  }
+  vm_free(p->ctx, tmp);
+  return blind;
+}
+
+void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
+                      const double *dir, const double *h, double *tgt) {
+  static const double blend[] = {0, 0.25, 0.5, 0.75, 1};
+#pragma omp parallel for schedule(static)
+  for (int64_t t = 0; t < p->nt; t++) {
+    const int32_t *c = p->tri + 3 * t;
+    double x[18], bx[18];
+    double bq = -INFINITY;
+    for (int i = 0; i < 3; i++) memcpy(x + 3 * i, base + 3 * (int64_t)c[i], 3 * sizeof *x);
+    int taken = 0;
+    for (int s = 0; s < 5 && !taken; s++) {
+      for (int i = 0; i < 3; i++) {
+        double u[3];
+        for (int k = 0; k < 3; k++)
+          u[k] = (1 - blend[s]) * dir[3 * (int64_t)c[i] + k] + blend[s] * fn[3 * t + k];
+        if (blend[s] == 1 || pr_normalize(u) == 0) memcpy(u, fn + 3 * t, sizeof u);
+        for (int k = 0; k < 3; k++) x[9 + 3 * i + k] = x[3 * i + k] + h[c[i]] * u[k];
+      }
+      double q = pr_prism_quality(x);
+      if (q >= 0.5) taken = 1;
+      if (taken || q > bq) {
+        bq = q;
+        memcpy(bx, x, sizeof bx);
+      }
+    }
+    if (!(bq > 0)) {
+      /* the face-normal extrusion is valid in exact arithmetic */
+      memcpy(bx, x, 9 * sizeof *bx);
+      for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) bx[9 + 3 * i + k] = bx[3 * i + k] + h[c[i]] * fn[3 * t + k];
+    }
+    memcpy(tgt + 18 * t, bx, sizeof bx);
+  }
+}

@@ -1,0 +1,284 @@
+/* prism/src/march.c: phase 5, the marching split: the remaining layer is
+ * split in two, the middle surface optimized by the explicit solver with
+ * orthogonalizing targets and weights on the inner sublayer, the inner
+ * sublayer kept; repeated until the schedule of layer heights is met. Also
+ * the result mesh and the report. */
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "prism_private.h"
+
+/* Minimum corner quality of the prisms between levels a and b. */
+static double level_quality(const vm_prism *p, const double *la, const double *lb) {
+  double qm = INFINITY;
+  for (int64_t t = 0; t < p->nt; t++) {
+    double x[18];
+    for (int i = 0; i < 3; i++) {
+      memcpy(x + 3 * i, la + 3 * (int64_t)p->tri[3 * t + i], 3 * sizeof *x);
+      memcpy(x + 9 + 3 * i, lb + 3 * (int64_t)p->tri[3 * t + i], 3 * sizeof *x);
+    }
+    double q = pr_prism_corner_quality(x, NULL);
+    if (q < qm) qm = q;
+  }
+  return qm;
+}
+
+int vm_prism_march(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  if (p->done != 4) return vm_error(p->ctx, VM_ERR_ARG, "prism: marching needs the restored layer");
+  double t0 = omp_get_wtime();
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  int n = p->rep.layers_requested;
+  size_t lsz = (size_t)(3 * nw);
+  int st = VM_OK, warn = VM_OK;
+  vm_mesh *m2 = NULL;
+  vm_problem *pb = NULL;
+  double *fn = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *fn);
+  double *vn = vm_alloc_array(ctx, lsz, sizeof *vn);
+  double *dr = vm_alloc_array(ctx, lsz, sizeof *dr);
+  double *hk = vm_alloc_array(ctx, (size_t)nw, sizeof *hk);
+  double *w = vm_alloc_array(ctx, (size_t)(2 * nt), sizeof *w);
+  p->lev = vm_alloc_array(ctx, (size_t)(n + 1) * lsz, sizeof *p->lev);
+  if (!fn || !vn || !dr || !hk || !w || !p->lev) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  memcpy(p->lev, p->wall, lsz * sizeof *p->lev);
+  const double *outer = p->layer->xyz + lsz;
+  /* the two-sublayer mesh: base (fixed), middle (free), outer (fixed) */
+  if ((st = vm_mesh_create(ctx, &m2)) || (st = vm_mesh_set_vertices(m2, 3 * nw)) ||
+      (st = vm_mesh_set_elements(m2, 2 * nt, 12 * nt)))
+    goto done;
+  for (int64_t v = 0; v < nw; v++) {
+    m2->vflag[v] = VM_VERTEX_FIXED;
+    m2->vflag[2 * nw + v] = VM_VERTEX_FIXED;
+  }
+  for (int64_t s = 0; s < 2; s++)
+    for (int64_t t = 0; t < nt; t++) {
+      int64_t e = s * nt + t;
+      m2->etype[e] = VM_PRISM;
+      m2->eoff[e + 1] = 6 * (e + 1);
+      for (int i = 0; i < 3; i++) {
+        m2->conn[6 * e + i] = (int32_t)(p->tri[3 * t + i] + s * nw);
+        m2->conn[6 * e + 3 + i] = (int32_t)(p->tri[3 * t + i] + (s + 1) * nw);
+      }
+      w[e] = s == 0 ? p->o.ortho_weight : 1;
+    }
+  memcpy(m2->xyz + 2 * lsz, outer, lsz * sizeof *m2->xyz);
+  vm_field *tf;
+  if ((st = vm_mesh_add_field(m2, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT, VM_FIELD_F64, 18, &tf)))
+    goto done;
+  if ((st = vm_problem_create(ctx, m2, &pb))) goto done;
+  vm_measure_params prm = vm_measure_params_default();
+  prm.theta = p->o.theta;
+  if ((st = vm_problem_set_measure(pb, VM_MEASURE_BALANCED, &prm)) ||
+      (st = vm_problem_set_rule(pb, VM_RULE_GEOMETRIC)) || (st = vm_problem_set_weights(pb, w)))
+    goto done;
+  int made = n; /* levels 0..made */
+  double rem = 0;
+  for (int k = 0; k < n; k++) rem += p->sched[k];
+  for (int k = 0; k + 1 < n; k++) {
+    if (pr_time_left(p) <= 0) {
+      made = k + 1;
+      warn = VM_WARN_TIME;
+      break;
+    }
+    double *base = p->lev + (size_t)k * lsz;
+    double f = p->sched[k] / rem;
+    rem -= p->sched[k];
+    memcpy(m2->xyz, base, lsz * sizeof *m2->xyz);
+    for (int64_t v = 0; v < nw; v++) {
+      double *mv = m2->xyz + lsz + 3 * v;
+      for (int c = 0; c < 3; c++) mv[c] = base[3 * v + c] + f * (outer[3 * v + c] - base[3 * v + c]);
+      hk[v] = f * pr_dist(outer + 3 * v, base + 3 * v);
+    }
+    /* inner targets: orthogonal to the base surface (vertex normals,
+     * bent towards the face normal only where needed); outer targets: the
+     * shape at the split */
+    pr_surface_dirs(p, base, fn, vn, dr, 0);
+    double *tg = tf->data;
+    pr_build_targets(p, base, fn, vn, hk, tg);
+    for (int64_t t = 0; t < nt; t++) {
+      const int32_t *c = m2->conn + 6 * (nt + t);
+      for (int i = 0; i < 6; i++)
+        memcpy(tg + 18 * (nt + t) + 3 * i, m2->xyz + 3 * (int64_t)c[i], 3 * sizeof *tg);
+    }
+    if ((st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD))) goto done;
+    int it = 0;
+    st = pr_solve(p, pb, m2, VM_MINIMIZER_EXPLICIT, p->o.march_iter, VM_PRISM_PHASE_MARCH, &it);
+    if (st < 0) goto done;
+    if (st == VM_WARN_TIME) warn = st;
+    vm_node_stats ns;
+    if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) goto done;
+    if (ns.inverted) {
+      st = vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after split %d",
+                    (long long)ns.inverted, k + 1);
+      goto done;
+    }
+    memcpy(p->lev + (size_t)(k + 1) * lsz, m2->xyz + lsz, lsz * sizeof *p->lev);
+    pr_progress(p, VM_PRISM_PHASE_MARCH, k + 1, p->sched[k], 0);
+  }
+  memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
+  p->nlev = made + 1;
+  /* the paper's option: drop a skewed outermost remainder */
+  if (p->o.drop_quality > 0 && p->nlev > 2 &&
+      level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz,
+                    p->lev + (size_t)(p->nlev - 1) * lsz) < p->o.drop_quality)
+    p->nlev--;
+  p->rep.layers = p->nlev - 1;
+  p->done = 5;
+  st = warn;
+done:
+  vm_problem_destroy(&pb);
+  vm_mesh_destroy(&m2);
+  vm_free(ctx, fn);
+  vm_free(ctx, vn);
+  vm_free(ctx, dr);
+  vm_free(ctx, hk);
+  vm_free(ctx, w);
+  p->rep.time[VM_PRISM_PHASE_MARCH] += omp_get_wtime() - t0;
+  return st;
+}
+
+/* Levels of the current state: after marching the levels; before, the
+ * single layer (2 levels, pointing into the layer mesh). */
+static const double *levels(const vm_prism *p, int *nlev) {
+  if (p->done >= 5) {
+    *nlev = p->nlev;
+    return p->lev;
+  }
+  *nlev = p->layer ? 2 : 0;
+  return p->layer ? p->layer->xyz : NULL;
+}
+
+int vm_prism_result(vm_prism *p, vm_mesh **out) {
+  if (!out) return VM_ERR_ARG;
+  *out = NULL;
+  if (!p) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  int nlev;
+  const double *L = levels(p, &nlev);
+  if (nlev < 2) return vm_error(ctx, VM_ERR_ARG, "prism: no layer built yet");
+  int64_t nw = p->nw, nt = p->nt, nl = nlev - 1;
+  int64_t ne = nl * nt + 2 * nt;
+  vm_mesh *m = NULL;
+  int st = vm_mesh_create(ctx, &m);
+  if (st) return st;
+  if ((st = vm_mesh_set_vertices(m, nlev * nw)) ||
+      (st = vm_mesh_set_elements(m, ne, 6 * nl * nt + 6 * nt)))
+    goto fail;
+  memcpy(m->xyz, L, (size_t)(3 * nw * nlev) * sizeof *m->xyz);
+  memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
+  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
+  int64_t e = 0, c = 0;
+  for (int64_t k = 0; k < nl; k++)
+    for (int64_t t = 0; t < nt; t++, e++) {
+      m->etype[e] = VM_PRISM;
+      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + k * nw);
+      for (int i = 0; i < 3; i++) m->conn[c + 3 + i] = (int32_t)(p->tri[3 * t + i] + (k + 1) * nw);
+      c += 6;
+      m->eoff[e + 1] = c;
+    }
+  for (int s = 0; s < 2; s++)
+    for (int64_t t = 0; t < nt; t++, e++) {
+      m->etype[e] = VM_TRI;
+      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + (s ? nl * nw : 0));
+      c += 3;
+      m->eoff[e + 1] = c;
+    }
+  vm_field *fl, *fp, *fth;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fl)) ||
+      (st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fp)) ||
+      (st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &fth)))
+    goto fail;
+  int32_t *lay = fl->data, *ph = fp->data;
+  for (int64_t k = 0; k < ne; k++) {
+    lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
+    ph[k] = k < nl * nt ? VM_PRISM_TAG_VOLUME : k < nl * nt + nt ? VM_PRISM_TAG_WALL
+                                                                  : VM_PRISM_TAG_OUTER;
+  }
+  double *th = fth->data;
+  for (int64_t v = 0; v < nw; v++) {
+    double d = pr_dist(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
+    for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
+  }
+  if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
+      (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
+      (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
+    goto fail;
+  *out = m;
+  return VM_OK;
+fail:
+  vm_mesh_destroy(&m);
+  return st;
+}
+
+int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
+  if (!p || !r) return VM_ERR_ARG;
+  int nlev;
+  const double *L = levels(p, &nlev);
+  vm_prism_report R = p->rep;
+  R.time_total = pr_elapsed(p);
+  if (nlev >= 2) {
+    int64_t nw = p->nw, nt = p->nt;
+    size_t lsz = (size_t)(3 * nw);
+    double T = p->o.thickness;
+    const double *top = L + (size_t)(nlev - 1) * lsz;
+    int64_t full = 0;
+    double tmin = INFINITY, tsum = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      double d = pr_dist(p->wall + 3 * v, top + 3 * v) / T;
+      if (d >= 1 - p->o.full_tol) full++;
+      tmin = d < tmin ? d : tmin;
+      tsum += d;
+    }
+    R.full_fraction = (double)full / (double)nw;
+    R.thick_min = tmin;
+    R.thick_mean = tsum / (double)nw;
+    R.prisms = (nlev - 1) * nt;
+    R.layers = nlev - 1;
+    int64_t inv = 0;
+    double sj = INFINITY;
+    for (int k = 0; k + 1 < nlev; k++)
+      for (int64_t t = 0; t < nt; t++) {
+        double x[18];
+        for (int i = 0; i < 3; i++) {
+          memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+          memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+        }
+        int bad;
+        double q = pr_prism_corner_quality(x, &bad);
+        inv += bad;
+        sj = q < sj ? q : sj;
+      }
+    R.inverted = inv;
+    R.sj_min = sj;
+    double dmax = 0, dsum = 0;
+    int64_t ns = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (!p->smooth[v]) continue;
+      double e[3];
+      for (int c = 0; c < 3; c++) e[c] = L[lsz + 3 * v + c] - p->wall[3 * v + c];
+      double cs = pr_dot(e, p->vnrm + 3 * v) / pr_norm(e);
+      double a = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+      dmax = a > dmax ? a : dmax;
+      dsum += a;
+      ns++;
+    }
+    R.normal_dev_max = dmax;
+    R.normal_dev_mean = ns ? dsum / (double)ns : 0;
+    R.smooth_vertices = ns;
+    double gmax = 0;
+    for (int64_t v = 0; v < nw && nlev > 2; v++)
+      for (int k = 0; k + 2 < nlev; k++) {
+        double h0 = pr_dist(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
+        double h1 = pr_dist(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
+        if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
+      }
+    R.growth_max = gmax;
+  }
+  *r = R;
+  return VM_OK;
+}

@@ -1,0 +1,441 @@
+/* prism/src/prism.c: the layer builder: options, wall import and
+ * adjacency, the thin layer (phase 1), the result mesh and the report. */
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "prism_private.h"
+
+const char *vm_prism_phase_name(vm_prism_phase ph) {
+  static const char *const names[] = {"thin", "springback", "cut", "restore", "march"};
+  return (int)ph >= 0 && ph < VM_PRISM_NPHASES ? names[ph] : "unknown";
+}
+
+vm_prism_opts vm_prism_opts_default(void) {
+  vm_prism_opts o;
+  memset(&o, 0, sizeof o);
+  o.thickness = 0;
+  o.nlayers = 20;
+  o.first_height = 0;
+  o.growth = 1.2;
+  o.theta = 0.8;
+  o.cut_factor = 0.85;
+  o.springback_iter = 60;
+  o.resolve_iter = 15;
+  o.max_cut_rounds = 80;
+  o.smooth_iter = 30;
+  o.march_iter = 8;
+  o.ortho_weight = 10;
+  o.drop_quality = 0;
+  o.full_tol = 0.01;
+  o.time_limit = 0;
+  return o;
+}
+
+double pr_elapsed(const vm_prism *p) { return omp_get_wtime() - p->t0; }
+
+double pr_time_left(const vm_prism *p) {
+  return p->o.time_limit > 0 ? p->o.time_limit - pr_elapsed(p) : INFINITY;
+}
+
+void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count) {
+  if (!p->o.progress) return;
+  vm_prism_progress pg = {ph, step, value, count, pr_elapsed(p)};
+  p->o.progress(p->o.user, &pg);
+}
+
+static int check_opts(vm_ctx *ctx, const vm_prism_opts *o) {
+  if (!(o->thickness > 0) || !isfinite(o->thickness))
+    return vm_error(ctx, VM_ERR_ARG, "prism: thickness %g must be positive", o->thickness);
+  if (o->nlayers < 1 || o->nlayers > 1000)
+    return vm_error(ctx, VM_ERR_ARG, "prism: %d layers (1..1000)", o->nlayers);
+  if (!(o->first_height > 0) && !(o->growth >= 1))
+    return vm_error(ctx, VM_ERR_ARG, "prism: give a first height or a growth ratio >= 1");
+  if (o->first_height > 0 && o->first_height > o->thickness)
+    return vm_error(ctx, VM_ERR_ARG, "prism: first height %g exceeds the thickness %g",
+                    o->first_height, o->thickness);
+  if (o->growth > 0 && !(o->growth >= 1 && o->growth <= 10))
+    return vm_error(ctx, VM_ERR_ARG, "prism: growth ratio %g (1..10)", o->growth);
+  if (!(o->theta > 0 && o->theta < 1))
+    return vm_error(ctx, VM_ERR_ARG, "prism: theta %g not in (0, 1)", o->theta);
+  if (!(o->cut_factor >= 0.5 && o->cut_factor < 1))
+    return vm_error(ctx, VM_ERR_ARG, "prism: cut factor %g not in [0.5, 1)", o->cut_factor);
+  if (o->springback_iter < 0 || o->resolve_iter < 0 || o->max_cut_rounds < 0 ||
+      o->smooth_iter < 0 || o->march_iter < 0)
+    return vm_error(ctx, VM_ERR_ARG, "prism: negative iteration limit");
+  if (!(o->ortho_weight >= 1) || !isfinite(o->ortho_weight))
+    return vm_error(ctx, VM_ERR_ARG, "prism: orthogonality weight %g (>= 1)", o->ortho_weight);
+  if (!(o->drop_quality >= 0 && o->drop_quality < 1) || !(o->full_tol >= 0 && o->full_tol < 1))
+    return vm_error(ctx, VM_ERR_ARG, "prism: drop quality or full tolerance out of [0, 1)");
+  return VM_OK;
+}
+
+/* The schedule of layer heights h_k = h1 r^k summing to T. */
+static int build_schedule(vm_prism *p) {
+  const vm_prism_opts *o = &p->o;
+  int n = o->nlayers;
+  double T = o->thickness, r = o->growth, h1 = o->first_height;
+  if (h1 > 0 && r >= 1) {
+    /* both given: keep the growth law, as many layers as fit (<= n); the
+     * last one takes the remainder */
+    double s = 0;
+    int k = 0;
+    while (k < n && s + h1 * pow(r, k) < T * (1 - 1e-9)) s += h1 * pow(r, k++);
+    if (k < n) n = k + 1;
+  } else if (h1 > 0) {
+    /* solve h1 (r^n - 1)/(r - 1) = T for r >= 1 by bisection */
+    if (h1 * n >= T) {
+      r = 1;
+      h1 = T / n;
+    } else {
+      double lo = 1, hi = 2;
+      while (h1 * (pow(hi, n) - 1) / (hi - 1) < T) hi *= 2;
+      for (int it = 0; it < 200; it++) {
+        double mid = 0.5 * (lo + hi);
+        if (h1 * (pow(mid, n) - 1) / (mid - 1) < T)
+          lo = mid;
+        else
+          hi = mid;
+      }
+      r = 0.5 * (lo + hi);
+    }
+  } else {
+    h1 = r == 1 ? T / n : T * (r - 1) / (pow(r, n) - 1);
+  }
+  p->sched = vm_alloc_array(p->ctx, (size_t)n, sizeof *p->sched);
+  if (!p->sched) return VM_ERR_NOMEM;
+  double s = 0;
+  for (int k = 0; k < n; k++) {
+    p->sched[k] = h1 * pow(r, k);
+    if (k == n - 1 || s + p->sched[k] > T) p->sched[k] = T - s;
+    s += p->sched[k];
+  }
+  p->rep.layers_requested = n;
+  p->rep.first_height = p->sched[0];
+  p->rep.growth = r;
+  return VM_OK;
+}
+
+static int cmp_i32(const void *a, const void *b) {
+  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+typedef struct {
+  int32_t a, b, t;
+} half_edge;
+
+static int cmp_he(const void *x, const void *y) {
+  const half_edge *a = x, *b = y;
+  if (a->a != b->a) return a->a < b->a ? -1 : 1;
+  if (a->b != b->b) return a->b < b->b ? -1 : 1;
+  return (a->t > b->t) - (a->t < b->t);
+}
+
+static int build_adjacency(vm_prism *p) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  p->vt_off = vm_calloc(ctx, (size_t)nw + 1, sizeof *p->vt_off);
+  p->vt = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *p->vt);
+  half_edge *he = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *he);
+  if (!p->vt_off || !p->vt || !he) {
+    vm_free(ctx, he);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t k = 0; k < 3 * nt; k++) p->vt_off[p->tri[k] + 1]++;
+  for (int64_t v = 0; v < nw; v++) p->vt_off[v + 1] += p->vt_off[v];
+  int64_t *fill = vm_alloc_array(ctx, (size_t)nw + 1, sizeof *fill);
+  if (!fill) {
+    vm_free(ctx, he);
+    return VM_ERR_NOMEM;
+  }
+  memcpy(fill, p->vt_off, (size_t)(nw + 1) * sizeof *fill);
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++) p->vt[fill[p->tri[3 * t + i]]++] = (int32_t)t;
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++) {
+      int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
+      he[3 * t + i] = (half_edge){a < b ? a : b, a < b ? b : a, (int32_t)t};
+    }
+  qsort(he, (size_t)(3 * nt), sizeof *he, cmp_he);
+  int64_t ned = 0;
+  for (int64_t k = 0; k < 3 * nt; k++)
+    if (k == 0 || he[k].a != he[k - 1].a || he[k].b != he[k - 1].b) ned++;
+  p->ned = ned;
+  p->edge = vm_alloc_array(ctx, (size_t)(2 * ned), sizeof *p->edge);
+  p->etri = vm_alloc_array(ctx, (size_t)(2 * ned), sizeof *p->etri);
+  p->vv_off = vm_calloc(ctx, (size_t)nw + 1, sizeof *p->vv_off);
+  p->vv = vm_alloc_array(ctx, (size_t)(2 * ned), sizeof *p->vv);
+  p->elen = vm_calloc(ctx, (size_t)nw, sizeof *p->elen);
+  if (!p->edge || !p->etri || !p->vv_off || !p->vv || !p->elen) {
+    vm_free(ctx, he);
+    vm_free(ctx, fill);
+    return VM_ERR_NOMEM;
+  }
+  int64_t nonman = 0;
+  for (int64_t k = 0, e = -1; k < 3 * nt; k++) {
+    if (k == 0 || he[k].a != he[k - 1].a || he[k].b != he[k - 1].b) {
+      e++;
+      p->edge[2 * e] = he[k].a;
+      p->edge[2 * e + 1] = he[k].b;
+      p->etri[2 * e] = he[k].t;
+      p->etri[2 * e + 1] = -1;
+    } else if (p->etri[2 * e + 1] < 0) {
+      p->etri[2 * e + 1] = he[k].t;
+    } else {
+      nonman++;
+    }
+  }
+  vm_free(ctx, he);
+  if (nonman) {
+    vm_free(ctx, fill);
+    return vm_error(ctx, VM_ERR_ARG,
+                    "prism: the wall has %lld non-manifold edges (more than two triangles)",
+                    (long long)nonman);
+  }
+  for (int64_t e = 0; e < ned; e++) {
+    p->vv_off[p->edge[2 * e] + 1]++;
+    p->vv_off[p->edge[2 * e + 1] + 1]++;
+  }
+  for (int64_t v = 0; v < nw; v++) p->vv_off[v + 1] += p->vv_off[v];
+  memcpy(fill, p->vv_off, (size_t)(nw + 1) * sizeof *fill);
+  for (int64_t e = 0; e < ned; e++) {
+    int32_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
+    p->vv[fill[a]++] = b;
+    p->vv[fill[b]++] = a;
+    double l = pr_dist(p->wall + 3 * (int64_t)a, p->wall + 3 * (int64_t)b);
+    p->elen[a] += l;
+    p->elen[b] += l;
+  }
+  vm_free(ctx, fill);
+  for (int64_t v = 0; v < nw; v++) {
+    int64_t d = p->vv_off[v + 1] - p->vv_off[v];
+    qsort(p->vv + p->vv_off[v], (size_t)d, sizeof *p->vv, cmp_i32);
+    if (d) p->elen[v] /= (double)d;
+  }
+  return VM_OK;
+}
+
+int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
+                    vm_prism **out) {
+  if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_prism_create: out is NULL");
+  *out = NULL;
+  if (!wall) return vm_error(ctx, VM_ERR_ARG, "vm_prism_create: wall is NULL");
+  vm_prism_opts o = opts ? *opts : vm_prism_opts_default();
+  int st = check_opts(ctx, &o);
+  if (st) return st;
+  int64_t nt = 0;
+  for (int64_t e = 0; e < wall->ne; e++)
+    nt += wall->etype[e] == VM_TRI ? 1 : wall->etype[e] == VM_QUAD ? 2 : 0;
+  if (nt == 0) return vm_error(ctx, VM_ERR_ARG, "prism: the wall has no triangles");
+  if (nt > INT32_MAX / 8 || wall->nv > INT32_MAX / 64)
+    return vm_error(ctx, VM_ERR_ARG, "prism: the wall is too large");
+  vm_prism *p = vm_calloc(ctx, 1, sizeof *p);
+  if (!p) return VM_ERR_NOMEM;
+  p->ctx = ctx;
+  p->o = o;
+  p->t0 = omp_get_wtime();
+  p->nt = nt;
+  int32_t *map = vm_alloc_array(ctx, (size_t)(wall->nv ? wall->nv : 1), sizeof *map);
+  p->tri = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *p->tri);
+  if (!map || !p->tri) {
+    vm_free(ctx, map);
+    vm_prism_destroy(&p);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t v = 0; v < wall->nv; v++) map[v] = -1;
+  int64_t k = 0;
+  for (int64_t e = 0; e < wall->ne; e++) {
+    const int32_t *c = wall->conn + wall->eoff[e];
+    if (wall->etype[e] == VM_TRI) {
+      for (int i = 0; i < 3; i++) p->tri[k++] = c[i];
+    } else if (wall->etype[e] == VM_QUAD) {
+      static const int sp[6] = {0, 1, 2, 0, 2, 3};
+      for (int i = 0; i < 6; i++) p->tri[k++] = c[sp[i]];
+    }
+  }
+  for (int64_t i = 0; i < 3 * nt; i++) map[p->tri[i]] = 0;
+  int64_t nw = 0;
+  for (int64_t v = 0; v < wall->nv; v++)
+    if (map[v] == 0) map[v] = (int32_t)nw++;
+  for (int64_t i = 0; i < 3 * nt; i++) p->tri[i] = map[p->tri[i]];
+  p->nw = nw;
+  p->wall = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *p->wall);
+  if (!p->wall) {
+    vm_free(ctx, map);
+    vm_prism_destroy(&p);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t v = 0; v < wall->nv; v++)
+    if (map[v] >= 0) memcpy(p->wall + 3 * (int64_t)map[v], wall->xyz + 3 * v, 3 * sizeof *p->wall);
+  vm_free(ctx, map);
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *c = p->tri + 3 * t;
+    if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) {
+      vm_prism_destroy(&p);
+      return vm_error(ctx, VM_ERR_ARG, "prism: wall triangle %lld repeats a vertex", (long long)t);
+    }
+  }
+  if ((st = build_adjacency(p))) {
+    vm_prism_destroy(&p);
+    return st;
+  }
+  p->fnrm = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *p->fnrm);
+  p->vnrm = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *p->vnrm);
+  p->dir = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *p->dir);
+  p->smooth = vm_calloc(ctx, (size_t)nw, sizeof *p->smooth);
+  p->h = vm_alloc_array(ctx, (size_t)nw, sizeof *p->h);
+  p->cap = vm_alloc_array(ctx, (size_t)nw, sizeof *p->cap);
+  p->cut = vm_calloc(ctx, (size_t)nw, sizeof *p->cut);
+  if (!p->fnrm || !p->vnrm || !p->dir || !p->smooth || !p->h || !p->cap || !p->cut) {
+    vm_prism_destroy(&p);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *c = p->tri + 3 * t;
+    double e1[3], e2[3], n[3];
+    for (int i = 0; i < 3; i++) {
+      e1[i] = p->wall[3 * (int64_t)c[1] + i] - p->wall[3 * (int64_t)c[0] + i];
+      e2[i] = p->wall[3 * (int64_t)c[2] + i] - p->wall[3 * (int64_t)c[0] + i];
+    }
+    pr_cross(e1, e2, n);
+    double a = pr_norm(n), l = pr_dot(e1, e1) + pr_dot(e2, e2);
+    if (!(a > 1e-14 * l)) {
+      vm_prism_destroy(&p);
+      return vm_error(ctx, VM_ERR_ARG, "prism: wall triangle %lld is degenerate", (long long)t);
+    }
+  }
+  int64_t blind = pr_surface_dirs(p, p->wall, p->fnrm, p->vnrm, p->dir, 3);
+  if (blind) {
+    vm_prism_destroy(&p);
+    return vm_error(ctx, VM_ERR_ARG,
+                    "prism: at %lld wall vertices no direction sees every incident triangle",
+                    (long long)blind);
+  }
+  for (int64_t v = 0; v < nw; v++) {
+    int sm = 1;
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+      if (pr_dot(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < cos(10 * PR_PI / 180)) sm = 0;
+    p->smooth[v] = (uint8_t)sm;
+    p->h[v] = o.thickness;
+    p->cap[v] = o.thickness;
+  }
+  if ((st = build_schedule(p))) {
+    vm_prism_destroy(&p);
+    return st;
+  }
+  p->rep.wall_vertices = nw;
+  p->rep.wall_triangles = nt;
+  p->rep.thickness = o.thickness;
+  *out = p;
+  return VM_OK;
+}
+
+void vm_prism_destroy(vm_prism **pp) {
+  if (!pp || !*pp) return;
+  vm_prism *p = *pp;
+  vm_ctx *ctx = p->ctx;
+  vm_problem_destroy(&p->prob);
+  vm_mesh_destroy(&p->layer);
+  void *arrays[] = {p->wall, p->tri, p->fnrm, p->vnrm, p->dir, p->elen, p->smooth,
+                    p->vt_off, p->vt, p->vv_off, p->vv, p->edge, p->etri, p->h,
+                    p->cap, p->cut, p->lev, p->sched};
+  for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
+  vm_free(ctx, p);
+  *pp = NULL;
+}
+
+const vm_mesh *vm_prism_layer(const vm_prism *p) { return p ? p->layer : NULL; }
+
+void pr_set_top(vm_prism *p, const double *t, const double *d) {
+  double *top = p->layer->xyz + 3 * p->nw;
+  for (int64_t v = 0; v < p->nw; v++)
+    for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+}
+
+/* Phase 1: top_v = wall_v + h_v dir_v with h_v a small fraction of the local
+ * edge length, halved where a prism is degenerate or poor. */
+int vm_prism_thin(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  if (p->done != 0) return vm_error(p->ctx, VM_ERR_ARG, "prism: thin layer already built");
+  double t0 = omp_get_wtime();
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  int st = vm_mesh_create(ctx, &p->layer);
+  if (st) return st;
+  vm_mesh *m = p->layer;
+  if ((st = vm_mesh_set_vertices(m, 2 * nw)) || (st = vm_mesh_set_elements(m, nt, 6 * nt)))
+    return st;
+  memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
+  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
+  for (int64_t t = 0; t < nt; t++) {
+    m->etype[t] = VM_PRISM;
+    m->eoff[t + 1] = 6 * (t + 1);
+    for (int i = 0; i < 3; i++) {
+      m->conn[6 * t + i] = p->tri[3 * t + i];
+      m->conn[6 * t + 3 + i] = (int32_t)(p->tri[3 * t + i] + nw);
+    }
+  }
+  double *hv = vm_alloc_array(ctx, (size_t)nw, sizeof *hv);
+  uint8_t *bad = vm_alloc_array(ctx, (size_t)nw, sizeof *bad);
+  if (!hv || !bad) {
+    vm_free(ctx, hv);
+    vm_free(ctx, bad);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t v = 0; v < nw; v++) {
+    double h = 0.05 * p->elen[v];
+    hv[v] = h < p->o.thickness ? h : p->o.thickness;
+  }
+  int64_t nbad = 0;
+  for (int round = 0; round < 60; round++) {
+    pr_set_top(p, hv, p->dir);
+    memset(bad, 0, (size_t)nw);
+    nbad = 0;
+    for (int64_t t = 0; t < nt; t++) {
+      double x[18];
+      const int32_t *c = m->conn + 6 * t;
+      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+      if (pr_prism_quality(x) > 0.02) continue;
+      nbad++;
+      for (int i = 0; i < 3; i++) bad[c[i]] = 1;
+    }
+    if (!nbad) break;
+    for (int64_t v = 0; v < nw; v++)
+      if (bad[v]) hv[v] *= 0.5;
+  }
+  double hmin = INFINITY, hmax = 0;
+  for (int64_t v = 0; v < nw; v++) {
+    hmin = hv[v] < hmin ? hv[v] : hmin;
+    hmax = hv[v] > hmax ? hv[v] : hmax;
+  }
+  vm_free(ctx, hv);
+  vm_free(ctx, bad);
+  if (nbad)
+    return vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld thin prisms stay degenerate",
+                    (long long)nbad);
+  vm_field *f;
+  if ((st = vm_mesh_add_field(m, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT, VM_FIELD_F64, 18, &f)))
+    return st;
+  p->rep.thin_min = hmin;
+  p->rep.thin_max = hmax;
+  p->rep.prisms = nt;
+  p->done = 1;
+  p->rep.time[VM_PRISM_PHASE_THIN] = omp_get_wtime() - t0;
+  pr_progress(p, VM_PRISM_PHASE_THIN, 1, hmax, 0);
+  return VM_OK;
+}
+
+int vm_prism_run(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  int warn = 0, st;
+  int (*const phase[])(vm_prism *) = {vm_prism_thin, vm_prism_springback, vm_prism_cut,
+                                      vm_prism_restore, vm_prism_march};
+  for (int k = p->done; k < VM_PRISM_NPHASES; k++) {
+    st = phase[k](p);
+    if (st < 0) return st;
+    if (st > 0 && !warn) warn = st;
+  }
+  return warn;
+}

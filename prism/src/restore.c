@@ -1,0 +1,200 @@
+/* prism/src/restore.c: phase 4: thickness restored to T wherever nothing
+ * prevents it, and Laplace-Beltrami smoothing (mean-value weights) of the
+ * offset surface near the contact zones left by cutting; outer vertices
+ * move only along their prism side edges, every prism stays valid and the
+ * layer free of self-intersections. */
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "prism_private.h"
+
+/* Mean-value (Floater) average of the outer neighbours of every vertex,
+ * projected on its side edge: tp[v] = (q_v - wall_v) . d_v. */
+static void mean_value_proj(const vm_prism *p, const double *d, double *tp) {
+  const double *top = p->layer->xyz + 3 * p->nw;
+#pragma omp parallel for schedule(static)
+  for (int64_t v = 0; v < p->nw; v++) {
+    double q[3] = {0, 0, 0}, ws = 0;
+    const double *x = top + 3 * v;
+    for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
+      const int32_t *c = p->tri + 3 * (int64_t)p->vt[k];
+      int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+      const double *a = top + 3 * (int64_t)c[(i + 1) % 3], *b = top + 3 * (int64_t)c[(i + 2) % 3];
+      double u[3], w[3];
+      for (int r = 0; r < 3; r++) {
+        u[r] = a[r] - x[r];
+        w[r] = b[r] - x[r];
+      }
+      double lu = pr_norm(u), lw = pr_norm(w);
+      if (!(lu > 0) || !(lw > 0)) continue;
+      double cs = pr_dot(u, w) / (lu * lw);
+      cs = cs < -1 ? -1 : cs > 1 ? 1 : cs;
+      double tn = tan(0.5 * acos(cs));
+      for (int r = 0; r < 3; r++) q[r] += tn / lu * a[r] + tn / lw * b[r];
+      ws += tn / lu + tn / lw;
+    }
+    if (!(ws > 0)) {
+      tp[v] = pr_dist(x, p->wall + 3 * v);
+      continue;
+    }
+    double s = 0;
+    for (int r = 0; r < 3; r++) s += (q[r] / ws - p->wall[3 * v + r]) * d[3 * v + r];
+    tp[v] = s;
+  }
+}
+
+/* Quality of every prism of the layer (geometric rule, pr_prism_quality). */
+static void layer_quality(const vm_prism *p, double *q) {
+  const vm_mesh *m = p->layer;
+#pragma omp parallel for schedule(static)
+  for (int64_t e = 0; e < p->nt; e++) {
+    double x[18];
+    const int32_t *c = m->conn + 6 * e;
+    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+    q[e] = pr_prism_quality(x);
+  }
+}
+
+/* Set the top from t; where a prism became worse than min(QMIN, its old
+ * quality qold), put its vertices back to t_old and halve their step,
+ * until no prism is. */
+#define QMIN 0.03
+static void apply_quality(vm_prism *p, double *t, const double *t_old, const double *d,
+                          const double *qold, double *q, double *alpha, uint8_t *bad) {
+  for (int round = 0; round < 200; round++) {
+    pr_set_top(p, t, d);
+    layer_quality(p, q);
+    memset(bad, 0, (size_t)p->nw);
+    int64_t nbad = 0;
+    for (int64_t e = 0; e < p->nt; e++) {
+      double lim = qold[e] < QMIN ? qold[e] : QMIN;
+      if (q[e] >= lim && q[e] > 1e-3) continue;
+      nbad++;
+      for (int i = 0; i < 3; i++) bad[p->tri[3 * e + i]] = 1;
+    }
+    if (!nbad) return;
+    int64_t back = 0;
+    for (int64_t v = 0; v < p->nw; v++)
+      if (bad[v] && t[v] != t_old[v]) {
+        t[v] = t_old[v];
+        alpha[v] *= 0.5;
+        back++;
+      }
+    if (!back) { /* cannot happen from a valid start; be safe */
+      memcpy(t, t_old, (size_t)p->nw * sizeof *t);
+      pr_set_top(p, t, d);
+      return;
+    }
+  }
+}
+
+/* Vertices within `rings` edges of a cut vertex. */
+static void mark_zone(const vm_prism *p, int rings, uint8_t *zone, uint8_t *tmp) {
+  for (int64_t v = 0; v < p->nw; v++) zone[v] = p->cut[v];
+  for (int r = 0; r < rings; r++) {
+    memcpy(tmp, zone, (size_t)p->nw);
+    for (int64_t v = 0; v < p->nw; v++) {
+      if (tmp[v]) continue;
+      for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++)
+        if (tmp[p->vv[k]]) {
+          zone[v] = 1;
+          break;
+        }
+    }
+  }
+}
+
+int vm_prism_restore(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  if (p->done != 3) return vm_error(p->ctx, VM_ERR_ARG, "prism: restoring needs the cut layer");
+  double t0 = omp_get_wtime();
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw;
+  double T = p->o.thickness;
+  double *d = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *d);
+  double *t = vm_alloc_array(ctx, (size_t)nw, sizeof *t);
+  double *told = vm_alloc_array(ctx, (size_t)nw, sizeof *told);
+  double *tp = vm_alloc_array(ctx, (size_t)nw, sizeof *tp);
+  double *alpha = vm_alloc_array(ctx, (size_t)nw, sizeof *alpha);
+  double *q = vm_alloc_array(ctx, (size_t)p->nt, sizeof *q);
+  double *qold = vm_alloc_array(ctx, (size_t)p->nt, sizeof *qold);
+  uint8_t *zone = vm_alloc_array(ctx, (size_t)nw, sizeof *zone);
+  uint8_t *tmp = vm_alloc_array(ctx, (size_t)nw, sizeof *tmp);
+  int st = VM_OK;
+  if (!d || !t || !told || !tp || !alpha || !q || !qold || !zone || !tmp) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  const double *x = p->layer->xyz;
+  for (int64_t v = 0; v < nw; v++) {
+    for (int k = 0; k < 3; k++) d[3 * v + k] = x[3 * (v + nw) + k] - x[3 * v + k];
+    t[v] = pr_normalize(d + 3 * v);
+    p->cap[v] = T;
+    alpha[v] = 1;
+  }
+  mark_zone(p, 3, zone, tmp);
+  for (int64_t v = 0; v < nw; v++)
+    if (zone[v]) alpha[v] = 0.5;
+  int64_t np = 0;
+  for (int pass = 1; pass <= p->o.smooth_iter; pass++) {
+    if (pr_time_left(p) <= 0) {
+      st = VM_WARN_TIME;
+      break;
+    }
+    mean_value_proj(p, d, tp);
+    memcpy(told, t, (size_t)nw * sizeof *t);
+    layer_quality(p, qold);
+    double change = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      double goal = p->cap[v] < T ? p->cap[v] : T;
+      /* near cuts: one Laplace-Beltrami step (mean-value weights) of the
+       * offset surface along the side edge, then restoration towards T */
+      double s = zone[v] ? 0.5 * (t[v] + tp[v]) : t[v];
+      double nt = s + alpha[v] * (goal - s);
+      if (nt > goal) nt = goal;
+      if (nt < 0.5 * t[v]) nt = 0.5 * t[v];
+      t[v] = nt;
+    }
+    apply_quality(p, t, told, d, qold, q, alpha, tmp);
+    /* no new intersections: the columns involved go back and halve their
+     * steps; after many halvings their cap is frozen at the contact */
+    for (int round = 0; round < 50; round++) {
+      if ((st = pr_layer_intersections(p, tmp, &np))) goto done;
+      if (!np) break;
+      int64_t back = 0;
+      for (int64_t v = 0; v < nw; v++)
+        if (tmp[v] && t[v] != told[v]) {
+          t[v] = told[v];
+          alpha[v] *= 0.5;
+          if (alpha[v] < 1.0 / 64) p->cap[v] = told[v];
+          back++;
+        }
+      if (!back) memcpy(t, told, (size_t)nw * sizeof *t);
+      pr_set_top(p, t, d);
+    }
+    double mean = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      mean += t[v];
+      double c = fabs(t[v] - told[v]);
+      change = c > change ? c : change;
+    }
+    pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np);
+    if (np || change < 1e-6 * T) break;
+  }
+  p->rep.intersections = np;
+  if (np && st == VM_OK) st = VM_WARN_MAXITER;
+done:
+  vm_free(ctx, d);
+  vm_free(ctx, t);
+  vm_free(ctx, told);
+  vm_free(ctx, tp);
+  vm_free(ctx, alpha);
+  vm_free(ctx, q);
+  vm_free(ctx, qold);
+  vm_free(ctx, zone);
+  vm_free(ctx, tmp);
+  p->rep.time[VM_PRISM_PHASE_RESTORE] += omp_get_wtime() - t0;
+  if (st >= 0) p->done = 4;
+  return st;
+}

@@ -1,0 +1,182 @@
+/* prism/src/springback.c: elastic springback of the thin layer to its
+ * target thickness (phase 2, implicit solver) and the cutting of
+ * self-intersections (phase 3: target heights of intersecting prisms
+ * reduced by a factor close to one, re-solved until none remain). */
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "prism_private.h"
+
+typedef struct {
+  vm_prism *p;
+  vm_prism_phase ph;
+  int base;
+} monitor_data;
+
+static void monitor(void *user, const vm_iter_info *it) {
+  monitor_data *d = user;
+  pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted);
+}
+
+int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+             vm_prism_phase ph, int *iters) {
+  if (iters) *iters = 0;
+  if (max_iter <= 0) return VM_OK;
+  double left = pr_time_left(p);
+  if (left <= 0) return VM_WARN_TIME;
+  vm_minimizer *mz = NULL;
+  int st = vm_minimizer_create(p->ctx, prob, kind, &mz);
+  if (st) return st;
+  vm_minimize_options mo = vm_minimize_options_default();
+  mo.max_iter = max_iter;
+  mo.time_limit = isfinite(left) ? left : 0;
+  mo.rel_decrease_tol = 1e-7;
+  mo.rel_decrease_count = 2;
+  mo.stats_every = 0;
+  monitor_data md = {p, ph, 0};
+  mo.monitor = monitor;
+  mo.user = &md;
+  vm_minimize_result res;
+  if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
+  if (iters && st >= 0) *iters = res.iterations;
+  vm_minimizer_destroy(&mz);
+  if (st == VM_WARN_MAXITER) st = VM_OK;
+  return st;
+}
+
+/* Targets from heights hv along the blended directions, installed on the
+ * layer's problem. */
+static int set_targets(vm_prism *p, const double *hv) {
+  vm_field *f = vm_mesh_find_field(p->layer, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
+  if (!f) return vm_error(p->ctx, VM_ERR_ARG, "prism: layer without targets");
+  pr_build_targets(p, p->wall, p->fnrm, p->dir, hv, f->data);
+  return vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
+}
+
+static int make_problem(vm_prism *p) {
+  if (p->prob) return VM_OK;
+  int st = vm_problem_create(p->ctx, p->layer, &p->prob);
+  if (st) return st;
+  vm_measure_params prm = vm_measure_params_default();
+  prm.theta = p->o.theta;
+  if ((st = vm_problem_set_measure(p->prob, VM_MEASURE_BALANCED, &prm)) ||
+      (st = vm_problem_set_rule(p->prob, VM_RULE_GEOMETRIC)))
+    return st;
+  return VM_OK;
+}
+
+/* Column lengths of the layer. */
+static void column_lengths(const vm_prism *p, double *len) {
+  const double *x = p->layer->xyz;
+  for (int64_t v = 0; v < p->nw; v++) len[v] = pr_dist(x + 3 * v, x + 3 * (v + p->nw));
+}
+
+static int check_valid(vm_prism *p, const char *when) {
+  vm_node_stats ns;
+  int st = vm_problem_node_stats(p->prob, p->layer->xyz, &ns);
+  if (st < 0) return st;
+  if (ns.inverted)
+    return vm_error(p->ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after %s",
+                    (long long)ns.inverted, when);
+  return VM_OK;
+}
+
+/* Phase 2. The target heights grow by continuation (at most `grow` times
+ * the current column length per stage) so each solve starts near its
+ * answer; the last stage has the full height T. */
+int vm_prism_springback(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  if (p->done != 1) return vm_error(p->ctx, VM_ERR_ARG, "prism: springback needs the thin layer");
+  double t0 = omp_get_wtime();
+  vm_ctx *ctx = p->ctx;
+  int total = 0, warn = 0;
+  int st = make_problem(p);
+  if (st) return st;
+  double *len = vm_alloc_array(ctx, (size_t)p->nw, sizeof *len);
+  double *hs = vm_alloc_array(ctx, (size_t)p->nw, sizeof *hs);
+  if (!len || !hs) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  const double grow = 8;
+  for (int stage = 0; stage < 40; stage++) {
+    column_lengths(p, len);
+    int last = 1;
+    for (int64_t v = 0; v < p->nw; v++) {
+      hs[v] = grow * len[v];
+      if (hs[v] >= p->h[v])
+        hs[v] = p->h[v];
+      else
+        last = 0;
+    }
+    if ((st = set_targets(p, hs))) goto done;
+    int it = 0;
+    int maxit = last ? p->o.springback_iter : 8;
+    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, maxit, VM_PRISM_PHASE_SPRINGBACK,
+                  &it);
+    total += it;
+    if (st == VM_WARN_TIME) warn = st;
+    if (st < 0 || st == VM_WARN_TIME) break;
+    if (last) break;
+  }
+  if (st >= 0) st = check_valid(p, "springback");
+  if (st == VM_OK) st = warn;
+done:
+  vm_free(ctx, len);
+  vm_free(ctx, hs);
+  p->rep.springback_iter += total;
+  p->rep.time[VM_PRISM_PHASE_SPRINGBACK] += omp_get_wtime() - t0;
+  if (st >= 0) p->done = 2;
+  return st;
+}
+
+/* Phase 3. */
+int vm_prism_cut(vm_prism *p) {
+  if (!p) return VM_ERR_ARG;
+  if (p->done != 2) return vm_error(p->ctx, VM_ERR_ARG, "prism: cutting needs the springback");
+  double t0 = omp_get_wtime();
+  vm_ctx *ctx = p->ctx;
+  uint8_t *mark = vm_alloc_array(ctx, (size_t)p->nw, sizeof *mark);
+  if (!mark) return VM_ERR_NOMEM;
+  int st = VM_OK, round = 0;
+  int64_t np = 0;
+  for (;; round++) {
+    if ((st = pr_layer_intersections(p, mark, &np))) break;
+    int64_t nmark = 0;
+    for (int64_t v = 0; v < p->nw; v++) nmark += mark[v];
+    if (round == 0) p->rep.cut_pairs_first = np;
+    pr_progress(p, VM_PRISM_PHASE_CUT, round, (double)np, nmark);
+    if (np == 0) break;
+    if (round >= p->o.max_cut_rounds) {
+      st = VM_WARN_MAXITER;
+      break;
+    }
+    if (pr_time_left(p) <= 0) {
+      st = VM_WARN_TIME;
+      break;
+    }
+    for (int64_t v = 0; v < p->nw; v++)
+      if (mark[v]) {
+        p->h[v] *= p->o.cut_factor;
+        p->cut[v] = 1;
+      }
+    if ((st = set_targets(p, p->h))) break;
+    int it = 0;
+    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, p->o.resolve_iter,
+                  VM_PRISM_PHASE_CUT, &it);
+    p->rep.springback_iter += it;
+    if (st < 0) break;
+    if (st == VM_WARN_TIME) break;
+  }
+  vm_free(ctx, mark);
+  p->rep.cut_rounds = round;
+  p->rep.intersections = np;
+  if (st >= 0) {
+    int s2 = check_valid(p, "cutting");
+    if (s2) st = s2;
+  }
+  p->rep.time[VM_PRISM_PHASE_CUT] += omp_get_wtime() - t0;
+  if (st >= 0) p->done = 3;
+  return st;
+}

@@ -1,0 +1,134 @@
+/* varmesh/repair.h: the CGAL side of the surface stage: repair of an
+ * imported surface (orient, stitch, degenerate faces, isolated vertices,
+ * self-intersections), isotropic remeshing with protected features, the
+ * closest-point projector onto a reference surface and its feature lines
+ * (AABB trees) for the minimizer, and Hausdorff distances. */
+#ifndef VARMESH_REPAIR_H
+#define VARMESH_REPAIR_H
+
+#include <stdint.h>
+
+#include "varmesh/boundary.h"
+#include "varmesh/features.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_repair_opts {
+  int require_closed; /* refuse a surface that stays open (default 1) */
+  int check_self_intersections; /* (default 1): found ones are an error if
+                                   require_closed, else a warning */
+} vm_repair_opts;
+
+vm_repair_opts vm_repair_opts_default(void);
+
+/* What vm_surface_repair found and did. */
+typedef struct vm_repair_report {
+  int64_t nv_in, nf_in;          /* vertices and faces before */
+  int64_t nv, nf;                /* after (triangles) */
+  int64_t merged_vertices;       /* duplicate points merged */
+  int64_t removed_polygons;      /* duplicate or invalid (repeated vertex) faces removed */
+  int64_t removed_degenerate;    /* zero-area faces removed (net face count change) */
+  int64_t removed_isolated;      /* vertices used by no face */
+  int64_t reoriented;            /* faces whose orientation was reversed */
+  int64_t stitched;              /* border edge pairs stitched */
+  int64_t border_edges;          /* left after repair (0: closed) */
+  int64_t holes;                 /* border cycles */
+  int64_t components;            /* connected components */
+  int64_t self_intersections;    /* pairs of intersecting faces (if checked, else -1) */
+  double volume;                 /* enclosed volume (closed surfaces; else 0) */
+} vm_repair_report;
+
+/* Repair the surface m in place (its 2D elements; volume elements are an
+ * error): merge duplicate points, drop faces with a repeated vertex and
+ * duplicate faces, orient consistently (CGAL orient_polygon_soup), stitch
+ * coincident borders, remove degenerate (zero-area) faces, remove isolated
+ * vertices, triangulate quads, check for self-intersections, and orient
+ * every closed component outward (orient_to_bound_a_volume). The result is
+ * a triangle mesh with new vertex numbering: fields and vertex flags of m
+ * are dropped (one VM_LOG_WARN if there were any), attributes kept.
+ * Refused (negative status, m unchanged, one line naming what and where):
+ *  - VM_ERR_FORMAT: a non-manifold edge or vertex, or a surface that cannot
+ *    be oriented consistently (it would have to be cut); an open surface
+ *    (border edges left) when o->require_closed; self-intersections when
+ *    checked and o->require_closed; nothing left after repair;
+ *  - VM_ERR_ARG, VM_ERR_NOMEM, VM_ERR_BACKEND.
+ * rep may be NULL; o NULL means defaults. */
+int vm_surface_repair(vm_mesh *m, const vm_repair_opts *o, vm_repair_report *rep);
+
+/* Pairs of intersecting triangles of a triangle mesh m (faces sharing a
+ * vertex or an edge intersect only if they overlap beyond that). Writes
+ * the count to *count and, if pairs != NULL, a vm_malloc'd array of
+ * 2 * count element indices, sorted (free with vm_free). */
+int vm_surface_self_intersections(const vm_mesh *m, int64_t *count, int32_t **pairs);
+
+typedef struct vm_remesh_opts {
+  double target_edge_length; /* > 0 */
+  int iterations;            /* (default 5) */
+  int relaxation_steps;      /* tangential relaxation per iteration (default 1) */
+} vm_remesh_opts;
+
+vm_remesh_opts vm_remesh_opts_default(void);
+
+/* Isotropic remeshing (CGAL PMP::isotropic_remeshing) of the triangle mesh
+ * m in place to edge length o->target_edge_length, new vertices projected
+ * onto the input surface. Features in f (of m; may be NULL) are protected:
+ * feature edges are constrained (they may be split or collapsed along
+ * their line, never flipped; their vertices move only along the line) and
+ * corners never move. On success m holds the new mesh (fields and flags
+ * dropped) and f, if given, the features of the new mesh (same corners,
+ * the constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG
+ * (not a closed-or-open manifold triangle mesh, bad options), VM_ERR_NOMEM,
+ * VM_ERR_BACKEND. */
+int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_remesh_opts *o,
+                      double corner_deg);
+
+/* The closest-point projector onto a reference triangle mesh and its
+ * feature lines, for vm_minimizer_set_surfaces: surface id 0 is the whole
+ * reference surface (closest point by an AABB tree; one constraint
+ * normal: the normal of the face the point lands on); id k in 1..nline is
+ * feature line k of the reference features (closest point on that
+ * polyline; two constraint normals orthogonal to the line's direction
+ * there, so a vertex slides along it). Other ids: VM_ERR_ARG. The
+ * reference mesh and features are copied. */
+typedef struct vm_surface_projector vm_surface_projector;
+
+int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref, const vm_surface_features *f,
+                                vm_surface_projector **out);
+void vm_surface_projector_destroy(vm_surface_projector **p);
+vm_surface_ops vm_surface_projector_ops(vm_surface_projector *p);
+/* Number of reference feature lines. */
+int32_t vm_surface_projector_nlines(const vm_surface_projector *p);
+
+/* For the features f of a mesh m lying on (or near) the reference: the
+ * reference line of each line of f (line_map[1..f->nline]; line_map[0] =
+ * 0), by a vote of its vertices' nearest reference feature segments.
+ * A line with no reference feature near it maps to 0 (the surface), so its
+ * vertices slide on the surface. */
+int vm_surface_projector_match_lines(vm_surface_projector *p, const vm_mesh *m,
+                                     const vm_surface_features *f, int32_t *line_map);
+
+/* Distance from each of n points (3*n) to the reference surface. */
+int vm_surface_projector_distance(vm_surface_projector *p, int64_t n, const double *pts,
+                                  double *dist);
+
+/* A per-vertex field of the reference (field[v], v < ref->nv) evaluated
+ * at the closest reference points of n points (3*n): linear
+ * interpolation in the triangle the closest point lies in. */
+int vm_surface_projector_interpolate(vm_surface_projector *p, const double *field, int64_t n,
+                                     const double *pts, double *out);
+
+/* Approximate one-sided Hausdorff distances between two triangle meshes:
+ * the largest distance from a sample of a's surface to b (*ab) and of b's
+ * to a (*ba); samples are the vertices, edge points and a regular grid of
+ * spacing `spacing` on every face (<= 0: 1/100 of the bounding box
+ * diagonal of a). Deterministic. Either output may be NULL. */
+int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
+                         double *ba);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,431 @@
+// surface/src/repair_cgal.cpp: CGAL adapter: repair of an imported surface
+// (Polygon_mesh_processing), self-intersection detection, isotropic
+// remeshing with protected features.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/manifoldness.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Polygon_mesh_processing/repair.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "cxx_private.h"
+#include "varmesh/repair.h"
+
+namespace {
+
+typedef CGAL::Exact_predicates_inexact_constructions_kernel K;
+typedef K::Point_3 Point;
+typedef CGAL::Surface_mesh<Point> SMesh;
+typedef boost::graph_traits<SMesh>::vertex_descriptor vertex_descriptor;
+typedef boost::graph_traits<SMesh>::face_descriptor face_descriptor;
+typedef boost::graph_traits<SMesh>::halfedge_descriptor halfedge_descriptor;
+typedef boost::graph_traits<SMesh>::edge_descriptor edge_descriptor;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+typedef std::vector<std::size_t> Polygon;
+
+// What orient_polygon_soup met on the way (the visitor is copied by CGAL,
+// so it records through a pointer).
+struct OrientLog {
+  std::size_t nm_edges = 0, nm_vertices = 0, duplicated = 0, reversed = 0;
+  std::size_t edge_a = 0, edge_b = 0, edge_n = 0, vertex = 0;
+};
+struct OrientVisitor : public PMP::Default_orientation_visitor {
+  OrientLog *log;
+  explicit OrientVisitor(OrientLog *l) : log(l) {}
+  void non_manifold_edge(std::size_t a, std::size_t b, std::size_t n) {
+    if (!log->nm_edges++) {
+      log->edge_a = a;
+      log->edge_b = b;
+      log->edge_n = n;
+    }
+  }
+  void non_manifold_vertex(std::size_t v, std::size_t) {
+    if (!log->nm_vertices++) log->vertex = v;
+  }
+  void duplicated_vertex(std::size_t v, std::size_t) {
+    if (!log->duplicated++ && !log->nm_vertices) log->vertex = v;
+  }
+  void polygon_orientation_reversed(std::size_t) { log->reversed++; }
+};
+
+// m's 2D elements as a polygon soup; false if m has volume elements.
+bool to_soup(const vm_mesh *m, std::vector<Point> &pts, std::vector<Polygon> &polys) {
+  pts.reserve(static_cast<size_t>(m->nv));
+  for (int64_t v = 0; v < m->nv; v++)
+    pts.emplace_back(m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
+  polys.reserve(static_cast<size_t>(m->ne));
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (vm_elem_dim(m->etype[e]) != 2) return false;
+    Polygon p;
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++)
+      p.push_back(static_cast<std::size_t>(m->conn[k]));
+    polys.push_back(std::move(p));
+  }
+  return true;
+}
+
+// Drop repeated consecutive vertices; a polygon left with < 3 distinct
+// vertices (or a repeated one elsewhere) is removed. Returns the count.
+std::size_t remove_invalid(std::vector<Polygon> &polys) {
+  std::size_t removed = 0, k = 0;
+  for (std::size_t i = 0; i < polys.size(); i++) {
+    Polygon p;
+    for (std::size_t a = 0; a < polys[i].size(); a++)
+      if (p.empty() || p.back() != polys[i][a]) p.push_back(polys[i][a]);
+    while (p.size() > 1 && p.front() == p.back()) p.pop_back();
+    Polygon s = p;
+    std::sort(s.begin(), s.end());
+    bool bad = p.size() < 3 || std::adjacent_find(s.begin(), s.end()) != s.end();
+    if (bad) {
+      removed++;
+      continue;
+    }
+    polys[k++] = std::move(p);
+  }
+  polys.resize(k);
+  return removed;
+}
+
+// m's arrays replaced by sm's (compact: garbage collected) triangles;
+// attributes kept, fields and flags dropped.
+int replace_mesh(vm_mesh *m, const SMesh &sm) {
+  vm_ctx *ctx = m->ctx;
+  vm_mesh *n = NULL;
+  int st = vm_mesh_create(ctx, &n);
+  if (st) return st;
+  n->dim = 3;
+  std::vector<int32_t> idx(sm.number_of_vertices() + sm.number_of_removed_vertices(), -1);
+  int64_t nv = 0;
+  for (vertex_descriptor v : sm.vertices()) idx[v.idx()] = static_cast<int32_t>(nv++);
+  if ((st = vm_mesh_set_vertices(n, nv))) goto fail;
+  for (vertex_descriptor v : sm.vertices()) {
+    const Point &p = sm.point(v);
+    double *x = n->xyz + 3 * static_cast<int64_t>(idx[v.idx()]);
+    x[0] = p.x();
+    x[1] = p.y();
+    x[2] = p.z();
+  }
+  {
+    int64_t nf = static_cast<int64_t>(sm.number_of_faces());
+    if ((st = vm_mesh_set_elements(n, nf, 3 * nf))) goto fail;
+    int64_t e = 0;
+    for (face_descriptor f : sm.faces()) {
+      n->etype[e] = VM_TRI;
+      n->eoff[e + 1] = n->eoff[e] + 3;
+      int a = 0;
+      for (vertex_descriptor v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+        n->conn[3 * e + a++] = idx[v.idx()];
+      e++;
+    }
+  }
+  for (int i = 0; i < m->nattr; i++)
+    if ((st = vm_mesh_set_attr(n, m->attrs[i].key, m->attrs[i].value))) goto fail;
+  {
+    vm_mesh tmp = *m;
+    *m = *n;
+    *n = tmp;
+  }
+  vm_mesh_destroy(&n);
+  return VM_OK;
+fail:
+  vm_mesh_destroy(&n);
+  return st;
+}
+
+// A triangle mesh from m (triangles only); false if a face cannot be added.
+bool to_surface_mesh(const vm_mesh *m, SMesh &sm, int64_t *bad_elem) {
+  std::vector<vertex_descriptor> vh;
+  vh.reserve(static_cast<size_t>(m->nv));
+  for (int64_t v = 0; v < m->nv; v++)
+    vh.push_back(sm.add_vertex(Point(m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2])));
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    if (m->etype[e] != VM_TRI ||
+        sm.add_face(vh[static_cast<size_t>(c[0])], vh[static_cast<size_t>(c[1])],
+                    vh[static_cast<size_t>(c[2])]) == SMesh::null_face()) {
+      *bad_elem = e;
+      return false;
+    }
+  }
+  return true;
+}
+
+Point face_centroid(const SMesh &sm, face_descriptor f) {
+  double s[3] = {0, 0, 0};
+  int n = 0;
+  for (vertex_descriptor v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+    const Point &p = sm.point(v);
+    s[0] += p.x();
+    s[1] += p.y();
+    s[2] += p.z();
+    n++;
+  }
+  return Point(s[0] / n, s[1] / n, s[2] / n);
+}
+
+}  // namespace
+
+extern "C" vm_repair_opts vm_repair_opts_default(void) {
+  vm_repair_opts o;
+  o.require_closed = 1;
+  o.check_self_intersections = 1;
+  return o;
+}
+
+extern "C" vm_remesh_opts vm_remesh_opts_default(void) {
+  vm_remesh_opts o;
+  o.target_edge_length = 0;
+  o.iterations = 5;
+  o.relaxation_steps = 1;
+  return o;
+}
+
+extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repair_report *rep) {
+  if (!m) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  vm_repair_opts o = opts ? *opts : vm_repair_opts_default();
+  vm_repair_report r;
+  std::memset(&r, 0, sizeof r);
+  r.self_intersections = -1;
+  if (rep) *rep = r;
+  VM_CXX_BEGIN
+  std::vector<Point> pts;
+  std::vector<Polygon> polys;
+  if (!to_soup(m, pts, polys))
+    return vm_error(ctx, VM_ERR_ARG, "repair: the mesh has volume elements");
+  r.nv_in = m->nv;
+  r.nf_in = static_cast<int64_t>(polys.size());
+  if (polys.empty()) return vm_error(ctx, VM_ERR_FORMAT, "repair: the surface has no faces");
+
+  r.merged_vertices = static_cast<int64_t>(PMP::merge_duplicate_points_in_polygon_soup(pts, polys));
+  r.removed_polygons = static_cast<int64_t>(remove_invalid(polys));
+  r.removed_polygons +=
+      static_cast<int64_t>(PMP::merge_duplicate_polygons_in_polygon_soup(pts, polys));
+  r.removed_isolated = static_cast<int64_t>(PMP::remove_isolated_points_in_polygon_soup(pts, polys));
+  if (polys.empty())
+    return vm_error(ctx, VM_ERR_FORMAT, "repair: no valid face left (all %lld were degenerate)",
+                    static_cast<long long>(r.nf_in));
+
+  const std::size_t npts = pts.size();
+  OrientLog vis;
+  bool ok = PMP::orient_polygon_soup(pts, polys, CGAL::parameters::visitor(OrientVisitor(&vis)));
+  r.reoriented = static_cast<int64_t>(vis.reversed);
+  if (vis.nm_edges) {
+    const Point &a = pts[vis.edge_a], &b = pts[vis.edge_b];
+    return vm_error(ctx, VM_ERR_FORMAT,
+                    "non-manifold surface: %zu edges are shared by more than two faces; the "
+                    "first, (%g, %g, %g)-(%g, %g, %g), by %zu",
+                    vis.nm_edges, a.x(), a.y(), a.z(), b.x(), b.y(), b.z(), vis.edge_n);
+  }
+  if (vis.nm_vertices || !ok || pts.size() != npts) {
+    const Point &p = pts[std::min(vis.vertex, npts - 1)];
+    return vm_error(ctx, VM_ERR_FORMAT,
+                    "the surface cannot be made manifold and consistently oriented without "
+                    "cutting it at %zu vertices (non-manifold vertex, or a non-orientable "
+                    "surface); the first at (%g, %g, %g)",
+                    std::max<std::size_t>(pts.size() - npts, 1), p.x(), p.y(), p.z());
+  }
+
+  SMesh sm;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, sm);
+  PMP::triangulate_faces(sm);
+  r.stitched = static_cast<int64_t>(PMP::stitch_borders(sm));
+  const std::size_t nf_before = sm.number_of_faces();
+  PMP::remove_degenerate_faces(sm);
+  r.removed_degenerate = static_cast<int64_t>(nf_before) - static_cast<int64_t>(sm.number_of_faces());
+  r.removed_isolated += static_cast<int64_t>(PMP::remove_isolated_vertices(sm));
+  sm.collect_garbage();
+  if (sm.number_of_faces() == 0)
+    return vm_error(ctx, VM_ERR_FORMAT, "repair: no face left after removing degenerate ones");
+
+  // after stitching and collapses the surface may have become non-manifold
+  {
+    std::vector<halfedge_descriptor> nmv;
+    PMP::non_manifold_vertices(sm, std::back_inserter(nmv));
+    if (!nmv.empty()) {
+      std::vector<std::size_t> ids;
+      for (halfedge_descriptor h : nmv) ids.push_back(sm.target(h).idx());
+      std::sort(ids.begin(), ids.end());
+      std::size_t nids = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
+      const Point &p = sm.point(vertex_descriptor(static_cast<SMesh::size_type>(ids.front())));
+      return vm_error(ctx, VM_ERR_FORMAT,
+                      "%zu non-manifold vertices after repair (faces meeting at a point); the "
+                      "first at (%g, %g, %g)",
+                      nids, p.x(), p.y(), p.z());
+    }
+  }
+
+  std::vector<halfedge_descriptor> cycles;
+  PMP::extract_boundary_cycles(sm, std::back_inserter(cycles));
+  r.holes = static_cast<int64_t>(cycles.size());
+  for (halfedge_descriptor h : sm.halfedges())
+    if (sm.is_border(h)) r.border_edges++;
+  auto fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+  r.components = static_cast<int64_t>(PMP::connected_components(sm, fcc));
+  if (r.border_edges > 0 && o.require_closed) {
+    halfedge_descriptor h = cycles.front();
+    const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h));
+    return vm_error(ctx, VM_ERR_FORMAT,
+                    "open surface: %lld border edges around %lld holes; e.g. the border edge "
+                    "(%g, %g, %g)-(%g, %g, %g)",
+                    static_cast<long long>(r.border_edges), static_cast<long long>(r.holes), a.x(),
+                    a.y(), a.z(), b.x(), b.y(), b.z());
+  }
+
+  if (o.check_self_intersections) {
+    std::vector<std::pair<face_descriptor, face_descriptor>> pairs;
+    PMP::self_intersections(sm, std::back_inserter(pairs));
+    r.self_intersections = static_cast<int64_t>(pairs.size());
+    if (!pairs.empty()) {
+      std::sort(pairs.begin(), pairs.end());
+      Point c = face_centroid(sm, pairs.front().first);
+      if (o.require_closed)
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "self-intersecting surface: %zu pairs of faces intersect; e.g. near "
+                        "(%g, %g, %g)",
+                        pairs.size(), c.x(), c.y(), c.z());
+      vm_log(ctx, VM_LOG_WARN, "repair: %zu pairs of faces intersect; e.g. near (%g, %g, %g)",
+             pairs.size(), c.x(), c.y(), c.z());
+    }
+  }
+
+  if (r.border_edges == 0) {
+    std::vector<K::Vector_3> before;
+    before.reserve(sm.number_of_faces());
+    for (face_descriptor f : sm.faces()) before.push_back(PMP::compute_face_normal(f, sm));
+    if (r.self_intersections == 0)
+      PMP::orient_to_bound_a_volume(sm);
+    else
+      PMP::orient(sm);
+    std::size_t i = 0;
+    for (face_descriptor f : sm.faces())
+      if (before[i++] * PMP::compute_face_normal(f, sm) < 0) r.reoriented++;
+    r.volume = PMP::volume(sm);
+  }
+  sm.remove_property_map(fcc);
+
+  if (m->nfield > 0)
+    vm_log(ctx, VM_LOG_WARN, "repair: %d fields dropped (the vertex numbering changes)",
+           m->nfield);
+  r.nv = static_cast<int64_t>(sm.number_of_vertices());
+  r.nf = static_cast<int64_t>(sm.number_of_faces());
+  int st = replace_mesh(m, sm);
+  if (st) return st;
+  if (rep) *rep = r;
+  return VM_OK;
+  VM_CXX_END(ctx, "repair")
+}
+
+extern "C" int vm_surface_self_intersections(const vm_mesh *m, int64_t *count, int32_t **pairs) {
+  if (!m || !count) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  *count = 0;
+  if (pairs) *pairs = NULL;
+  VM_CXX_BEGIN
+  SMesh sm;
+  int64_t bad = -1;
+  if (!to_surface_mesh(m, sm, &bad))
+    return vm_error(ctx, VM_ERR_ARG,
+                    "self-intersections: element %lld is not a triangle of a manifold surface",
+                    static_cast<long long>(bad));
+  std::vector<std::pair<face_descriptor, face_descriptor>> fp;
+  PMP::self_intersections(sm, std::back_inserter(fp));
+  std::vector<std::pair<int32_t, int32_t>> ip;
+  ip.reserve(fp.size());
+  for (auto &p : fp) {
+    int32_t a = static_cast<int32_t>(p.first.idx()), b = static_cast<int32_t>(p.second.idx());
+    ip.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  std::sort(ip.begin(), ip.end());
+  *count = static_cast<int64_t>(ip.size());
+  if (pairs) {
+    int32_t *out = static_cast<int32_t *>(vm_alloc_array(ctx, 2 * (ip.size() ? ip.size() : 1),
+                                                         sizeof *out));
+    if (!out) return VM_ERR_NOMEM;
+    for (std::size_t i = 0; i < ip.size(); i++) {
+      out[2 * i] = ip[i].first;
+      out[2 * i + 1] = ip[i].second;
+    }
+    *pairs = out;
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "self-intersections")
+}
+
+extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_remesh_opts *o,
+                                 double corner_deg) {
+  if (!m || !o) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  if (!(o->target_edge_length > 0) || !std::isfinite(o->target_edge_length) ||
+      o->iterations < 1 || o->relaxation_steps < 0)
+    return vm_error(ctx, VM_ERR_ARG, "remesh: target edge length %g, %d iterations",
+                    o->target_edge_length, o->iterations);
+  if (f && f->nv != m->nv)
+    return vm_error(ctx, VM_ERR_ARG, "remesh: the features belong to another mesh");
+  VM_CXX_BEGIN
+  SMesh sm;
+  int64_t bad = -1;
+  if (!to_surface_mesh(m, sm, &bad))
+    return vm_error(ctx, VM_ERR_ARG,
+                    "remesh: element %lld is not a triangle of a manifold surface (repair first)",
+                    static_cast<long long>(bad));
+  auto ecm = sm.add_property_map<edge_descriptor, bool>("e:vm_constrained", false).first;
+  auto vcm = sm.add_property_map<vertex_descriptor, bool>("v:vm_constrained", false).first;
+  if (f) {
+    for (int64_t k = 0; k < f->nedge; k++) {
+      halfedge_descriptor h = sm.halfedge(vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k])),
+                                          vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k + 1])));
+      if (h == SMesh::null_halfedge())
+        return vm_error(ctx, VM_ERR_ARG, "remesh: feature edge %lld is not a mesh edge",
+                        static_cast<long long>(k));
+      ecm[sm.edge(h)] = true;
+    }
+    for (int64_t v = 0; v < m->nv; v++)
+      if (f->vclass[v] == VM_FEATURE_CORNER) vcm[vertex_descriptor(static_cast<SMesh::size_type>(v))] = true;
+  }
+  PMP::isotropic_remeshing(faces(sm), o->target_edge_length, sm,
+                           CGAL::parameters::number_of_iterations(static_cast<unsigned>(o->iterations))
+                               .number_of_relaxation_steps(static_cast<unsigned>(o->relaxation_steps))
+                               .edge_is_constrained_map(ecm)
+                               .vertex_is_constrained_map(vcm)
+                               .protect_constraints(false)
+                               .relax_constraints(true));
+  sm.collect_garbage();
+  // the new mesh's features: constrained edges and corners, in the new numbering
+  std::vector<int32_t> fe;
+  std::vector<uint8_t> corner(sm.number_of_vertices(), 0);
+  for (edge_descriptor e : sm.edges())
+    if (ecm[e] || sm.is_border(e)) {
+      fe.push_back(static_cast<int32_t>(sm.source(sm.halfedge(e)).idx()));
+      fe.push_back(static_cast<int32_t>(sm.target(sm.halfedge(e)).idx()));
+    }
+  for (vertex_descriptor v : sm.vertices())
+    if (vcm[v]) corner[v.idx()] = 1;
+  int st = replace_mesh(m, sm);
+  if (st) return st;
+  if (f) {
+    vm_surface_features_free(ctx, f);
+    st = vm_surface_features_from_edges(m, static_cast<int64_t>(fe.size() / 2), fe.data(),
+                                        corner.data(), corner_deg, f);
+    if (st) return st;
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "remesh")
+}

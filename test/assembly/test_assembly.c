@@ -1,0 +1,655 @@
+/* test/assembly/test_assembly.c: the discrete functional: gradient and
+ * Hessian blocks against finite differences for every element type, rule
+ * and measure; invariances, known values, node statistics, subsets, errors
+ * and bit-identical results for 1 and 2 threads. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "meshgen.h"
+#include "varmesh/problem.h"
+#include "vmtest.h"
+
+enum {
+  MS_BAL,
+  MS_SHAPE,
+  MS_SHAPE_ALT,
+  MS_QISO,
+  MS_BARRIER,
+  MS_PEN_POS,
+  MS_PEN_NEG,
+  MS_BAR_NEG,
+  MS_COUNT
+};
+static const char *ms_name[MS_COUNT] = {"balanced",  "shape",    "shape-alt", "quasi-iso",
+                                        "barrier",   "penalty+", "penalty-",  "barrier-"};
+
+typedef struct {
+  int type, rule, surf, n[3];
+  const char *name;
+} ecase;
+
+static const ecase ecases[] = {
+    {VM_TRI, 0, 0, {2, 2, 1}, "tri"},        {VM_QUAD, 0, 0, {2, 2, 1}, "quad"},
+    {VM_TRI, 0, 1, {2, 2, 1}, "tri-surf"},   {VM_QUAD, 0, 1, {2, 2, 1}, "quad-surf"},
+    {VM_TET, 0, 0, {1, 1, 1}, "tet"},        {VM_PYRAMID, 0, 0, {1, 1, 1}, "pyramid"},
+    {VM_PRISM, 0, 0, {2, 1, 1}, "prism"},    {VM_PRISM, 1, 0, {2, 1, 1}, "prism"},
+    {VM_HEX, 0, 0, {2, 1, 1}, "hex"},        {VM_HEX, 1, 0, {2, 1, 1}, "hex"},
+};
+#define NCASE ((int)(sizeof ecases / sizeof ecases[0]))
+
+static double *dup(const double *x, size_t n) {
+  double *y = malloc(n * sizeof *y);
+  memcpy(y, x, n * sizeof *y);
+  return y;
+}
+
+static int64_t find_pos(const int64_t *rp, const int32_t *adj, int32_t u, int32_t v) {
+  for (int64_t k = rp[u]; k < rp[u + 1]; k++)
+    if (adj[k] == v) return k;
+  return -1;
+}
+
+static int set_ms(vm_problem *p, int ms, double mindet) {
+  vm_measure_params q = vm_measure_params_default();
+  vm_measure_kind kind = VM_MEASURE_BALANCED;
+  switch (ms) {
+  case MS_SHAPE:
+    kind = VM_MEASURE_SHAPE;
+    break;
+  case MS_SHAPE_ALT:
+    kind = VM_MEASURE_SHAPE_ALT;
+    break;
+  case MS_QISO:
+    kind = VM_MEASURE_QUASI_ISO;
+    q.t = 0.1;
+    break;
+  case MS_BARRIER:
+    kind = VM_MEASURE_BARRIER;
+    q.eps = 0.05;
+    break;
+  case MS_PEN_POS:
+    kind = VM_MEASURE_PENALTY;
+    q.eps = 0.05;
+    q.drop_chi2 = 0;
+    break;
+  case MS_PEN_NEG:
+    kind = VM_MEASURE_PENALTY;
+    q.eps = 0.3;
+    q.drop_chi2 = 0;
+    break;
+  case MS_BAR_NEG:
+    kind = VM_MEASURE_BARRIER;
+    q.eps = 1.5 * fabs(mindet);
+    break;
+  default:
+    break;
+  }
+  return vm_problem_set_measure(p, kind, &q);
+}
+
+/* Max relative errors of the gradient (vs central differences of F) and of
+ * hdiag and hoff (vs central differences of the gradient) at x0. */
+static int fd_errors(vm_problem *p, const double *x0, double *eg, double *eh) {
+  const vm_mesh *m = vm_problem_mesh(p);
+  int64_t nv = m->nv;
+  const int64_t *rp;
+  const int32_t *adj;
+  vm_problem_graph(p, &rp, &adj);
+  int64_t nnz = rp[nv];
+  double F, Fp, Fm;
+  double *g = calloc(3 * nv, sizeof *g), *hd = calloc(9 * nv, sizeof *hd);
+  double *ho = calloc(3 * nnz + 1, sizeof *ho);
+  double *gp = calloc(3 * nv, sizeof *gp), *gm = calloc(3 * nv, sizeof *gm);
+  double *x = dup(x0, 3 * nv);
+  vm_eval ev = {&F, g, hd, ho};
+  int st = vm_problem_eval(p, x, &ev);
+  double hs = 1e-5, mg = 0, erg = 0, mh = 0, erh = 0;
+  for (int64_t k = 0; k < 3 * nv; k++) mg = fmax(mg, fabs(g[k]));
+  int nc = m->dim;
+  for (int64_t v = 0; v < nv && !st; v++)
+    for (int c = 0; c < nc; c++) {
+      vm_eval ep = {&Fp, gp, NULL, NULL}, em = {&Fm, gm, NULL, NULL};
+      x[3 * v + c] = x0[3 * v + c] + hs;
+      st |= vm_problem_eval(p, x, &ep);
+      x[3 * v + c] = x0[3 * v + c] - hs;
+      st |= vm_problem_eval(p, x, &em);
+      x[3 * v + c] = x0[3 * v + c];
+      erg = fmax(erg, fabs(g[3 * v + c] - (Fp - Fm) / (2 * hs)));
+      for (int r = 0; r < nc; r++) {
+        double ref = (gp[3 * v + r] - gm[3 * v + r]) / (2 * hs);
+        mh = fmax(mh, fabs(ref));
+        erh = fmax(erh, fabs(hd[9 * v + 3 * r + c] - ref));
+      }
+      for (int64_t k = rp[v]; k < rp[v + 1]; k++) {
+        int32_t u = adj[k];
+        double ref = (gp[3 * u + c] - gm[3 * u + c]) / (2 * hs);
+        mh = fmax(mh, fabs(ref));
+        erh = fmax(erh, fabs(ho[3 * find_pos(rp, adj, u, (int32_t)v) + c] - ref));
+      }
+    }
+  *eg = erg / fmax(mg, 1e-300);
+  *eh = erh / fmax(mh, 1e-300);
+  free(g);
+  free(hd);
+  free(ho);
+  free(gp);
+  free(gm);
+  free(x);
+  return st;
+}
+
+/* Move vertex 0 past the centroid of element 0 until some nodes invert
+ * while every |det C| stays clear of 0; returns min det or 0 on failure. */
+static double invert_some(vm_problem *p, double *x) {
+  const vm_mesh *m = vm_problem_mesh(p);
+  int k = vm_elem_nverts(m->etype[0]);
+  int32_t v0 = m->conn[0];
+  double c[3] = {0, 0, 0}, x0[3];
+  for (int a = 0; a < k; a++)
+    for (int r = 0; r < 3; r++) c[r] += x[3 * m->conn[a] + r] / k;
+  memcpy(x0, x + 3 * v0, sizeof x0);
+  int64_t nn = vm_problem_num_nodes(p);
+  double *det = malloc(nn * sizeof *det);
+  double res = 0;
+  for (double f = 1.3; f < 3 && res == 0; f += 0.1) {
+    for (int r = 0; r < m->dim; r++) x[3 * v0 + r] = x0[r] + f * (c[r] - x0[r]);
+    vm_problem_node_dets(p, x, det);
+    double mn = INFINITY, ma = INFINITY;
+    for (int64_t q = 0; q < nn; q++) {
+      mn = fmin(mn, det[q]);
+      ma = fmin(ma, fabs(det[q]));
+    }
+    if (mn < -0.05 && ma > 0.02) res = mn;
+  }
+  free(det);
+  return res;
+}
+
+/* Per-vertex SPD tensors (variant runs), scalar metrics, weights, eps. */
+static void rand_tensor(vm_ctx *ctx, int64_t nv, double *G) {
+  for (int64_t v = 0; v < nv; v++) {
+    for (int c = 0; c < 3; c++) G[6 * v + c] = 1 + 0.5 * vm_ctx_rand_unit(ctx);
+    for (int c = 3; c < 6; c++) G[6 * v + c] = 0.3 * (2 * vm_ctx_rand_unit(ctx) - 1);
+  }
+}
+
+static void test_fd(vm_ctx *ctx) {
+  fprintf(stderr, "%-10s %-9s %-10s %-8s %-16s %-16s\n", "element", "rule", "measure", "variant",
+          "max_rel_err_grad", "max_rel_err_hess");
+  for (int ci = 0; ci < NCASE; ci++) {
+    const ecase *ec = &ecases[ci];
+    for (int variant = 0; variant < 2; variant++)
+      for (int ms = 0; ms < MS_COUNT; ms++) {
+        if (variant && ms != MS_BAL && ms != MS_PEN_NEG && ms != MS_SHAPE) continue;
+        vm_ctx_seed(ctx, 1000 + 31 * ci + 7 * ms + variant);
+        vm_mesh *m = mg_build(ctx, ec->type, ec->surf, ec->n[0], ec->n[1], ec->n[2], 1.0);
+        CHECK(m != NULL, "mesh %s", ec->name);
+        if (!m) continue;
+        double *base = dup(m->xyz, 3 * m->nv);
+        mg_jitter(ctx, m, 0.12);
+        vm_problem *p = NULL;
+        int st = vm_problem_create(ctx, m, &p);
+        CHECK(st == 0, "create %s: %s", ec->name, vm_ctx_error(ctx));
+        if (st) {
+          free(base);
+          vm_mesh_destroy(&m);
+          continue;
+        }
+        CHECK(vm_problem_set_rule(p, ec->rule) == 0, "rule");
+        double *G = NULL, *w = NULL, *eps = NULL;
+        if (variant) {
+          /* reference targets from another jitter, metric, weights */
+          double *ref = dup(base, 3 * m->nv);
+          for (int64_t k = 0; k < 3 * m->nv; k++)
+            if (m->dim == 3 || k % 3 < 2) ref[k] += 0.1 * (2 * vm_ctx_rand_unit(ctx) - 1);
+          CHECK(vm_problem_set_target_reference(p, ref) == 0, "ref: %s", vm_ctx_error(ctx));
+          free(ref);
+          G = malloc(6 * m->nv * sizeof *G);
+          if (ec->surf) {
+            for (int64_t v = 0; v < m->nv; v++) G[v] = 1 + vm_ctx_rand_unit(ctx);
+            CHECK(vm_problem_set_metric_scalar(p, G) == 0, "metric: %s", vm_ctx_error(ctx));
+          } else {
+            rand_tensor(ctx, m->nv, G);
+            CHECK(vm_problem_set_metric_tensor(p, G) == 0, "metric: %s", vm_ctx_error(ctx));
+          }
+          w = malloc(m->ne * sizeof *w);
+          for (int64_t e = 0; e < m->ne; e++) w[e] = 0.5 + vm_ctx_rand_unit(ctx);
+          CHECK(vm_problem_set_weights(p, w) == 0, "weights");
+        }
+        double *x = dup(m->xyz, 3 * m->nv), mindet = 0;
+        if (ms == MS_PEN_NEG || ms == MS_BAR_NEG) {
+          mindet = invert_some(p, x);
+          CHECK(mindet < 0, "%s: could not invert a node", ec->name);
+        }
+        CHECK(set_ms(p, ms, mindet) == 0, "measure: %s", vm_ctx_error(ctx));
+        if (variant && ms == MS_PEN_NEG) {
+          int64_t nn = vm_problem_num_nodes(p);
+          eps = malloc(nn * sizeof *eps);
+          for (int64_t q = 0; q < nn; q++) eps[q] = 0.2 + 0.2 * vm_ctx_rand_unit(ctx);
+          CHECK(vm_problem_set_node_eps(p, eps) == 0, "node eps");
+        }
+        double eg = 1, eh = 1;
+        st = fd_errors(p, x, &eg, &eh);
+        CHECK(st == 0, "%s %s: eval status %d", ec->name, ms_name[ms], st);
+        fprintf(stderr, "%-10s %-9s %-10s %-8s %-16.2e %-16.2e\n", ec->name,
+                ec->rule ? "geometric" : "corner", ms_name[ms], variant ? "ref+G+w" : "ideal", eg,
+                eh);
+        CHECK(eg < 1e-6, "%s %s grad rel err %g", ec->name, ms_name[ms], eg);
+        CHECK(eh < 1e-5, "%s %s hess rel err %g", ec->name, ms_name[ms], eh);
+        free(G);
+        free(w);
+        free(eps);
+        free(x);
+        free(base);
+        vm_problem_destroy(&p);
+        vm_mesh_destroy(&m);
+      }
+  }
+}
+
+/* A mixed mesh (hex, pyramid, prism, tet sharing faces) and a plane fan
+ * whose centre has 260 neighbours (hoff positions by binary search). */
+static void test_fd_special(vm_ctx *ctx) {
+  static const double X[12][3] = {{0, 0, 0},      {1, 0, 0},     {1, 1, 0},    {0, 1, 0},
+                                  {0, 0, 1},      {1, 0, 1},     {1, 1, 1},    {0, 1, 1},
+                                  {0.5, 0.5, 1.7}, {1.8, 0.5, 0}, {1.8, 0.5, 1}, {-0.8, 0.5, 0.5}};
+  static const int32_t hex[8] = {0, 1, 2, 3, 4, 5, 6, 7}, pyr[5] = {4, 5, 6, 7, 8},
+                       pri[6] = {1, 9, 2, 5, 10, 6};
+  int32_t tet[4] = {0, 3, 4, 11};
+  for (int rule = 0; rule < 2; rule++)
+    for (int ms = 0; ms < 2; ms++) {
+      vm_mesh *m = NULL;
+      vm_mesh_create(ctx, &m);
+      for (int v = 0; v < 12; v++) vm_mesh_add_vertex(m, X[v][0], X[v][1], X[v][2], NULL);
+      if (mg_tet_vol(m->xyz, tet) < 0) {
+        int32_t t = tet[1];
+        tet[1] = tet[2];
+        tet[2] = t;
+      }
+      vm_mesh_add_element(m, VM_HEX, hex);
+      vm_mesh_add_element(m, VM_PYRAMID, pyr);
+      vm_mesh_add_element(m, VM_PRISM, pri);
+      vm_mesh_add_element(m, VM_TET, tet);
+      vm_ctx_seed(ctx, 40 + ms);
+      mg_jitter(ctx, m, 0.1);
+      vm_problem *p = NULL;
+      CHECK(vm_problem_create(ctx, m, &p) == 0, "mixed: %s", vm_ctx_error(ctx));
+      vm_problem_set_rule(p, rule);
+      double *x = dup(m->xyz, 3 * m->nv), mindet = 0;
+      if (ms) mindet = invert_some(p, x);
+      set_ms(p, ms ? MS_PEN_NEG : MS_BAL, mindet);
+      double eg = 1, eh = 1;
+      CHECK(fd_errors(p, x, &eg, &eh) == 0, "mixed eval");
+      fprintf(stderr, "%-10s %-9s %-10s %-8s %-16.2e %-16.2e\n", "mixed",
+              rule ? "geometric" : "corner", ms ? "penalty-" : "balanced", "ideal", eg, eh);
+      CHECK(eg < 1e-6 && eh < 1e-5, "mixed: errors %g %g", eg, eh);
+      free(x);
+      vm_problem_destroy(&p);
+      vm_mesh_destroy(&m);
+    }
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  m->dim = 2;
+  const int nfan = 260;
+  vm_mesh_add_vertex(m, 0, 0, 0, NULL);
+  for (int k = 0; k < nfan; k++)
+    vm_mesh_add_vertex(m, cos(6.283185307179586 * k / nfan), sin(6.283185307179586 * k / nfan), 0, NULL);
+  for (int k = 0; k < nfan; k++) {
+    int32_t t[3] = {0, 1 + k, 1 + (k + 1) % nfan};
+    vm_mesh_add_element(m, VM_TRI, t);
+  }
+  vm_ctx_seed(ctx, 5);
+  mg_jitter(ctx, m, 0.002);
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "fan: %s", vm_ctx_error(ctx));
+  double eg = 1, eh = 1;
+  CHECK(fd_errors(p, m->xyz, &eg, &eh) == 0, "fan eval");
+  fprintf(stderr, "%-10s %-9s %-10s %-8s %-16.2e %-16.2e\n", "tri-fan260", "corner", "balanced",
+          "ideal", eg, eh);
+  CHECK(eg < 1e-6 && eh < 1e-5, "fan: errors %g %g", eg, eh);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
+/* F is invariant under rotation and translation of all vertices. */
+static void test_invariance(vm_ctx *ctx) {
+  const double ang = 0.7, ax[3] = {0.36, 0.48, 0.8}; /* unit axis */
+  double R[9], c = cos(ang), s = sin(ang);
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) R[3 * i + j] = (i == j ? c : 0) + (1 - c) * ax[i] * ax[j];
+  R[1] -= s * ax[2], R[2] += s * ax[1], R[3] += s * ax[2];
+  R[5] -= s * ax[0], R[6] -= s * ax[1], R[7] += s * ax[0];
+  for (int ci = 0; ci < NCASE; ci++) {
+    const ecase *ec = &ecases[ci];
+    vm_ctx_seed(ctx, 77 + ci);
+    vm_mesh *m = mg_build(ctx, ec->type, ec->surf, 2, 2, 2, 1.0);
+    mg_jitter(ctx, m, 0.15);
+    vm_problem *p = NULL;
+    CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+    vm_problem_set_rule(p, ec->rule);
+    double F0, F1;
+    CHECK(vm_problem_value(p, m->xyz, &F0) == 0, "value");
+    for (int64_t v = 0; v < m->nv; v++) {
+      double *y = m->xyz + 3 * v, z[3];
+      if (m->dim == 2) {
+        z[0] = c * y[0] - s * y[1] + 3.5;
+        z[1] = s * y[0] + c * y[1] - 1.25;
+        z[2] = 0;
+      } else {
+        for (int i = 0; i < 3; i++) z[i] = R[3 * i] * y[0] + R[3 * i + 1] * y[1] + R[3 * i + 2] * y[2];
+        z[0] += 3.5, z[1] -= 1.25, z[2] += 10;
+      }
+      memcpy(y, z, sizeof z);
+    }
+    CHECK(vm_problem_update_normals(p, NULL) == 0, "normals");
+    CHECK(vm_problem_value(p, m->xyz, &F1) == 0, "value");
+    CHECK(fabs(F1 - F0) <= 1e-12 * fabs(F0), "%s %s: F %.17g rotated %.17g", ec->name,
+          ec->rule ? "geometric" : "corner", F0, F1);
+    vm_problem_destroy(&p);
+    vm_mesh_destroy(&m);
+  }
+}
+
+/* F equals the total target volume where the mesh is its own target, the
+ * gradient vanishes there; targets from a field give the same. */
+static void test_known_values(vm_ctx *ctx) {
+  for (int ci = 0; ci < NCASE; ci++) {
+    const ecase *ec = &ecases[ci];
+    vm_ctx_seed(ctx, 500 + ci);
+    /* surfaces: a jittered plane mesh tilted into 3D, so quads are planar
+     * and "the mesh is its target" holds exactly */
+    vm_mesh *m = mg_build(ctx, ec->type, 0, 2, 2, 2, 1.0);
+    mg_jitter(ctx, m, 0.15);
+    if (ec->surf) {
+      m->dim = 3;
+      for (int64_t v = 0; v < m->nv; v++) {
+        double *y = m->xyz + 3 * v;
+        y[2] = 0.6 * y[1];
+        y[1] *= 0.8;
+      }
+      CHECK(vm_problem_update_normals(NULL, NULL) == VM_ERR_ARG, "NULL problem");
+    }
+    vm_problem *p = NULL;
+    CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+    vm_problem_set_rule(p, ec->rule);
+    CHECK(vm_problem_set_target_reference(p, m->xyz) == 0, "ref %s", vm_ctx_error(ctx));
+    double F, tv = vm_problem_target_volume(p);
+    double *g = calloc(3 * m->nv, sizeof *g);
+    vm_eval ev = {&F, g, NULL, NULL};
+    CHECK(vm_problem_eval(p, m->xyz, &ev) == 0, "eval");
+    CHECK(fabs(F - tv) <= 1e-13 * tv, "%s: F %.17g target volume %.17g", ec->name, F, tv);
+    double gm = 0;
+    for (int64_t k = 0; k < 3 * m->nv; k++) gm = fmax(gm, fabs(g[k]));
+    CHECK(gm < 1e-12, "%s: |grad| %g at the target", ec->name, gm);
+    /* the same targets through an element field */
+    vm_field *f = NULL;
+    CHECK(vm_mesh_add_field(m, "target", VM_FIELD_ELEMENT, VM_FIELD_F64, 24, &f) == 0, "field");
+    for (int64_t e = 0; e < m->ne; e++)
+      for (int64_t a = m->eoff[e]; a < m->eoff[e + 1]; a++)
+        memcpy((double *)f->data + 24 * e + 3 * (a - m->eoff[e]), m->xyz + 3 * m->conn[a],
+               3 * sizeof(double));
+    CHECK(vm_problem_set_target_field(p, "target") == 0, "field: %s", vm_ctx_error(ctx));
+    double F2;
+    CHECK(vm_problem_value(p, m->xyz, &F2) == 0, "value");
+    CHECK(fabs(F2 - tv) <= 1e-13 * tv, "%s: field F %.17g vs %.17g", ec->name, F2, tv);
+    free(g);
+    vm_problem_destroy(&p);
+    vm_mesh_destroy(&m);
+  }
+  /* uniform Cartesian hexes with ideal targets: the minimum */
+  for (int rule = 0; rule < 2; rule++) {
+    vm_mesh *m = mg_build(ctx, VM_HEX, 0, 4, 3, 2, 0.5);
+    vm_problem *p = NULL;
+    CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+    vm_problem_set_rule(p, rule);
+    CHECK(fabs(vm_problem_target_size(p) - 0.5) < 1e-15, "size %.17g", vm_problem_target_size(p));
+    double F, *g = calloc(3 * m->nv, sizeof *g);
+    vm_eval ev = {&F, g, NULL, NULL};
+    CHECK(vm_problem_eval(p, m->xyz, &ev) == 0, "eval");
+    double gm = 0;
+    for (int64_t k = 0; k < 3 * m->nv; k++) gm = fmax(gm, fabs(g[k]));
+    CHECK(gm < 1e-13, "Cartesian hex (%s): |grad| %g", rule ? "geometric" : "corner", gm);
+    CHECK(fabs(F - 0.125 * 24) < 1e-13, "Cartesian hex: F %.17g, volume 3", F);
+    free(g);
+    vm_problem_destroy(&p);
+    vm_mesh_destroy(&m);
+  }
+}
+
+static int same_bits(const double *a, const double *b, size_t n) {
+  return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* 1 and 2 threads give the same bits. */
+static void test_threads(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 12);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 12, 12, 12, 1.0);
+  mg_jitter(ctx, m, 0.15);
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  const int64_t *rp;
+  const int32_t *adj;
+  vm_problem_graph(p, &rp, &adj);
+  size_t nv = (size_t)m->nv, nnz = (size_t)rp[nv];
+  for (int rule = 0; rule < 2; rule++) {
+    vm_problem_set_rule(p, rule);
+    double F[2], Fv[2], *g[2], *hd[2], *ho[2];
+    vm_node_stats ns[2];
+    for (int t = 0; t < 2; t++) {
+      vm_ctx_set_threads(ctx, t + 1);
+      g[t] = malloc(3 * nv * sizeof(double));
+      hd[t] = malloc(9 * nv * sizeof(double));
+      ho[t] = malloc(3 * nnz * sizeof(double));
+      vm_eval ev = {&F[t], g[t], hd[t], ho[t]};
+      CHECK(vm_problem_eval(p, m->xyz, &ev) == 0, "eval");
+      CHECK(vm_problem_value(p, m->xyz, &Fv[t]) == 0, "value");
+      vm_problem_node_stats(p, m->xyz, &ns[t]);
+    }
+    CHECK(same_bits(F, F + 1, 1), "F %.17g vs %.17g", F[0], F[1]);
+    CHECK(same_bits(Fv, F, 1) && same_bits(Fv + 1, F, 1), "value %.17g vs eval %.17g", Fv[0],
+          F[0]);
+    CHECK(same_bits(g[0], g[1], 3 * nv), "gradient differs between 1 and 2 threads");
+    CHECK(same_bits(hd[0], hd[1], 9 * nv), "hdiag differs between 1 and 2 threads");
+    CHECK(same_bits(ho[0], ho[1], 3 * nnz), "hoff differs between 1 and 2 threads");
+    CHECK(!memcmp(&ns[0], &ns[1], sizeof ns[0]), "node stats differ");
+    for (int t = 0; t < 2; t++) {
+      free(g[t]);
+      free(hd[t]);
+      free(ho[t]);
+    }
+  }
+  vm_ctx_set_threads(ctx, 0);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
+/* One mirrored hex inverts exactly its 8 (corner) or 64 (geometric) nodes;
+ * one tet with two vertices swapped, exactly its node. */
+static void test_node_stats(vm_ctx *ctx) {
+  for (int rule = 0; rule < 2; rule++) {
+    vm_ctx_seed(ctx, 3);
+    vm_mesh *m = mg_build(ctx, VM_HEX, 0, 3, 3, 3, 1.0);
+    mg_jitter(ctx, m, 0.05);
+    int32_t *c = m->conn + m->eoff[13];
+    for (int a = 0; a < 4; a++) {
+      int32_t t = c[a];
+      c[a] = c[a + 4];
+      c[a + 4] = t;
+    }
+    vm_problem *p = NULL;
+    CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+    vm_problem_set_rule(p, rule);
+    vm_node_stats ns;
+    CHECK(vm_problem_node_stats(p, m->xyz, &ns) == 0, "stats");
+    int64_t want = rule ? 64 : 8, nn = vm_problem_num_nodes(p);
+    CHECK(ns.inverted == want, "mirrored hex: %lld inverted nodes, want %lld",
+          (long long)ns.inverted, (long long)want);
+    double *det = malloc(nn * sizeof *det), mn = INFINITY;
+    vm_problem_node_dets(p, m->xyz, det);
+    const int32_t *ne = vm_problem_node_elements(p);
+    int64_t cnt = 0, wrong = 0;
+    for (int64_t q = 0; q < nn; q++) {
+      mn = fmin(mn, det[q]);
+      if (det[q] <= 0) {
+        cnt++;
+        wrong += ne[q] != 13;
+      }
+    }
+    CHECK(cnt == want && wrong == 0, "node dets: %lld inverted, %lld elsewhere", (long long)cnt,
+          (long long)wrong);
+    CHECK(mn == ns.min_det && ns.phi_min < 0 && ns.psi_min < 0, "min det %g vs %g", mn,
+          ns.min_det);
+    double F = 0;
+    CHECK(vm_problem_value(p, m->xyz, &F) == VM_WARN_INVERTED && F == INFINITY, "value %g", F);
+    double *g = malloc(3 * m->nv * sizeof *g);
+    vm_eval ev = {&F, g, NULL, NULL};
+    F = 0;
+    CHECK(vm_problem_eval(p, m->xyz, &ev) == VM_WARN_INVERTED && F == INFINITY, "eval %g", F);
+    free(g);
+    free(det);
+    vm_problem_destroy(&p);
+    vm_mesh_destroy(&m);
+  }
+  vm_mesh *m = mg_build(ctx, VM_TET, 0, 2, 2, 2, 1.0);
+  int32_t *c = m->conn + m->eoff[20], t = c[1];
+  c[1] = c[2];
+  c[2] = t;
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  vm_node_stats ns;
+  vm_problem_node_stats(p, m->xyz, &ns);
+  CHECK(ns.inverted == 1, "swapped tet: %lld inverted", (long long)ns.inverted);
+  /* an ideal-size Kuhn tet is not regular but has phi in (0, 1] */
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
+/* Subsets add up; per-node eps equal to eps changes nothing. */
+static void test_subsets(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 9);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 3, 3, 3, 1.0);
+  mg_jitter(ctx, m, 0.1);
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  size_t nv = (size_t)m->nv;
+  double F, Fa, Fb, Fall;
+  double *g = malloc(3 * nv * sizeof *g), *ga = malloc(3 * nv * sizeof *ga);
+  double *gb = malloc(3 * nv * sizeof *gb), *gall = malloc(3 * nv * sizeof *gall);
+  uint8_t *mask = malloc(m->ne);
+  vm_eval e0 = {&F, g, NULL, NULL}, ea = {&Fa, ga, NULL, NULL}, eb = {&Fb, gb, NULL, NULL},
+          eall = {&Fall, gall, NULL, NULL};
+  vm_problem_eval(p, m->xyz, &e0);
+  for (int64_t e = 0; e < m->ne; e++) mask[e] = 1;
+  vm_problem_set_active(p, mask);
+  vm_problem_eval(p, m->xyz, &eall);
+  CHECK(Fall == F && same_bits(g, gall, 3 * nv), "full mask differs");
+  for (int64_t e = 0; e < m->ne; e++) mask[e] = e % 3 == 0;
+  vm_problem_set_active(p, mask);
+  vm_problem_eval(p, m->xyz, &ea);
+  double Fv;
+  vm_problem_value(p, m->xyz, &Fv);
+  CHECK(Fv == Fa, "masked value %.17g vs eval %.17g", Fv, Fa);
+  for (int64_t e = 0; e < m->ne; e++) mask[e] = e % 3 != 0;
+  vm_problem_set_active(p, mask);
+  vm_problem_eval(p, m->xyz, &eb);
+  CHECK(fabs(Fa + Fb - F) <= 1e-13 * F, "subsets: %.17g + %.17g vs %.17g", Fa, Fb, F);
+  double err = 0;
+  for (size_t k = 0; k < 3 * nv; k++) err = fmax(err, fabs(ga[k] + gb[k] - g[k]));
+  CHECK(err < 1e-13, "subset gradients add up to within %g", err);
+  vm_problem_set_active(p, NULL);
+  vm_problem_eval(p, m->xyz, &eall);
+  CHECK(Fall == F && same_bits(g, gall, 3 * nv), "mask removal");
+  /* per-node eps */
+  vm_measure_params q = vm_measure_params_default();
+  q.eps = 0.25;
+  vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q);
+  vm_problem_eval(p, m->xyz, &e0);
+  int64_t nn = vm_problem_num_nodes(p);
+  double *eps = malloc(nn * sizeof *eps);
+  for (int64_t k = 0; k < nn; k++) eps[k] = 0.25;
+  CHECK(vm_problem_set_node_eps(p, eps) == 0, "node eps");
+  vm_problem_eval(p, m->xyz, &eall);
+  CHECK(Fall == F && same_bits(g, gall, 3 * nv), "node eps = eps differs");
+  free(eps);
+  free(mask);
+  free(g);
+  free(ga);
+  free(gb);
+  free(gall);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
+/* Bad input is refused with the problem unchanged; every allocation
+ * failure is reported and leaks nothing. */
+static void test_errors(vm_ctx *ctx) {
+  vm_mesh *m = mg_build(ctx, VM_TET, 0, 2, 1, 1, 1.0);
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  double F0, F1;
+  vm_problem_value(p, m->xyz, &F0);
+  double *ref = dup(m->xyz, 3 * m->nv);
+  for (int64_t v = 0; v < m->nv; v++) ref[3 * v + 2] = -ref[3 * v + 2];
+  CHECK(vm_problem_set_target_reference(p, ref) == VM_ERR_ARG, "mirrored reference accepted");
+  vm_problem_value(p, m->xyz, &F1);
+  CHECK(F0 == F1, "failed set_target changed F");
+  double g[64];
+  for (int k = 0; k < 64; k++) g[k] = k == 5 ? -1 : 1;
+  CHECK(vm_problem_set_metric_scalar(p, g) == VM_ERR_ARG, "negative metric accepted");
+  CHECK(vm_problem_set_rule(p, (vm_rule)7) == VM_ERR_ARG, "bad rule accepted");
+  CHECK(vm_problem_set_measure(p, VM_MEASURE_COUNT, NULL) == VM_ERR_ARG, "bad measure accepted");
+  free(ref);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+  m = mg_build(ctx, VM_QUAD, 1, 2, 2, 1, 1.0);
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  double G[6 * 9] = {0};
+  CHECK(vm_problem_set_metric_tensor(p, G) == VM_ERR_UNSUPPORTED, "surface tensor metric");
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+
+  m = mg_build(ctx, VM_PRISM, 0, 2, 2, 1, 1.0);
+  ref = dup(m->xyz, 3 * m->nv);
+  double *ones = malloc(m->nv * sizeof *ones);
+  for (int64_t v = 0; v < m->nv; v++) ones[v] = 1;
+  long live = vm_ctx_alloc_live(ctx);
+  int done = 0, n;
+  for (n = 1; n < 200 && !done; n++) {
+    vm_ctx_set_alloc_fail(ctx, n);
+    int st = vm_problem_create(ctx, m, &p);
+    if (!st) st = vm_problem_set_rule(p, VM_RULE_GEOMETRIC);
+    if (!st) st = vm_problem_set_target_reference(p, ref);
+    if (!st) st = vm_problem_set_metric_scalar(p, ones);
+    vm_ctx_set_alloc_fail(ctx, 0);
+    CHECK(st == 0 || st == VM_ERR_NOMEM, "failure %d: status %d", n, st);
+    if (!st) {
+      done = 1;
+      double F;
+      CHECK(vm_problem_value(p, m->xyz, &F) == 0, "value after injected failures");
+    }
+    vm_problem_destroy(&p);
+    CHECK(vm_ctx_alloc_live(ctx) == live, "failure %d leaks %ld blocks", n,
+          vm_ctx_alloc_live(ctx) - live);
+  }
+  CHECK(done && n > 5, "allocation failure loop ended after %d", n);
+  free(ones);
+  free(ref);
+  vm_mesh_destroy(&m);
+}
+
+int main(void) {
+  vm_ctx *ctx = NULL;
+  if (vm_ctx_create(&ctx)) return 1;
+  test_fd(ctx);
+  test_fd_special(ctx);
+  test_invariance(ctx);
+  test_known_values(ctx);
+  test_threads(ctx);
+  test_node_stats(ctx);
+  test_subsets(ctx);
+  test_errors(ctx);
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("assembly");
+}

@@ -1,0 +1,157 @@
+/* test/core/test_quality.c: quality figures, boundary extraction and the
+ * rotated-cube generator on shapes with known answers. */
+#include <math.h>
+#include <string.h>
+
+#include "varmesh/generate.h"
+#include "varmesh/quality.h"
+#include "varmesh/quadrature.h"
+#include "varmesh/topology.h"
+#include "vmtest.h"
+
+/* One ideal element of each type, scaled by h: phi = psi = sj = 1, M = 0. */
+static void ideal_elements(vm_ctx *ctx) {
+  for (int t = 0; t < VM_NTYPES; t++) {
+    vm_mesh *m;
+    vm_mesh_create(ctx, &m);
+    int k = vm_elem_nverts(t);
+    double ref[VM_MAX_ELEM_VERTS * 3];
+    vm_elem_ideal(t, ref);
+    vm_mesh_set_vertices(m, k);
+    const double h = 0.3;
+    for (int i = 0; i < 3 * k; i++) m->xyz[i] = h * ref[i] + 1.0;
+    if (vm_elem_dim(t) == 2) {
+      m->dim = 2;
+      for (int i = 0; i < k; i++) m->xyz[3 * i + 2] = 0;
+    }
+    int32_t c[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+    vm_mesh_add_element(m, t, c);
+    vm_quality q;
+    vm_quality_opts o = {VM_RULE_GEOMETRIC, h};
+    CHECK(vm_mesh_quality(m, &o, &q) == VM_OK, "quality %s", vm_elem_name(t));
+    CHECK(q.all.inverted_nodes == 0, "%s: M = %lld", vm_elem_name(t),
+          (long long)q.all.inverted_nodes);
+    CHECK_NEAR(q.all.phi_min, 1.0, 1e-12, vm_elem_name(t));
+    CHECK_NEAR(q.all.psi_min, 1.0, 1e-12, vm_elem_name(t));
+    CHECK_NEAR(q.all.sj_min, 1.0, 1e-12, vm_elem_name(t));
+    /* mirror the element: every node inverted, sj = -1 */
+    for (int i = 0; i < k; i++) m->xyz[3 * i] = -m->xyz[3 * i];
+    CHECK(vm_mesh_quality(m, &o, &q) == VM_OK, "quality");
+    CHECK(q.all.inverted_nodes == q.all.nodes && q.all.inverted_elems == 1,
+          "%s mirrored: M = %lld of %lld", vm_elem_name(t), (long long)q.all.inverted_nodes,
+          (long long)q.all.nodes);
+    CHECK_NEAR(q.all.sj_min, -1.0, 1e-12, vm_elem_name(t));
+    vm_mesh_destroy(&m);
+  }
+}
+
+static void rotated_cube(vm_ctx *ctx) {
+  vm_rotcube_opts o = vm_rotcube_opts_default();
+  o.n = 8;
+  for (int tets = 0; tets < 2; tets++) {
+    o.cells = tets ? VM_GEN_TETS : VM_GEN_HEX;
+    o.alpha = 0;
+    vm_mesh *m;
+    double *ref;
+    CHECK(vm_gen_rotated_cube(ctx, &o, &m, &ref) == VM_OK, "generate");
+    CHECK(m->nv == 729 && m->ne == (tets ? 6 * 512 : 512), "sizes %lld %lld", (long long)m->nv,
+          (long long)m->ne);
+    CHECK(memcmp(m->xyz, ref, sizeof(double) * 3 * 729) == 0, "alpha 0 is Cartesian");
+    /* fixed: 9^3 - 7^3 boundary + inner vertices with |x| < 0.3536: i in 2..6 => 3^3? */
+    int64_t nfix = 0;
+    for (int64_t v = 0; v < m->nv; v++) nfix += m->vflag[v] == VM_VERTEX_FIXED;
+    /* coordinates -0.5 + i/8 strictly inside 0.35355: |x| in {0, .125, .25} => 5 per axis */
+    CHECK(nfix == 729 - 343 + 125, "fixed %lld", (long long)nfix);
+    vm_quality q;
+    vm_quality_opts qo = {VM_RULE_CORNER, 1.0 / 8};
+    vm_mesh_quality(m, &qo, &q);
+    CHECK(q.all.inverted_nodes == 0, "untangled at alpha 0");
+    if (!tets) {
+      CHECK_NEAR(q.all.phi_min, 1.0, 1e-12, "phi at alpha 0");
+      CHECK_NEAR(q.all.psi_min, 1.0, 1e-12, "psi at alpha 0");
+    }
+    int64_t nb, nbv;
+    vm_mesh_boundary(m, &nb, NULL, NULL, NULL, NULL);
+    CHECK(nb == (tets ? 2 : 1) * 6 * 64, "boundary faces %lld", (long long)nb);
+    vm_mesh *c;
+    vm_mesh_clone(m, &c);
+    memset(c->vflag, 0, (size_t)c->nv);
+    vm_mesh_mark_boundary(c, VM_VERTEX_FIXED, &nbv);
+    CHECK(nbv == 729 - 343, "boundary vertices %lld", (long long)nbv);
+    vm_mesh_destroy(&c);
+    vm_free(ctx, ref);
+    vm_mesh_destroy(&m);
+    /* pi/2: the generator's whole point is a tangled mesh */
+    o.alpha = 3.14159265358979323846 / 2;
+    vm_gen_rotated_cube(ctx, &o, &m, NULL);
+    vm_mesh_quality(m, &qo, &q);
+    CHECK(q.all.inverted_nodes > 0 && q.all.inverted_elems > 0, "tangled at pi/2: M = %lld",
+          (long long)q.all.inverted_nodes);
+    fprintf(stderr, "rotcube n=8 pi/2 %s: M = %lld, inverted elements %lld\n",
+            tets ? "tets" : "hexes", (long long)q.all.inverted_nodes,
+            (long long)q.all.inverted_elems);
+    vm_mesh_destroy(&m);
+  }
+}
+
+/* The mixed cube: all four 3D types, valid at alpha 0, tangled at pi. */
+static void mixed_cube(vm_ctx *ctx) {
+  vm_rotcube_opts o = vm_rotcube_opts_default();
+  o.n = 8;
+  o.cells = VM_GEN_MIXED;
+  for (int tangled = 0; tangled < 2; tangled++) {
+    o.alpha = tangled ? 3.14159265358979323846 : 0;
+    vm_mesh *m;
+    double *ref;
+    CHECK(vm_gen_rotated_cube(ctx, &o, &m, &ref) == VM_OK, "mixed");
+    int64_t cnt[VM_NTYPES];
+    vm_mesh_count_types(m, cnt);
+    CHECK(cnt[VM_HEX] == 128 && cnt[VM_PRISM] == 256 && cnt[VM_PYRAMID] == 6 * 128 &&
+              cnt[VM_TET] == 6 * 128,
+          "mixed counts %lld %lld %lld %lld", (long long)cnt[VM_HEX], (long long)cnt[VM_PRISM],
+          (long long)cnt[VM_PYRAMID], (long long)cnt[VM_TET]);
+    CHECK(m->nv == 729 + 128, "mixed vertices %lld", (long long)m->nv);
+    CHECK(vm_mesh_check(m) == VM_OK, "mixed invariants");
+    vm_quality q;
+    vm_quality_opts qo = {VM_RULE_CORNER, 1.0 / 8};
+    vm_mesh_quality(m, &qo, &q);
+    if (tangled)
+      CHECK(q.all.inverted_nodes > 0, "mixed tangled at pi");
+    else
+      CHECK(q.all.inverted_nodes == 0 && q.all.sj_min > 0.4, "mixed valid at 0: M %lld sj %g",
+            (long long)q.all.inverted_nodes, q.all.sj_min);
+    vm_free(ctx, ref);
+    vm_mesh_destroy(&m);
+  }
+}
+
+static void adjacency(vm_ctx *ctx) {
+  vm_rotcube_opts o = vm_rotcube_opts_default();
+  o.n = 3;
+  vm_mesh *m;
+  vm_gen_rotated_cube(ctx, &o, &m, NULL);
+  int64_t *rp;
+  int32_t *el;
+  CHECK(vm_mesh_vertex_elements(m, &rp, &el) == VM_OK, "adjacency");
+  /* corner vertex: 1 hex; centre-ish vertex (1,1,1): 8 hexes */
+  CHECK(rp[1] - rp[0] == 1, "corner valence %lld", (long long)(rp[1] - rp[0]));
+  int64_t v = (1 * 4 + 1) * 4 + 1;
+  CHECK(rp[v + 1] - rp[v] == 8, "inner valence %lld", (long long)(rp[v + 1] - rp[v]));
+  for (int64_t k = rp[v]; k + 1 < rp[v + 1]; k++) CHECK(el[k] < el[k + 1], "sorted");
+  vm_free(ctx, rp);
+  vm_free(ctx, el);
+  vm_mesh_destroy(&m);
+}
+
+int main(void) {
+  vm_ctx *ctx;
+  vm_ctx_create(&ctx);
+  long live0 = vm_ctx_alloc_live(ctx);
+  ideal_elements(ctx);
+  rotated_cube(ctx);
+  mixed_cube(ctx);
+  adjacency(ctx);
+  CHECK(vm_ctx_alloc_live(ctx) == live0, "leak: %ld blocks", vm_ctx_alloc_live(ctx) - live0);
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("quality");
+}

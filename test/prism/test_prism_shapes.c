@@ -1,0 +1,202 @@
+/* test/prism/test_prism_shapes.c: the prism stage on walls that exercise
+ * each part of the method: a cube (sharp convex edges and corners), the
+ * hole of a torus (concave, the layer closes the hole), two spheres closer
+ * than 2T (cutting must end in a contact without intersection), and a
+ * plate thinner than T. Checked independently of the library: corner tets
+ * and an all-pairs separating-axis test of the boundary faces. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "shapes.h"
+#include "varmesh/prism.h"
+#include "vmtest.h"
+
+static int64_t corner_inverted(const vm_mesh *m) {
+  static const int ct[6][4] = {{0, 1, 2, 3}, {1, 2, 0, 4}, {2, 0, 1, 5},
+                               {3, 5, 4, 0}, {4, 3, 5, 1}, {5, 4, 3, 2}};
+  int64_t bad = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_PRISM) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int k = 0; k < 6; k++) {
+      const double *o = m->xyz + 3 * c[ct[k][0]];
+      double a[3], b[3], d[3], x[3];
+      sh_sub(m->xyz + 3 * c[ct[k][1]], o, a);
+      sh_sub(m->xyz + 3 * c[ct[k][2]], o, b);
+      sh_sub(m->xyz + 3 * c[ct[k][3]], o, d);
+      sh_cross(a, b, x);
+      if (!(sh_dot(x, d) > 0)) bad++;
+    }
+  }
+  return bad;
+}
+
+/* Outer faces against each other and against the wall (the triangles of
+ * the result: wall tag 1, outer tag 2), all pairs. */
+static int64_t boundary_intersections(const vm_mesh *res) {
+  const vm_field *ph = vm_mesh_find_field(res, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT);
+  int64_t n = 0;
+  for (int64_t e = 0; e < res->ne; e++) n += res->etype[e] == VM_TRI;
+  int32_t *tri = malloc(sizeof(int32_t) * 3 * (size_t)n);
+  int32_t *grp = malloc(sizeof(int32_t) * (size_t)n);
+  int64_t k = 0;
+  for (int64_t e = 0; e < res->ne; e++) {
+    if (res->etype[e] != VM_TRI) continue;
+    memcpy(tri + 3 * k, res->conn + res->eoff[e], 3 * sizeof(int32_t));
+    grp[k++] = ((const int32_t *)ph->data)[e] == VM_PRISM_TAG_WALL ? 0 : 1;
+  }
+  int64_t c = sh_count_intersections(res->xyz, n, tri, grp, 1e-6);
+  free(tri);
+  free(grp);
+  return c;
+}
+
+typedef struct {
+  vm_mesh *res;
+  vm_prism_report r;
+  int64_t nw;
+} run_out;
+
+static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, run_out *out) {
+  double *w0 = malloc(sizeof(double) * 3 * (size_t)w->nv);
+  memcpy(w0, w->xyz, sizeof(double) * 3 * (size_t)w->nv);
+  vm_prism_opts o = vm_prism_opts_default();
+  o.thickness = T;
+  o.nlayers = layers;
+  o.growth = 1.2;
+  vm_prism *p = NULL;
+  int st = vm_prism_create(ctx, w, &o, &p);
+  CHECK(st == 0, "%s: create: %d %s", name, st, vm_ctx_error(ctx));
+  if (st) {
+    free(w0);
+    return st;
+  }
+  st = vm_prism_run(p);
+  CHECK(st == 0, "%s: run: %d %s", name, st, vm_ctx_error(ctx));
+  vm_prism_get_report(p, &out->r);
+  vm_prism_result(p, &out->res);
+  out->nw = out->r.wall_vertices;
+  const vm_prism_report *r = &out->r;
+  fprintf(stderr,
+          "%s: %lld prisms, %d layers, cut %d rounds (%lld pairs first), full %.3f, thick "
+          "%.3f..%.3f, inverted %lld, sj %.3f, normal dev %.2f deg, growth %.3f, %.2f s\n",
+          name, (long long)r->prisms, r->layers, r->cut_rounds, (long long)r->cut_pairs_first,
+          r->full_fraction, r->thick_min, r->thick_mean, (long long)r->inverted, r->sj_min,
+          r->normal_dev_max, r->growth_max, r->time_total);
+  for (int k = 0; k < VM_PRISM_NPHASES; k++)
+    fprintf(stderr, "  %s %.3f s\n", vm_prism_phase_name((vm_prism_phase)k), r->time[k]);
+  CHECK(r->inverted == 0, "%s: %lld inverted corner tets", name, (long long)r->inverted);
+  CHECK(r->intersections == 0, "%s: %lld intersections left", name, (long long)r->intersections);
+  if (out->res) {
+    CHECK(vm_mesh_check(out->res) == 0, "%s: result: %s", name, vm_ctx_error(ctx));
+    CHECK(corner_inverted(out->res) == 0, "%s: result has inverted corner tets", name);
+    CHECK(!memcmp(out->res->xyz, w0, sizeof(double) * 3 * (size_t)w->nv), "%s: wall moved", name);
+    int64_t ni = boundary_intersections(out->res);
+    CHECK(ni == 0, "%s: %lld intersecting boundary face pairs (independent check)", name,
+          (long long)ni);
+  }
+  vm_prism_destroy(&p);
+  free(w0);
+  return 0;
+}
+
+static const double *top_of(const run_out *o, int64_t v) {
+  return o->res->xyz + 3 * (o->r.layers * o->nw + v);
+}
+
+int main(void) {
+  vm_ctx *ctx = NULL;
+  vm_ctx_create(&ctx);
+
+  { /* cube: sharp convex edges and corners */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    const int n[3] = {6, 6, 6};
+    sh_box(w, lo, hi, n);
+    sh_merge(w);
+    run_out o = {0};
+    run(ctx, "cube", w, 0.6, 4, &o);
+    CHECK(o.r.full_fraction >= 0.95, "cube: full fraction %g", o.r.full_fraction);
+    CHECK(o.r.normal_dev_max < 5, "cube: normal deviation %g", o.r.normal_dev_max);
+    /* the outer surface stays outside the cube by about T */
+    double dmin = INFINITY;
+    for (int64_t v = 0; o.res && v < o.nw; v++) {
+      const double *x = top_of(&o, v);
+      double d = fmax(fmax(fabs(x[0]), fabs(x[1])), fabs(x[2])) - 1;
+      dmin = fmin(dmin, d);
+    }
+    CHECK(dmin > 0.5 * 0.6, "cube: outer vertex only %g outside", dmin);
+    vm_mesh_destroy(&o.res);
+    vm_mesh_destroy(&w);
+  }
+
+  { /* torus: the hole (radius 0.5) is closed by a layer of T = 0.7 */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    sh_torus(w, 1.0, 0.5, 32, 16);
+    run_out o = {0};
+    run(ctx, "torus", w, 0.7, 3, &o);
+    /* inner equator columns end near the axis, none crosses it */
+    double rmin = INFINITY, rmax_inner = 0;
+    for (int64_t v = 0; o.res && v < o.nw; v++) {
+      const double *y = o.res->xyz + 3 * v;
+      if (fabs(y[2]) > 1e-9 || hypot(y[0], y[1]) > 0.5 + 1e-9) continue;
+      const double *x = top_of(&o, v);
+      double r = hypot(x[0], x[1]);
+      rmin = fmin(rmin, r);
+      rmax_inner = fmax(rmax_inner, r);
+    }
+    fprintf(stderr, "torus: inner-equator tops at axis distance %.3f..%.3f\n", rmin, rmax_inner);
+    CHECK(rmax_inner < 0.25, "torus: the hole stays open (%g)", rmax_inner);
+    vm_mesh_destroy(&o.res);
+    vm_mesh_destroy(&w);
+  }
+
+  { /* two spheres 0.6 apart, T = 0.5: contact in the middle */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    const double ca[3] = {-1.3, 0, 0}, cb[3] = {1.3, 0, 0};
+    sh_icosphere(w, ca, 1.0, 3);
+    int64_t na = w->nv;
+    sh_icosphere(w, cb, 1.0, 3);
+    run_out o = {0};
+    run(ctx, "two spheres", w, 0.5, 3, &o);
+    double gap = INFINITY, tmax = 0;
+    for (int64_t a = 0; o.res && a < na; a++) {
+      const double *xa = top_of(&o, a);
+      for (int64_t b = na; b < o.nw; b++) gap = fmin(gap, sqrt(pow(xa[0] - top_of(&o, b)[0], 2) +
+                                                             pow(xa[1] - top_of(&o, b)[1], 2) +
+                                                             pow(xa[2] - top_of(&o, b)[2], 2)));
+      const double *y = o.res->xyz + 3 * a;
+      if (y[0] > -0.35) tmax = fmax(tmax, sqrt(pow(xa[0] - y[0], 2) + pow(xa[1] - y[1], 2) +
+                                               pow(xa[2] - y[2], 2)));
+    }
+    fprintf(stderr, "two spheres: gap between the layers %.4f, thickness at contact <= %.3f\n",
+            gap, tmax);
+    CHECK(gap < 0.15, "two spheres: no contact, gap %g", gap);
+    CHECK(tmax < 0.4, "two spheres: column at the contact %g long", tmax);
+    CHECK(o.r.full_fraction > 0.6, "two spheres: full fraction %g", o.r.full_fraction);
+    vm_mesh_destroy(&o.res);
+    vm_mesh_destroy(&w);
+  }
+
+  { /* a plate 0.1 thick, T = 0.3 */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    const double lo[3] = {-1, -1, -0.05}, hi[3] = {1, 1, 0.05};
+    const int n[3] = {10, 10, 1};
+    sh_box(w, lo, hi, n);
+    sh_merge(w);
+    run_out o = {0};
+    run(ctx, "plate", w, 0.3, 4, &o);
+    CHECK(o.r.full_fraction >= 0.9, "plate: full fraction %g", o.r.full_fraction);
+    vm_mesh_destroy(&o.res);
+    vm_mesh_destroy(&w);
+  }
+
+  CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("prism_shapes");
+}
