@@ -9,7 +9,7 @@
 #define AMG_MAX_LEVELS 25
 /* Dense Cholesky up to this many coarsest unknowns when coarsening stalls;
  * above it the coarsest level is approximated by smoothing sweeps. */
-#define AMG_DENSE_MAX 3000
+#define AMG_DENSE_MAX 1000
 #define AMG_COARSE_SWEEPS 8
 #define AMG_POWER_ITERS 10
 

@@ -33,6 +33,9 @@ typedef struct {
   int32_t *uvert; /* per unknown: vertex */
   vm_csr A;       /* pattern and values */
   int64_t *hmap;  /* per entry of A: index into the vertex graph, -1 on the diagonal */
+  int share;      /* same unknowns as coordinate 0: use its A and hmap (values are
+                     refilled before each solve), saving a pattern */
+  int gen;        /* pattern generation: own builds, or coordinate 0's when shared */
   vm_precond *pc;
   int full_iter;  /* iteration of the last full preconditioner setup (0: none) */
   int have_pattern;
@@ -121,29 +124,40 @@ static int build_pattern(vm_minimizer *m, int c, const double *hdiag) {
     double hcc = hdiag[9 * v + 4 * c];
     /* zero blocks: vertices outside the active elements */
     if (hcc == 0 && hdiag[9 * v] == 0 && hdiag[9 * v + 4] == 0 && hdiag[9 * v + 8] == 0) in = 0;
-    cs->vidx[v] = in ? (int32_t)nu++ : -1;
+    cs->vidx[v] = -1;
+    if (in) {
+      cs->uvert[nu] = (int32_t)v;
+      cs->vidx[v] = (int32_t)nu++;
+    }
   }
   if (cs->have_pattern && nu == cs->nu &&
-      memcmp(cs->vidx, cs->prev, (size_t)nv * sizeof *cs->vidx) == 0)
+      memcmp(cs->vidx, cs->prev, (size_t)nv * sizeof *cs->vidx) == 0 &&
+      (!cs->share || cs->gen == S->sys[0].gen))
     return VM_OK;
   memcpy(cs->prev, cs->vidx, (size_t)nv * sizeof *cs->vidx);
   cs->nu = nu;
   cs->have_pattern = 0;
   cs->full_iter = 0;
+  vm_csr_free(ctx, &cs->A);
+  vm_free(ctx, cs->hmap);
+  cs->hmap = NULL;
+  cs->share = c > 0 && S->sys[0].have_pattern && S->sys[0].nu == nu &&
+              memcmp(cs->vidx, S->sys[0].vidx, (size_t)nv * sizeof *cs->vidx) == 0;
+  if (cs->share) {
+    cs->gen = S->sys[0].gen;
+    cs->have_pattern = 1;
+    return VM_OK;
+  }
   const int64_t *rp;
   const int32_t *adj;
   vm_problem_graph(m->prob, &rp, &adj);
   int64_t nnz = 0;
   for (int64_t v = 0; v < nv; v++) {
     if (cs->vidx[v] < 0) continue;
-    cs->uvert[cs->vidx[v]] = (int32_t)v;
     nnz++;
     for (int64_t k = rp[v]; k < rp[v + 1]; k++)
       if (cs->vidx[adj[k]] >= 0) nnz++;
   }
-  vm_csr_free(ctx, &cs->A);
-  vm_free(ctx, cs->hmap);
-  cs->hmap = NULL;
   int st = vm_csr_alloc(ctx, &cs->A, nu, nnz);
   if (st) return st;
   cs->hmap = vm_alloc_array(ctx, nnz ? (size_t)nnz : 1, sizeof *cs->hmap);
@@ -169,6 +183,7 @@ static int build_pattern(vm_minimizer *m, int c, const double *hdiag) {
     }
     cs->A.rowptr[i + 1] = pos;
   }
+  cs->gen++;
   cs->have_pattern = 1;
   return VM_OK;
 }
@@ -179,6 +194,8 @@ static int build_pattern(vm_minimizer *m, int c, const double *hdiag) {
 static void fill_values(vm_minimizer *m, int c, const double *hdiag, const double *hoff) {
   implicit_state *S = m->impl;
   coord_system *cs = &S->sys[c];
+  vm_csr *A = cs->share ? &S->sys[0].A : &cs->A;
+  const int64_t *hmap = cs->share ? S->sys[0].hmap : cs->hmap;
   const int32_t *adj;
   vm_problem_graph(m->prob, NULL, &adj);
   int nt = vm_nthreads(m->ctx);
@@ -188,8 +205,8 @@ static void fill_values(vm_minimizer *m, int c, const double *hdiag, const doubl
     int64_t v = cs->uvert[i], dpos = -1;
     const double *Lv = S->L + 9 * v;
     double off = 0;
-    for (int64_t k = cs->A.rowptr[i]; k < cs->A.rowptr[i + 1]; k++) {
-      int64_t e = cs->hmap[k];
+    for (int64_t k = A->rowptr[i]; k < A->rowptr[i + 1]; k++) {
+      int64_t e = hmap[k];
       double a;
       if (e < 0) {
         dpos = k;
@@ -217,10 +234,10 @@ static void fill_values(vm_minimizer *m, int c, const double *hdiag, const doubl
         }
         off += fabs(a);
       }
-      cs->A.val[k] = a;
+      A->val[k] = a;
     }
-    if (!(cs->A.val[dpos] > 0) || !isfinite(cs->A.val[dpos]))
-      cs->A.val[dpos] = off > 0 ? off : 1.0;
+    if (!(A->val[dpos] > 0) || !isfinite(A->val[dpos]))
+      A->val[dpos] = off > 0 ? off : 1.0;
   }
 }
 
@@ -245,15 +262,16 @@ static int implicit_direction(vm_minimizer *m, int iter, const double *g, const 
     }
     if (nz == 0) continue;
     fill_values(m, c, hdiag, hoff);
+    const vm_csr *A = cs->share ? &S->sys[0].A : &cs->A;
     if (cs->full_iter == 0 || iter - cs->full_iter >= o->amg_rebuild_every) {
-      st = vm_precond_setup(cs->pc, &cs->A);
+      st = vm_precond_setup(cs->pc, A);
       cs->full_iter = iter;
     } else {
-      st = vm_precond_update(cs->pc, &cs->A);
+      st = vm_precond_update(cs->pc, A);
     }
     if (st) return st;
     vm_pcg_result pr;
-    st = vm_pcg_solve(ctx, &cs->A, cs->pc, S->b, S->y, &po, &pr);
+    st = vm_pcg_solve(ctx, A, cs->pc, S->b, S->y, &po, &pr);
     if (st) return st;
     *lin_iters += pr.iterations;
     for (int64_t i = 0; i < cs->nu; i++) d[3 * cs->uvert[i] + c] = S->y[i];

@@ -21,8 +21,8 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.growth = 1.2;
   o.theta = 0.8;
   o.cut_factor = 0.85;
-  o.springback_iter = 60;
-  o.resolve_iter = 15;
+  o.springback_iter = 20;
+  o.resolve_iter = 6;
   o.max_cut_rounds = 80;
   o.smooth_iter = 30;
   o.march_iter = 8;
@@ -385,8 +385,35 @@ int vm_prism_thin(vm_prism *p) {
     return VM_ERR_NOMEM;
   }
   for (int64_t v = 0; v < nw; v++) {
-    double h = 0.05 * p->elen[v];
+    double h = 0.5 * p->elen[v];
     hv[v] = h < p->o.thickness ? h : p->o.thickness;
+  }
+  /* the quality each prism tends to as its height goes to 0: the bound the
+   * thin layer may approach but not reach */
+  double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
+  if (!q0) {
+    vm_free(ctx, hv);
+    vm_free(ctx, bad);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t v = 0; v < nw; v++) bad[v] = 0;
+  {
+    double *hs = vm_alloc_array(ctx, (size_t)nw, sizeof *hs);
+    if (!hs) {
+      vm_free(ctx, q0);
+      vm_free(ctx, hv);
+      vm_free(ctx, bad);
+      return VM_ERR_NOMEM;
+    }
+    for (int64_t v = 0; v < nw; v++) hs[v] = 1e-6 * hv[v];
+    pr_set_top(p, hs, p->dir);
+    vm_free(ctx, hs);
+    for (int64_t t = 0; t < nt; t++) {
+      double x[18];
+      const int32_t *c = m->conn + 6 * t;
+      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+      q0[t] = pr_prism_quality(x);
+    }
   }
   int64_t nbad = 0;
   for (int round = 0; round < 60; round++) {
@@ -397,7 +424,8 @@ int vm_prism_thin(vm_prism *p) {
       double x[18];
       const int32_t *c = m->conn + 6 * t;
       for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-      if (pr_prism_quality(x) > 0.02) continue;
+      double lim = 0.5 * q0[t] < 0.3 ? 0.5 * q0[t] : 0.3;
+      if (pr_prism_quality(x) > lim && lim > 0) continue;
       nbad++;
       for (int i = 0; i < 3; i++) bad[c[i]] = 1;
     }
@@ -412,6 +440,7 @@ int vm_prism_thin(vm_prism *p) {
   }
   vm_free(ctx, hv);
   vm_free(ctx, bad);
+  vm_free(ctx, q0);
   if (nbad)
     return vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld thin prisms stay degenerate",
                     (long long)nbad);

@@ -156,10 +156,11 @@ int vm_prism_restore(vm_prism *p) {
       if (nt < 0.5 * t[v]) nt = 0.5 * t[v];
       t[v] = nt;
     }
-    apply_quality(p, t, told, d, qold, q, alpha, tmp);
-    /* no new intersections: the columns involved go back and halve their
-     * steps; after many halvings their cap is frozen at the contact */
-    for (int round = 0; round < 50; round++) {
+    /* no worse prisms and no new intersections: the columns involved go
+     * back and halve their steps; after many halvings their cap is frozen
+     * at the contact. Going back to t_old is always safe. */
+    for (int round = 0;; round++) {
+      apply_quality(p, t, told, d, qold, q, alpha, tmp);
       if ((st = pr_layer_intersections(p, tmp, &np))) goto done;
       if (!np) break;
       int64_t back = 0;
@@ -170,8 +171,12 @@ int vm_prism_restore(vm_prism *p) {
           if (alpha[v] < 1.0 / 64) p->cap[v] = told[v];
           back++;
         }
-      if (!back) memcpy(t, told, (size_t)nw * sizeof *t);
-      pr_set_top(p, t, d);
+      if (!back || round >= 20) {
+        memcpy(t, told, (size_t)nw * sizeof *t);
+        pr_set_top(p, t, d);
+        if ((st = pr_layer_intersections(p, NULL, &np))) goto done;
+        break;
+      }
     }
     double mean = 0;
     for (int64_t v = 0; v < nw; v++) {
@@ -184,6 +189,14 @@ int vm_prism_restore(vm_prism *p) {
   }
   p->rep.intersections = np;
   if (np && st == VM_OK) st = VM_WARN_MAXITER;
+  {
+    vm_node_stats ns;
+    int s2 = vm_problem_node_stats(p->prob, p->layer->xyz, &ns);
+    if (s2 < 0) st = s2;
+    else if (ns.inverted)
+      st = vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after restoring",
+                    (long long)ns.inverted);
+  }
 done:
   vm_free(ctx, d);
   vm_free(ctx, t);

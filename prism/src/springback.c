@@ -31,7 +31,7 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
   vm_minimize_options mo = vm_minimize_options_default();
   mo.max_iter = max_iter;
   mo.time_limit = isfinite(left) ? left : 0;
-  mo.rel_decrease_tol = 1e-7;
+  mo.rel_decrease_tol = 1e-5;
   mo.rel_decrease_count = 2;
   mo.stats_every = 0;
   monitor_data md = {p, ph, 0};
@@ -100,11 +100,11 @@ int vm_prism_springback(vm_prism *p) {
     goto done;
   }
   const double grow = 8;
-  for (int stage = 0; stage < 40; stage++) {
-    column_lengths(p, len);
+  column_lengths(p, len);
+  for (int stage = 0; stage < 60; stage++) {
     int last = 1;
     for (int64_t v = 0; v < p->nw; v++) {
-      hs[v] = grow * len[v];
+      hs[v] = len[v] * pow(grow, stage + 1);
       if (hs[v] >= p->h[v])
         hs[v] = p->h[v];
       else
@@ -112,7 +112,7 @@ int vm_prism_springback(vm_prism *p) {
     }
     if ((st = set_targets(p, hs))) goto done;
     int it = 0;
-    int maxit = last ? p->o.springback_iter : 8;
+    int maxit = last ? p->o.springback_iter : 5;
     st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, maxit, VM_PRISM_PHASE_SPRINGBACK,
                   &it);
     total += it;
@@ -128,6 +128,50 @@ done:
   p->rep.springback_iter += total;
   p->rep.time[VM_PRISM_PHASE_SPRINGBACK] += omp_get_wtime() - t0;
   if (st >= 0) p->done = 2;
+  return st;
+}
+
+/* Re-solve only around the marked columns: the top vertices within a few
+ * rings of them move, every prism touching one of those is active, all
+ * other top vertices are held fixed for the solve. */
+static int local_solve(vm_prism *p, const uint8_t *mark, int max_iter, int *iters) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  uint8_t *reg = vm_alloc_array(ctx, (size_t)nw, sizeof *reg);
+  uint8_t *tmp = vm_alloc_array(ctx, (size_t)nw, sizeof *tmp);
+  uint8_t *act = vm_calloc(ctx, (size_t)nt, sizeof *act);
+  int st = VM_OK;
+  if (!reg || !tmp || !act) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  memcpy(reg, mark, (size_t)nw);
+  for (int r = 0; r < 4; r++) {
+    memcpy(tmp, reg, (size_t)nw);
+    for (int64_t v = 0; v < nw; v++)
+      if (!tmp[v])
+        for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++)
+          if (tmp[p->vv[k]]) {
+            reg[v] = 1;
+            break;
+          }
+  }
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++)
+      if (reg[p->tri[3 * t + i]]) act[t] = 1;
+  uint8_t *fl = p->layer->vflag + nw;
+  for (int64_t v = 0; v < nw; v++) fl[v] = reg[v] ? VM_VERTEX_FREE : VM_VERTEX_FIXED;
+  if ((st = vm_problem_set_active(p->prob, act)) == VM_OK) {
+    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, max_iter, VM_PRISM_PHASE_CUT,
+                  iters);
+    int s2 = vm_problem_set_active(p->prob, NULL);
+    if (st >= 0 && s2) st = s2;
+  }
+  for (int64_t v = 0; v < nw; v++) fl[v] = VM_VERTEX_FREE;
+done:
+  vm_free(ctx, reg);
+  vm_free(ctx, tmp);
+  vm_free(ctx, act);
   return st;
 }
 
@@ -163,8 +207,7 @@ int vm_prism_cut(vm_prism *p) {
       }
     if ((st = set_targets(p, p->h))) break;
     int it = 0;
-    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, p->o.resolve_iter,
-                  VM_PRISM_PHASE_CUT, &it);
+    st = local_solve(p, mark, p->o.resolve_iter, &it);
     p->rep.springback_iter += it;
     if (st < 0) break;
     if (st == VM_WARN_TIME) break;

@@ -189,33 +189,25 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   vm_surface_projector *own = NULL, *hproj = NULL;
   vm_problem *prob = NULL;
   vm_minimizer *mz = NULL;
-  int32_t *line_map = NULL;
+  int32_t *vs = vm_alloc_array(ctx, n1, sizeof *vs);
+  double *x0 = vm_alloc_array(ctx, 3 * n1, sizeof *x0);
   uint8_t *flag0 = vm_alloc_array(ctx, n1, sizeof *flag0);
   int32_t *surf0 = vm_alloc_array(ctx, n1, sizeof *surf0);
   double *Href = vm_alloc_array(ctx, n1, sizeof *Href);
   double *g = vm_alloc_array(ctx, n1, sizeof *g);
   double *Hx = vm_alloc_array(ctx, n1, sizeof *Hx);
   int st = VM_OK, flags_set = 0;
-  if (!flag0 || !surf0 || !Href || !g || !Hx) {
+  if (!flag0 || !surf0 || !Href || !g || !Hx || !vs || !x0) {
     st = VM_ERR_NOMEM;
     goto done;
   }
   memcpy(flag0, m->vflag, (size_t)nv * sizeof *flag0);
   memcpy(surf0, m->vsurf, (size_t)nv * sizeof *surf0);
+  memcpy(x0, m->xyz, 3 * (size_t)nv * sizeof *x0);
 
   /* features and the surfaces the vertices stay on */
   if ((st = vm_surface_detect_features(m, o.feature_angle, o.corner_angle, &f))) goto done;
   if ((st = vm_surface_projector_create(ctx, m, &f, &own))) goto done;
-  line_map = vm_alloc_array(ctx, (size_t)f.nline + 1, sizeof *line_map);
-  if (!line_map) {
-    st = VM_ERR_NOMEM;
-    goto done;
-  }
-  if (ref) {
-    if ((st = vm_surface_projector_match_lines(ref, m, &f, line_map))) goto done;
-  } else {
-    for (int32_t l = 0; l <= f.nline; l++) line_map[l] = l;
-  }
   hproj = own;
   vm_surface_ops ops = vm_surface_projector_ops(ref ? ref : own);
 
@@ -236,9 +228,14 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   if ((st = vm_surface_mean_curvature(m, Href, NULL, NULL, NULL))) goto done;
   if ((st = vm_curvature_filter_apply(m, &filt, Href))) goto done;
 
-  /* vertex classes */
+  /* vertex classes: the reference line each feature vertex lies on */
+  if ((st = vm_surface_projector_assign(ref ? ref : own, m, &f, 0.1 * h, vs))) goto done;
   flags_set = 1;
-  if ((st = vm_surface_features_apply(m, &f, line_map))) goto done;
+  for (int64_t v = 0; v < nv; v++) {
+    if (m->vflag[v] == VM_VERTEX_FIXED) continue;
+    m->vflag[v] = vs[v] < 0 ? VM_VERTEX_FIXED : VM_VERTEX_SLIP;
+    m->vsurf[v] = vs[v] < 0 ? -1 : vs[v];
+  }
   for (int64_t v = 0; v < nv; v++) {
     if (m->vflag[v] == VM_VERTEX_FIXED)
       r.nfixed++;
@@ -294,7 +291,10 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
     if (st == VM_WARN_MAXITER) st = VM_OK;
     if (st) break;
   }
-  if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+  if (st < 0 && st != VM_ERR_INTERRUPTED) {
+    memcpy(m->xyz, x0, 3 * (size_t)nv * sizeof *x0);
+    goto done;
+  }
   {
     int keep = st;
     int64_t flipped = 0;
@@ -326,7 +326,8 @@ done:
   vm_problem_destroy(&prob);
   vm_surface_projector_destroy(&own);
   vm_surface_features_free(ctx, &f);
-  vm_free(ctx, line_map);
+  vm_free(ctx, vs);
+  vm_free(ctx, x0);
   vm_free(ctx, flag0);
   vm_free(ctx, surf0);
   vm_free(ctx, Href);

@@ -5,7 +5,7 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,9 @@
 
 namespace {
 
-typedef CGAL::Exact_predicates_inexact_constructions_kernel K;
+// plain double arithmetic: the queries lie on the surface, where the
+// filtered predicates of Epick keep falling back to exact arithmetic
+typedef CGAL::Simple_cartesian<double> K;
 typedef K::Point_3 Point;
 typedef K::Vector_3 Vector;
 typedef K::Triangle_3 Triangle;
@@ -115,6 +117,7 @@ struct vm_surface_projector {
   std::vector<int32_t> seg_line;
   std::vector<std::size_t> lstart;
   std::unique_ptr<SegTree> segtree;
+  std::vector<Point> corner;
   int32_t nline = 0;
 };
 
@@ -192,6 +195,10 @@ extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
   pr->surf.build(ref);
   if (pr->surf.tri.empty())
     return vm_error(ctx, VM_ERR_ARG, "projector: the reference has no non-degenerate face");
+  if (f)
+    for (int64_t v = 0; v < f->nv; v++)
+      if (f->vclass[v] == VM_FEATURE_CORNER)
+        pr->corner.emplace_back(ref->xyz[3 * v], ref->xyz[3 * v + 1], ref->xyz[3 * v + 2]);
   if (f && f->nline > 0) {
     pr->nline = f->nline;
     // order each line's edges into a chain so neighbouring segments are adjacent
@@ -271,43 +278,33 @@ extern "C" int32_t vm_surface_projector_nlines(const vm_surface_projector *p) {
   return p ? p->nline : 0;
 }
 
-extern "C" int vm_surface_projector_match_lines(vm_surface_projector *p, const vm_mesh *m,
-                                                const vm_surface_features *f,
-                                                int32_t *line_map) {
-  if (!p || !m || !f || !line_map) return VM_ERR_ARG;
+extern "C" int vm_surface_projector_assign(vm_surface_projector *p, const vm_mesh *m,
+                                           const vm_surface_features *f, double tol,
+                                           int32_t *vsurf) {
+  if (!p || !m || !f || !vsurf || f->nv != m->nv || !(tol >= 0)) return VM_ERR_ARG;
   vm_ctx *ctx = p->ctx;
   VM_CXX_BEGIN
-  line_map[0] = 0;
-  for (int32_t l = 1; l <= f->nline; l++) line_map[l] = 0;
-  if (!p->segtree || f->nline == 0) return VM_OK;
-  // bounding box diagonal of the reference, for "near"
-  CGAL::Bbox_3 bb = p->surf.tree->bbox();
-  double diag = std::sqrt((bb.xmax() - bb.xmin()) * (bb.xmax() - bb.xmin()) +
-                          (bb.ymax() - bb.ymin()) * (bb.ymax() - bb.ymin()) +
-                          (bb.zmax() - bb.zmin()) * (bb.zmax() - bb.zmin()));
-  const double near2 = (1e-3 * diag) * (1e-3 * diag);
-  // votes[l] : (reference line, count) pairs, by the midpoints of the line's edges
-  std::vector<std::vector<std::pair<int32_t, int64_t>>> votes(static_cast<std::size_t>(f->nline) + 1);
-  for (int64_t k = 0; k < f->nedge; k++) {
-    const double *a = m->xyz + 3 * static_cast<int64_t>(f->edge[2 * k]);
-    const double *b = m->xyz + 3 * static_cast<int64_t>(f->edge[2 * k + 1]);
-    Point q(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]));
+  const double tol2 = tol * tol;
+  for (int64_t v = 0; v < m->nv; v++) {
+    int c = f->vclass[v];
+    if (c == VM_FEATURE_SMOOTH) {
+      vsurf[v] = 0;
+      continue;
+    }
+    if (c == VM_FEATURE_CORNER) {
+      vsurf[v] = -1;
+      continue;
+    }
+    vsurf[v] = 0;
+    if (!p->segtree) continue;
+    Point q(m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
     auto cp = p->segtree->closest_point_and_primitive(q);
-    if (CGAL::squared_distance(cp.first, q) > near2) continue;
-    int32_t rl = p->seg_line[static_cast<std::size_t>(cp.second - p->seg.begin())];
-    auto &v = votes[static_cast<std::size_t>(f->eline[k])];
-    auto it = std::find_if(v.begin(), v.end(), [rl](const std::pair<int32_t, int64_t> &x) { return x.first == rl; });
-    if (it == v.end())
-      v.emplace_back(rl, 1);
-    else
-      it->second++;
-  }
-  for (int32_t l = 1; l <= f->nline; l++) {
-    int64_t best = 0;
-    for (auto &x : votes[static_cast<std::size_t>(l)])
-      if (x.second > best || (x.second == best && x.first < line_map[l])) {
-        best = x.second;
-        line_map[l] = x.first;
+    if (CGAL::squared_distance(cp.first, q) > tol2) continue;
+    vsurf[v] = p->seg_line[static_cast<std::size_t>(cp.second - p->seg.begin())];
+    for (const Point &k : p->corner)
+      if (CGAL::squared_distance(k, q) <= tol2) {
+        vsurf[v] = -1;
+        break;
       }
   }
   return VM_OK;

@@ -406,7 +406,7 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
                                .edge_is_constrained_map(ecm)
                                .vertex_is_constrained_map(vcm)
                                .protect_constraints(false)
-                               .relax_constraints(true));
+                               .relax_constraints(false));
   sm.collect_garbage();
   // the new mesh's features: constrained edges and corners, in the new numbering
   std::vector<int32_t> fe;

@@ -25,12 +25,13 @@ typedef struct run_result {
   const char *at; /* stage that failed */
   long allocs;   /* allocations made */
   int64_t M_final;
+  int iters[3]; /* untangling, local, optimization iterations */
 } run_result;
 
 /* read -> mark fixed and boundary -> vm_volume_run -> write */
 static run_result one_run(vm_ctx *ctx, const char *in, const char *out, int method,
-                          long fail_at) {
-  run_result r = {0, "", 0, -1};
+                          int local_threshold, long fail_at) {
+  run_result r = {0, "", 0, -1, {0, 0, 0}};
   long count0 = vm_ctx_alloc_count(ctx);
   vm_ctx_set_alloc_fail(ctx, fail_at);
   vm_mesh *m = NULL;
@@ -44,13 +45,18 @@ static run_result one_run(vm_ctx *ctx, const char *in, const char *out, int meth
   if (r.st >= 0) {
     vm_volume_opts o = vm_volume_opts_default();
     o.method = (vm_untangle_method)method;
-    o.max_iter = 8;
+    o.max_iter = 40;
     o.opt_iter = 3;
-    o.local_threshold = 40;
+    o.local_threshold = local_threshold;
     vm_volume_report rep;
     r.st = vm_volume_run(ctx, m, NULL, &o, &rep);
     r.at = "vm_volume_run";
-    if (r.st >= 0) r.M_final = rep.M_final;
+    if (r.st >= 0) {
+      r.M_final = rep.M_final;
+      r.iters[0] = rep.iter_untangle;
+      r.iters[1] = rep.iter_local;
+      r.iters[2] = rep.iter_opt;
+    }
   }
   if (r.st >= 0) {
     int w = vm_mesh_write(ctx, m, out, VM_FMT_AUTO, NULL);
@@ -107,10 +113,14 @@ int main(int argc, char **argv) {
     vm_ctx_destroy(&g);
   }
 
+  /* output format, method (-1: the default), local_threshold (0: global only) */
   static const struct {
     const char *ext;
-    int method;
-  } runs[] = {{"vmsh", VM_UNTANGLE_PENALTY}, {"vtu", VM_UNTANGLE_BARRIER}, {"msh", -1}};
+    int method, local;
+  } runs[] = {{"vmsh", VM_UNTANGLE_PENALTY, 0},
+              {"vtu", VM_UNTANGLE_BARRIER, 0},
+              {"msh", -1, 100},
+              {"vmsht", VM_UNTANGLE_PENALTY_ONEWAY, 100}};
   long tried = 0;
   for (size_t k = 0; k < sizeof runs / sizeof runs[0]; k++) {
     int method = runs[k].method < 0 ? (int)vm_volume_opts_default().method : runs[k].method;
@@ -119,19 +129,21 @@ int main(int argc, char **argv) {
     if (vm_ctx_create(&ctx)) return 1;
     vm_ctx_set_threads(ctx, 1); /* the allocation order must be the same every run */
     long live0 = vm_ctx_alloc_live(ctx);
-    run_result ref = one_run(ctx, in, out, method, 0);
+    run_result ref = one_run(ctx, in, out, method, runs[k].local, 0);
     CHECK(ref.st >= 0, "reference run (%s, %s): %s failed: %d %s", runs[k].ext,
           vm_untangle_method_name((vm_untangle_method)method), ref.at, ref.st,
           vm_ctx_error(ctx));
     CHECK(vm_ctx_alloc_live(ctx) == live0, "reference run leaked %ld blocks",
           vm_ctx_alloc_live(ctx) - live0);
-    fprintf(stderr, "%s, %s: reference run: status %d, M_final %lld, %ld allocations\n",
+    fprintf(stderr,
+            "%s, %s: reference run: status %d, M_final %lld, %d untangling + %d local + %d "
+            "optimization iterations, %ld allocations\n",
             runs[k].ext, vm_untangle_method_name((vm_untangle_method)method), ref.st,
-            (long long)ref.M_final, ref.allocs);
+            (long long)ref.M_final, ref.iters[0], ref.iters[1], ref.iters[2], ref.allocs);
     long nomem = 0, ok = 0;
     for (long n = 1; n <= ref.allocs; n += stride) {
       remove(out);
-      run_result r = one_run(ctx, in, out, method, n);
+      run_result r = one_run(ctx, in, out, method, runs[k].local, n);
       tried++;
       long leak = vm_ctx_alloc_live(ctx) - live0;
       CHECK(leak == 0, "%s: failing allocation %ld (%s: status %d): %ld blocks leaked",

@@ -272,6 +272,73 @@ static void test_stops(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* Local work through the hook: at iteration 3 only the elements with a
+ * vertex below z = 0.3 stay active (the other vertices get zero rows and
+ * drop out of the implicit systems: they must not move), at iteration 6
+ * all are active again. */
+typedef struct {
+  vm_problem *p;
+  uint8_t *mask;
+  double *x3;   /* x at the start of iteration 3 */
+  int64_t n3;
+  int moved;    /* vertices outside the active part that moved in 3..5 */
+  const uint8_t *touch; /* per vertex: in an active element */
+  int calls;
+} mask_ctl;
+
+static int mask_hook(void *user, int iter, const double *x) {
+  mask_ctl *c = user;
+  c->calls++;
+  if (iter == 3) {
+    memcpy(c->x3, x, (size_t)c->n3 * sizeof *x);
+    return vm_problem_set_active(c->p, c->mask);
+  }
+  if (iter == 6) {
+    for (int64_t v = 0; v < c->n3 / 3; v++)
+      if (!c->touch[v] && memcmp(x + 3 * v, c->x3 + 3 * v, 3 * sizeof *x) != 0) c->moved++;
+    return vm_problem_set_active(c->p, NULL);
+  }
+  return 0;
+}
+
+static void test_active_mask(vm_ctx *ctx) {
+  vm_mesh *m = jittered_cube(ctx, 8, 0.2);
+  vm_problem *p = NULL;
+  vm_problem_create(ctx, m, &p);
+  uint8_t *mask = calloc((size_t)m->ne, 1), *touch = calloc((size_t)m->nv, 1);
+  for (int64_t e = 0; e < m->ne; e++)
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++)
+      if (m->xyz[3 * m->conn[k] + 2] < 0.3) mask[e] = 1;
+  int64_t ntouch = 0;
+  for (int64_t e = 0; e < m->ne; e++)
+    if (mask[e])
+      for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) touch[m->conn[k]] = 1;
+  for (int64_t v = 0; v < m->nv; v++) ntouch += touch[v];
+  mask_ctl c = {p, mask, malloc((size_t)m->nv * 3 * sizeof(double)), 3 * m->nv, 0, touch, 0};
+  vm_minimizer *mn = NULL;
+  vm_minimizer_create(ctx, p, VM_MINIMIZER_IMPLICIT, &mn);
+  vm_minimize_options o = vm_minimize_options_default();
+  o.max_iter = 10;
+  o.rel_decrease_tol = 0;
+  o.amg.coarse_size = 20;
+  o.before_iteration = mask_hook;
+  o.user = &c;
+  vm_minimizer_set_options(mn, &o);
+  vm_minimize_result r;
+  int st = vm_minimizer_run(mn, m->xyz, &r);
+  CHECK(st == VM_WARN_MAXITER && r.iterations == 10 && c.calls == 10, "masked run: %d %s", st,
+        vm_ctx_error(ctx));
+  CHECK(ntouch > 0 && ntouch < m->nv, "mask covers part of the mesh");
+  CHECK(c.moved == 0, "%d vertices outside the active elements moved", c.moved);
+  CHECK(isfinite(r.F) && r.inverted == 0, "F %g, %lld inverted", r.F, (long long)r.inverted);
+  free(c.x3);
+  free(mask);
+  free(touch);
+  vm_minimizer_destroy(&mn);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
 /* The same bits for 1 and 2 threads. */
 static void test_threads(vm_ctx *ctx, vm_minimizer_kind kind) {
   double *res[2] = {NULL, NULL};
@@ -360,6 +427,7 @@ int main(void) {
   test_untangle_hook(ctx, VM_MINIMIZER_EXPLICIT);
   test_untangle_hook(ctx, VM_MINIMIZER_IMPLICIT);
   test_stops(ctx);
+  test_active_mask(ctx);
   test_threads(ctx, VM_MINIMIZER_EXPLICIT);
   test_threads(ctx, VM_MINIMIZER_IMPLICIT);
   test_alloc_failures(ctx);

@@ -66,7 +66,8 @@ typedef struct {
   double F_before;  /* adaptive: F before and after the last step (same eps) */
   double F_after;
   int have_step;
-  int done;         /* adaptive: min det >= mu: untangled with margin */
+  int done;         /* adaptive: det >= eps everywhere: untangled with margin */
+  double pressure;  /* adaptive: multiplier of (35), halved on stalls */
   double t0;
 } ut_state;
 
@@ -113,15 +114,24 @@ static int update_eps(ut_state *s, int first) {
     if (s->eps <= neg) s->eps = neg + o->delta0;
     break;
   case VM_UNTANGLE_ADAPTIVE: {
-    /* (35), but eps may fall by at most the factor kappa per iteration, so
-     * nodes squeezed towards det = 0 from below see a smooth penalty and
-     * cross instead of shrinking with eps; done once det >= eps everywhere */
+    /* (35) scaled by a pressure factor that halves whenever a step stalls
+     * (a stationary point of P_eps with folds left: a smaller eps makes
+     * folds dearer), and falling by at most kappa per iteration, so nodes
+     * squeezed towards det = 0 from below see a smooth penalty and cross
+     * instead of shrinking with eps; done once det >= eps everywhere */
     double e35 = sqrt(o->delta0 * o->delta0 + 0.004 * neg * neg);
-    if (!first && s->M == 0 && s->min_det >= s->eps) {
+    if (first) {
+      s->pressure = 1;
+      s->eps = e35;
+      break;
+    }
+    if (s->M == 0 && s->min_det >= s->eps) {
       s->done = 1;
       break;
     }
-    s->eps = first ? e35 : fmax(e35, o->kappa * s->eps);
+    if (s->have_step && s->F_before - s->F_after < 1e-3 * fabs(s->F_before))
+      s->pressure = fmax(0.5 * s->pressure, 0.1);
+    s->eps = fmax(fmax(s->pressure * e35, o->delta0), o->kappa * s->eps);
     break;
   }
   default:

@@ -71,7 +71,7 @@ CGAL::Sign diff_det_sign(int d, const double *const h[3], const double *const t[
 // (not positively oriented; for surface elements: degenerate)?
 // `surface`: a 2D element embedded in 3D.
 bool node_is_bad(const vm_qnode *q, int d, bool surface, const double *const x[8]) {
-  const double *h[3], *t[3];
+  const double *h[3] = {NULL, NULL, NULL}, *t[3] = {NULL, NULL, NULL};
   for (int k = 0; k < d; k++) {
     h[k] = x[(int)q->head[k]];
     t[k] = x[(int)q->tail[k]];

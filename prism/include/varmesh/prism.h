@@ -62,8 +62,9 @@ typedef struct vm_prism_opts {
                            growth law is kept and the layer count may drop */
   double theta;         /* of the balanced measure (default 0.8) */
   double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
-  int springback_iter;  /* implicit iterations of the first springback (default 60) */
-  int resolve_iter;     /* implicit iterations after each cutting round (default 15) */
+  int springback_iter;  /* implicit iterations of the first springback (default 20) */
+  int resolve_iter;     /* implicit iterations after each cutting round, around
+                           the cut columns only (default 6) */
   int max_cut_rounds;   /* default 80 */
   int smooth_iter;      /* restoration / smoothing passes (default 30) */
   int march_iter;       /* explicit iterations per split (default 8) */

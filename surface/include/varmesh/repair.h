@@ -102,13 +102,14 @@ vm_surface_ops vm_surface_projector_ops(vm_surface_projector *p);
 /* Number of reference feature lines. */
 int32_t vm_surface_projector_nlines(const vm_surface_projector *p);
 
-/* For the features f of a mesh m lying on (or near) the reference: the
- * reference line of each line of f (line_map[1..f->nline]; line_map[0] =
- * 0), by a vote of its vertices' nearest reference feature segments.
- * A line with no reference feature near it maps to 0 (the surface), so its
- * vertices slide on the surface. */
-int vm_surface_projector_match_lines(vm_surface_projector *p, const vm_mesh *m,
-                                     const vm_surface_features *f, int32_t *line_map);
+/* The surface each vertex of a mesh m (with features f, lying on or near
+ * the reference) slides on: vsurf[v] (m->nv values) = -1 for CORNER
+ * vertices of f and for LINE vertices within `tol` of a reference corner
+ * (they stay fixed); k >= 1 for a LINE vertex within `tol` of reference
+ * line k (the nearest); 0 for SMOOTH vertices and for LINE vertices with
+ * no reference feature within `tol` (they slide on the surface). */
+int vm_surface_projector_assign(vm_surface_projector *p, const vm_mesh *m,
+                                const vm_surface_features *f, double tol, int32_t *vsurf);
 
 /* Distance from each of n points (3*n) to the reference surface. */
 int vm_surface_projector_distance(vm_surface_projector *p, int64_t n, const double *pts,

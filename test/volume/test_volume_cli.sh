@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# test/volume/test_volume_cli.sh: vm-volume end to end: a tangled .vtk with a
+# 'fixed' point array in, a valid .vtk out (exit 0); an impossible problem
+# gives exit 3 with the best mesh written; bad input gives exit 1 and no
+# output; usage errors exit 2.
+set -u
+gen=$1 vol=$2 qual=$3 conv=$4
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; else echo "ok: $2"; fi; }
+
+"$gen" rotcube --n 8 --angle pi/2 "$dir/in.vtk"
+check 'grep -q "fixed" "$dir/in.vtk"' "the generated file carries a fixed point array"
+"$qual" --require-valid "$dir/in.vtk" >/dev/null 2>&1
+check '[ $? -eq 3 ]' "the input is tangled (vm-quality --require-valid exits 3)"
+"$vol" --json "$dir/in.vtk" "$dir/out.vtk" >"$dir/sum.json" 2>"$dir/err.txt"
+rc=$?
+check '[ $rc -eq 0 ]' "vm-volume exits 0 on the pi/2 cube (got $rc)"
+check 'grep -q "\"valid\": true" "$dir/sum.json"' "JSON summary says valid"
+check 'grep -q "^untangle  it" "$dir/err.txt"' "progress lines on stderr"
+"$qual" --require-valid "$dir/out.vtk" >/dev/null
+check '[ $? -eq 0 ]' "the output is valid by vm-quality"
+check '[ ! -e "$dir/out.vtk.tmp"* ] 2>/dev/null; true' "no temporary files left"
+
+# impossible: a fixed inverted hex (every vertex fixed by the 'fixed' field)
+cat >"$dir/bad.vtk" <<'VTK'
+# vtk DataFile Version 3.0
+inverted hex, every vertex fixed
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 8 double
+0 0 0 1 0 0 1 1 0 0 1 0
+0 0 -1 1 0 -1 1 1 -1 0 1 -1
+CELLS 1 9
+8 0 1 2 3 4 5 6 7
+CELL_TYPES 1
+12
+POINT_DATA 8
+SCALARS fixed int 1
+LOOKUP_TABLE default
+1 1 1 1 1 1 1 1
+VTK
+"$vol" -q --time-limit 20 "$dir/bad.vtk" "$dir/bad_out.vtk"
+rc=$?
+check '[ $rc -eq 3 ]' "an impossible problem exits 3 (got $rc)"
+check '[ -s "$dir/bad_out.vtk" ]' "and still writes the best mesh"
+
+printf 'not a mesh\n' >"$dir/garbage.vtk"
+"$vol" -q "$dir/garbage.vtk" "$dir/g_out.vtk" 2>"$dir/gerr.txt"
+rc=$?
+check '[ $rc -eq 1 ]' "bad input exits 1 (got $rc)"
+check '[ $(wc -l <"$dir/gerr.txt") -eq 1 ]' "with a one-line error"
+check '[ ! -e "$dir/g_out.vtk" ]' "and no output file"
+"$vol" --no-such-option "$dir/in.vtk" "$dir/x.vtk" 2>/dev/null
+check '[ $? -eq 2 ]' "usage errors exit 2"
+exit $fail
