@@ -16,6 +16,12 @@ echo "== 2. convert it to the stages' exchange format and to ParaView's VTU"
 "$bin/vm-convert" "$out/rotcube.vtk" "$out/rotcube.vmsh"
 "$bin/vm-convert" "$out/rotcube.vmsh" "$out/rotcube.vtu"
 echo "== 3. judge it (M = inverted corner tets, phi/psi as in the paper's Table 1)"
-"$bin/vm-quality" --target-size 0.0625 "$out/rotcube.vmsh"
+"$bin/vm-quality" --target-size 0.0625 "$out/rotcube.vmsh" | head -n 4
+echo "== 4. untangle and optimize it (volume stage)"
+"$bin/vm-volume" --target-size 0.0625 --progress-every 20 "$out/rotcube.vmsh" "$out/rotcube-untangled.vtu"
+echo "== 5. judge the result"
+"$bin/vm-quality" --target-size 0.0625 --require-valid "$out/rotcube-untangled.vtu" | head -n 5
 echo
-echo "results in $out: rotcube.vtk (input), rotcube.vmsh, rotcube.vtu (open in ParaView)"
+echo "results in $out:"
+echo "  rotcube.vtk / .vmsh / .vtu   the tangled input (open the .vtu in ParaView)"
+echo "  rotcube-untangled.vtu        the untangled, optimized mesh"

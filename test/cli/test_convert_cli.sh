@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# test/cli/test_convert_cli.sh: vm-convert and vm-quality end to end:
+# plane.stl -> .vmsh -> .vtu -> .vmsh keeps geometry and connectivity bit
+# for bit; every output format round-trips; bad input gives a one-line
+# error, exit 1 and no output; usage errors exit 2; --strict exits 3 on loss.
+set -u
+conv=$1 qual=$2 gen=$3
+plane="$VM_SOURCE_ROOT/../shared/data/plane.stl"
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+
+if [ -f "$plane" ]; then
+  "$conv" -q "$plane" "$dir/p1.vmsh" && "$conv" -q "$dir/p1.vmsh" "$dir/p.vtu" &&
+    "$conv" -q "$dir/p.vtu" "$dir/p2.vmsh"
+  check '[ $? -eq 0 ]' "plane.stl -> vmsh -> vtu -> vmsh converts"
+  check 'cmp -s "$dir/p1.vmsh" "$dir/p2.vmsh"' "the two .vmsh files are byte-identical"
+  "$qual" --json "$dir/p2.vmsh" >"$dir/q.json"
+  check 'grep -q "\"tri\": {\"elements\": 17456" "$dir/q.json"' "17,456 triangles kept"
+  check 'grep -q "\"vertices\": 8730" "$dir/q.json"' "8,730 vertices (duplicates merged)"
+else
+  echo "skip: $plane not found"
+fi
+
+"$gen" rotcube --n 4 --angle pi/2 --mixed "$dir/m.vmsh"
+for f in vtk vtu msh mesh vmsht; do
+  "$conv" -q "$dir/m.vmsh" "$dir/m.$f" && "$conv" -q "$dir/m.$f" "$dir/back_$f.vmsht"
+  check '[ $? -eq 0 ]' "mixed mesh through .$f"
+  "$conv" -q "$dir/m.vmsh" "$dir/ref.vmsht"
+  # coordinates and flags must match exactly, elements as a set (MEDIT
+  # groups elements by type)
+  check 'diff <(sed -n "/^vertices/,/^elements/p" "$dir/ref.vmsht") <(sed -n "/^vertices/,/^elements/p" "$dir/back_$f.vmsht") >/dev/null' ".$f keeps coordinates and flags bit for bit"
+  check 'diff <(sed -n "/^elements/,/^fields/{/^fields/!p}" "$dir/ref.vmsht" | sort) <(sed -n "/^elements/,/^fields/{/^fields/!p}" "$dir/back_$f.vmsht" | sort) >/dev/null' ".$f keeps the elements"
+done
+"$conv" --binary -q "$dir/m.vmsh" "$dir/mb.vtk" && "$conv" --binary -q "$dir/m.vmsh" "$dir/mb.msh"
+check '[ $? -eq 0 ]' "binary VTK and msh"
+
+printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nendloop\n' >"$dir/bad.stl"
+"$conv" "$dir/bad.stl" "$dir/bad.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ]' "truncated STL exits 1 (got $rc)"
+check '[ $(wc -l <"$dir/err") -eq 1 ] && grep -q "bad.stl" "$dir/err"' "one-line error naming the file: $(cat "$dir/err")"
+check '[ ! -e "$dir/bad.vmsh" ]' "no output on failure"
+"$conv" "$dir/m.vmsh" 2>/dev/null
+check '[ $? -eq 2 ]' "missing OUT is a usage error"
+"$conv" --strict -q "$dir/m.vmsh" "$dir/m_strict.stl" 2>/dev/null
+rc=$?
+check '[ $rc -eq 1 ] || [ $rc -eq 3 ]' "--strict refuses a lossy conversion (volume mesh to STL: $rc)"
+"$conv" --version | grep -q "vm-convert (varmesh)"
+check '[ $? -eq 0 ]' "--version"
+"$qual" --help | grep -q "require-valid"
+check '[ $? -eq 0 ]' "vm-quality --help"
+exit $fail
