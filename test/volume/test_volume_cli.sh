@@ -54,4 +54,30 @@ check '[ $(wc -l <"$dir/gerr.txt") -eq 1 ]' "with a one-line error"
 check '[ ! -e "$dir/g_out.vtk" ]' "and no output file"
 "$vol" --no-such-option "$dir/in.vtk" "$dir/x.vtk" 2>/dev/null
 check '[ $? -eq 2 ]' "usage errors exit 2"
+
+# interruption: a long run (pi at n = 16 does not finish quickly) stopped by
+# SIGINT writes its best state and exits 4; two SIGINTs exit at once and
+# leave the output alone
+"$gen" rotcube --n 16 --angle pi "$dir/long.vmsh"
+echo "previous content" >"$dir/long_out2.vmsh"
+"$vol" -q --threads 1 "$dir/long.vmsh" "$dir/long_out.vmsh" &
+pid=$!
+sleep 3
+kill -INT $pid
+wait $pid
+rc=$?
+check '[ $rc -eq 4 ]' "SIGINT: exit 4 (got $rc)"
+check '[ -s "$dir/long_out.vmsh" ]' "SIGINT: the best state is written"
+"$qual" -q "$dir/long_out.vmsh" >/dev/null
+check '[ $? -eq 0 ]' "SIGINT: the written mesh is readable"
+"$vol" -q --threads 1 "$dir/long.vmsh" "$dir/long_out2.vmsh" &
+pid=$!
+sleep 3
+# identical pending signals merge into one, so queue two different ones
+# while the process is stopped: both handlers run, the second exits at once
+kill -STOP $pid; kill -TERM $pid; kill -INT $pid; kill -CONT $pid
+wait $pid
+rc=$?
+check '[ $rc -eq 130 ] || [ $rc -eq 143 ]' "two signals: exit at once with 128+signal (got $rc)"
+check '[ "$(cat "$dir/long_out2.vmsh")" = "previous content" ]' "two signals: the output is untouched"
 exit $fail
