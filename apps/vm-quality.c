@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_report.h"
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
 #include "varmesh/verify.h"
@@ -24,6 +25,10 @@ static const char usage[] =
     "                            quadrature simplex of --rule positively oriented; if there\n"
     "                            are prisms, their outer (top) faces neither intersect\n"
     "                            each other nor cross the wall (bottom faces)\n"
+    "  --report DIR              write DIR/index.html with pictures: quality histograms, a\n"
+    "                            slice if 3D, a rendered surface if triangles/quads in 3D\n"
+    "  --report-field NAME       field colouring the surface picture (default\n"
+    "                            mean_curvature if present, else the scaled Jacobian)\n"
     "  -q, --quiet               no warnings\n"
     "  --help, --version\n"
     "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n";
@@ -144,7 +149,7 @@ static int verify_mesh(const vm_cli *cli, const char *path, const vm_mesh *m, in
 int main(int argc, char **argv) {
   vm_cli cli;
   vm_cli_init(&cli, "vm-quality");
-  const char *path = NULL;
+  const char *path = NULL, *report = NULL, *report_field = NULL;
   int json = 0, require_valid = 0, verify = 0, fin = VM_FMT_AUTO;
   double min_sj = -INFINITY;
   vm_quality_opts qo = {VM_RULE_CORNER, 0};
@@ -188,6 +193,13 @@ int main(int argc, char **argv) {
         rc = VM_EXIT_USAGE;
         goto done;
       }
+    } else if (!strcmp(a, "--report") || !strcmp(a, "--report-field")) {
+      i++;
+      if (!val) {
+        rc = vm_cli_usage_error(&cli, "%s expects a value", a);
+        goto done;
+      }
+      *(!strcmp(a, "--report") ? &report : &report_field) = val;
     } else if (!strcmp(a, "--format")) {
       i++;
       fin = val ? vm_format_from_name(val) : VM_FMT_AUTO;
@@ -237,6 +249,10 @@ int main(int argc, char **argv) {
     if (verify) {
       int vrc = verify_mesh(&cli, path, m, qo.rule, !json);
       if (vrc != VM_EXIT_OK) rc = vrc;
+    }
+    if (report) {
+      int rrc = vm_cli_report_quality(&cli, report, path, m, &qo, report_field);
+      if (rrc != VM_EXIT_OK) rc = rrc;
     }
   }
   vm_mesh_destroy(&m);

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_report.h"
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
 #include "varmesh/topology.h"
@@ -19,7 +20,8 @@ static const char usage[] =
     "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
     "never move. OUT is written in the format of its extension, else IN's.\n"
     "  --untangle penalty|oneway|barrier   untangling method (default penalty, (35))\n"
-    "  --solver implicit|explicit          global solver (default implicit)\n"
+    "  --solver implicit|explicit|newton   global solver (default implicit; newton:\n"
+    "                       full coupled Hessian, projected to PSD per node)\n"
     "  --measure balanced|shape|shape-alt  optimization measure (default balanced)\n"
     "  --theta T            volumetric weight of the balanced measure (default 0.8)\n"
     "  --rule corner|geometric   quadrature (default corner; geometric: 64 per hex)\n"
@@ -35,6 +37,8 @@ static const char usage[] =
     "  --binary             binary output where the format has both\n"
     "  --progress-every N   a progress line every N iterations (default 10)\n"
     "  --json               JSON summary on stdout\n"
+    "  --report DIR         write DIR/index.html with pictures: convergence, quality\n"
+    "                       histograms and slices before and after\n"
     "  -q, --quiet          no progress\n"
     "  --help, --version\n"
     "exit: 0 valid result; 1 bad input or I/O; 2 usage; 3 inverted elements remain\n"
@@ -53,10 +57,13 @@ typedef struct {
   vm_cli *cli;
   int every;
   const char *last_phase;
+  vm_report_history *hist; /* --report: every iteration */
 } progress_state;
 
 static void progress(void *user, const vm_volume_progress *p) {
   progress_state *ps = user;
+  if (ps->hist)
+    vm_report_history_add(ps->hist, p->phase, p->total_iter, p->F, p->inverted, p->eps);
   if (ps->cli->quiet) return;
   int first = !ps->last_phase || strcmp(ps->last_phase, p->phase);
   ps->last_phase = p->phase;
@@ -78,13 +85,16 @@ int main(int argc, char **argv) {
   vm_cli_init(&cli, "vm-volume");
   vm_volume_opts o = vm_volume_opts_default();
   vm_write_opts wo = vm_write_opts_default();
-  const char *in = NULL, *out = NULL;
+  const char *in = NULL, *out = NULL, *report_dir = NULL;
+  vm_report *report = NULL;
+  vm_report_history *hist = NULL;
+  vm_mesh *before = NULL;
   int json = 0, free_boundary = 0, fout = VM_FMT_AUTO;
   long every = 10, lv;
   int rc = VM_EXIT_OK;
   vm_mesh *m = NULL;
   static const char *const methods[] = {"penalty", "oneway", "barrier"};
-  static const char *const solvers[] = {"explicit", "implicit"};
+  static const char *const solvers[] = {"explicit", "implicit", "newton"};
   static const char *const rules[] = {"corner", "geometric"};
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
@@ -112,8 +122,8 @@ int main(int argc, char **argv) {
       o.method = (vm_untangle_method)k;
     } else if (!strcmp(a, "--solver")) {
       i++;
-      if ((k = pick(val, solvers, 2)) < 0) {
-        rc = vm_cli_usage_error(&cli, "--solver expects implicit or explicit");
+      if ((k = pick(val, solvers, 3)) < 0) {
+        rc = vm_cli_usage_error(&cli, "--solver expects implicit, explicit or newton");
         goto done;
       }
       o.solver = (vm_minimizer_kind)k;
@@ -168,6 +178,12 @@ int main(int argc, char **argv) {
         vm_ctx_set_threads(cli.ctx, (int)lv);
       else
         every = lv;
+    } else if (!strcmp(a, "--report")) {
+      i++;
+      if (!(report_dir = val)) {
+        rc = vm_cli_usage_error(&cli, "--report expects a directory");
+        goto done;
+      }
     } else if (!strcmp(a, "--format")) {
       i++;
       fout = val ? vm_format_from_name(val) : VM_FMT_AUTO;
@@ -216,7 +232,17 @@ int main(int argc, char **argv) {
     fprintf(stderr, "vm-volume: %s: %lld vertices (%lld free; %lld fixed by field, %lld on the "
             "boundary), %lld elements\n", in, (long long)m->nv, (long long)nfree,
             (long long)nfixed, (long long)nbnd, (long long)m->ne);
-  progress_state ps = {&cli, (int)every, NULL};
+  if (report_dir) {
+    char title[512];
+    snprintf(title, sizeof title, "vm-volume: %s", in);
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
+    if (vm_mesh_clone(m, &before) < 0 || vm_report_history_create(cli.ctx, &hist) < 0) {
+      vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+  }
+  progress_state ps = {&cli, (int)every, NULL, hist};
   o.progress = progress;
   o.user = &ps;
   signal(SIGINT, on_signal);
@@ -257,6 +283,10 @@ int main(int argc, char **argv) {
             (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems,
             rc == VM_EXIT_CHECK ? "  -- NOT VALID" : rc == VM_EXIT_INTERRUPTED ? "  -- interrupted" : "");
   }
+  if (report) {
+    int rrc = vm_cli_report_volume(&cli, &report, report_dir, in, out, before, m, hist, &o, &rep);
+    if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
+  }
   if (json) {
     printf("{\"input\": ");
     vm_json_string(stdout, in);
@@ -282,6 +312,9 @@ int main(int argc, char **argv) {
     printf("}\n");
   }
 done:
+  vm_report_destroy(&report);
+  vm_report_history_destroy(&hist);
+  vm_mesh_destroy(&before);
   vm_mesh_destroy(&m);
   vm_cli_finish(&cli);
   return rc;

@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "varmesh/generate.h"
 #include "varmesh/quality.h"
@@ -26,7 +27,7 @@ static void usage(void) {
           "usage: bench_rotcube [--n N] [--angles i,j,..] [--geometric] [--tets] [--mixed]\n"
           "                     [--time-limit S] [--max-iter N] [--opt-iter N] [--method "
           "penalty|oneway|barrier]\n"
-          "                     [--explicit] [--threads N] [--verbose]\n"
+          "                     [--explicit | --newton] [--threads N] [--verbose]\n"
           "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all)\n");
 }
 
@@ -38,9 +39,9 @@ typedef struct {
 static void progress(void *user, const vm_volume_progress *p) {
   const prog *g = user;
   if (!g->verbose || p->iter % g->every) return;
-  fprintf(stderr, "  %-9s it %6d F %.4e M %7lld min det %+.2e eps %.1e tau %.1e %6.1fs\n",
+  fprintf(stderr, "  %-9s it %6d F %.4e M %7lld min det %+.2e eps %.1e tau %.1e cg %4d %6.1fs\n",
           p->phase, p->iter, p->F, (long long)p->inverted, p->min_det, p->eps, p->tau,
-          p->elapsed);
+          p->pcg_iters, p->elapsed);
 }
 
 int main(int argc, char **argv) {
@@ -66,6 +67,8 @@ int main(int argc, char **argv) {
       cells = VM_GEN_MIXED;
     } else if (!strcmp(a, "--explicit")) {
       o.solver = VM_MINIMIZER_EXPLICIT;
+    } else if (!strcmp(a, "--newton")) {
+      o.solver = VM_MINIMIZER_NEWTON;
     } else if (!strcmp(a, "--time-limit")) {
       o.time_limit = atof(v);
       i++;
@@ -98,11 +101,14 @@ int main(int argc, char **argv) {
   printf("rotated cube n = %d, %s, %s rule, %s untangling, %s solver, time limit %.0f s\n", n,
          cells == VM_GEN_HEX ? "hexahedra" : cells == VM_GEN_TETS ? "6 tets per hex" : "mixed",
          o.rule == VM_RULE_GEOMETRIC ? "geometric (64-node)" : "corner (8 tets)",
-         vm_untangle_method_name(o.method), o.solver == VM_MINIMIZER_IMPLICIT ? "implicit" : "explicit",
+         vm_untangle_method_name(o.method),
+         o.solver == VM_MINIMIZER_IMPLICIT ? "implicit"
+         : o.solver == VM_MINIMIZER_NEWTON ? "newton"
+                                            : "explicit",
          o.time_limit);
-  printf("%-6s %9s %9s %9s %7s %7s %7s %9s %10s %10s %8s %8s   | paper: %7s %7s %6s %6s %9s %9s\n",
+  printf("%-6s %9s %9s %9s %7s %7s %7s %9s %10s %10s %8s %8s %8s   | paper: %7s %7s %6s %6s %9s %9s\n",
          "angle", "M_init", "M_max", "M_final", "niter", "local", "opt", "t_untgl", "phi_min",
-         "psi_min", "inv.hex", "t_total", "M_init", "M_max", "niter", "t_u", "phi_min",
+         "psi_min", "inv.hex", "t_total", "cpu", "M_init", "M_max", "niter", "t_u", "phi_min",
          "psi_min");
   int all_ok = 1;
   for (int a = 0; a < 5; a++) {
@@ -119,18 +125,20 @@ int main(int argc, char **argv) {
     }
     o.target_xyz = ref;
     vm_volume_report r;
+    clock_t c0 = clock();
     int st = vm_volume_run(ctx, m, NULL, &o, &r);
+    double cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
     if (st < 0) fprintf(stderr, "%s: %s\n", angle_names[a], vm_ctx_error(ctx));
     /* independent check: every corner simplex of every element */
     vm_quality q;
     vm_quality_opts qo = {VM_RULE_CORNER, 1.0 / n};
     vm_mesh_quality(m, &qo, &q);
     if (r.M_final || q.all.inverted_nodes) all_ok = 0;
-    printf("%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f   | paper: %7.0f "
+    printf("%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f %8.2f   | paper: %7.0f "
            "%7.0f %6.0f %6.0f %9.2e %9.2e\n",
            angle_names[a], (long long)r.M_init, (long long)r.M_max, (long long)r.M_final,
            r.iter_untangle, r.iter_local, r.iter_opt, r.time_untangle, r.phi_min, r.psi_min,
-           (long long)q.all.inverted_elems, r.time_total, paper[0][a], paper[1][a], paper[2][a],
+           (long long)q.all.inverted_elems, r.time_total, cpu, paper[0][a], paper[1][a], paper[2][a],
            paper[3][a], paper[4][a], paper[5][a]);
     fflush(stdout);
     vm_free(ctx, ref);

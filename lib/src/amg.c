@@ -350,6 +350,121 @@ static int64_t aggregate(const mat *F, int32_t *agg) {
   return na;
 }
 
+/* Unknown-based aggregation for 3x3 block systems (unknowns 3i..3i+2 are
+ * node i): node strength from the Frobenius norms of the blocks (block IJ
+ * strong when |A_IJ| >= theta max_{K != I} |A_IK|), nodes aggregated as in
+ * aggregate(), and the scalar filtered matrix F: strong blocks and the
+ * diagonal block kept, weak blocks added to the diagonal block (so A t is
+ * kept for the translations t, the near-kernel, unless a diagonal entry
+ * would become non-positive). agg (3 n_nodes, allocated here) maps unknown
+ * 3i + c to coarse unknown 3 a(i) + c; *na gets the number of coarse
+ * unknowns. */
+static int block_aggregate(vm_ctx *ctx, const mat *A, double theta, mat *F, int32_t **agg_out,
+                           int64_t *na_out) {
+  const int64_t n = A->nr, nb = n / 3;
+  *agg_out = NULL;
+  memset(F, 0, sizeof *F);
+  int64_t *mark = vm_alloc_array(ctx, (size_t)(nb ? nb : 1), sizeof *mark);
+  int32_t *aggv = vm_alloc_array(ctx, (size_t)(nb ? nb : 1), sizeof *aggv);
+  int32_t *agg = vm_alloc_array(ctx, (size_t)(n ? n : 1), sizeof *agg);
+  int64_t *cols = vm_alloc_array(ctx, (size_t)(nb ? nb : 1), sizeof *cols);
+  mat V;
+  memset(&V, 0, sizeof V);
+  int st = VM_OK;
+  if (!mark || !aggv || !agg || !cols) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  /* node matrix of block norms (pattern: strong blocks and the diagonal) */
+  int64_t nnzb = 0;
+  for (int64_t I = 0; I < nb; I++) mark[I] = -1;
+  for (int64_t I = 0; I < nb; I++)
+    for (int r = 0; r < 3; r++)
+      for (int64_t k = A->rp[3 * I + r]; k < A->rp[3 * I + r + 1]; k++) {
+        int64_t J = A->ci[k] / 3;
+        if (mark[J] != I) {
+          mark[J] = I;
+          nnzb++;
+        }
+      }
+  st = mat_alloc(ctx, &V, nb, nb, nnzb);
+  if (st) goto done;
+  for (int64_t I = 0; I < nb; I++) mark[I] = -1;
+  int64_t pos = 0;
+  for (int64_t I = 0; I < nb; I++) {
+    int64_t start = pos;
+    for (int r = 0; r < 3; r++)
+      for (int64_t k = A->rp[3 * I + r]; k < A->rp[3 * I + r + 1]; k++) {
+        int64_t J = A->ci[k] / 3;
+        if (mark[J] != I) {
+          mark[J] = I;
+          cols[J] = pos;
+          V.ci[pos] = (int32_t)J;
+          V.v[pos++] = 0;
+        }
+        V.v[cols[J]] += A->v[k] * A->v[k];
+      }
+    double rmax = 0;
+    for (int64_t k = start; k < pos; k++) {
+      V.v[k] = sqrt(V.v[k]);
+      if (V.ci[k] != I && V.v[k] > rmax) rmax = V.v[k];
+    }
+    /* keep the diagonal and the strong blocks only */
+    int64_t w = start;
+    for (int64_t k = start; k < pos; k++)
+      if (V.ci[k] == I || (V.v[k] > 0 && V.v[k] >= theta * rmax)) {
+        V.ci[w] = V.ci[k];
+        V.v[w++] = V.v[k];
+      }
+    pos = w;
+    V.rp[I + 1] = pos;
+  }
+  int64_t na = aggregate(&V, aggv);
+  /* the scalar filtered matrix */
+  st = mat_alloc(ctx, F, n, n, A->rp[n]);
+  if (st) goto done;
+  pos = 0;
+  for (int64_t I = 0; I < nb; I++) {
+    /* strong block columns of node I */
+    for (int64_t k = V.rp[I]; k < V.rp[I + 1]; k++) mark[V.ci[k]] = -2 - I;
+    for (int r = 0; r < 3; r++) {
+      int64_t i = 3 * I + r, dblk[3] = {-1, -1, -1};
+      double lump[3] = {0, 0, 0};
+      for (int64_t k = A->rp[i]; k < A->rp[i + 1]; k++) {
+        int64_t c = A->ci[k], J = c / 3;
+        if (mark[J] == -2 - I) {
+          if (J == I) dblk[c - 3 * I] = pos;
+          F->ci[pos] = (int32_t)c;
+          F->v[pos++] = A->v[k];
+        } else {
+          lump[c % 3] += A->v[k];
+        }
+      }
+      int ok = 1;
+      if (dblk[r] < 0 || !(F->v[dblk[r]] + lump[r] > 0)) ok = 0;
+      for (int q = 0; q < 3 && ok; q++)
+        if (lump[q] != 0 && dblk[q] < 0) ok = 0;
+      if (ok)
+        for (int q = 0; q < 3; q++)
+          if (dblk[q] >= 0) F->v[dblk[q]] += lump[q];
+      F->rp[i + 1] = pos;
+    }
+  }
+  for (int64_t I = 0; I < nb; I++)
+    for (int c = 0; c < 3; c++) agg[3 * I + c] = aggv[I] < 0 ? -1 : 3 * aggv[I] + c;
+  *agg_out = agg;
+  agg = NULL;
+  *na_out = 3 * na;
+done:
+  if (st) mat_free(ctx, F);
+  mat_free(ctx, &V);
+  vm_free(ctx, mark);
+  vm_free(ctx, aggv);
+  vm_free(ctx, agg);
+  vm_free(ctx, cols);
+  return st;
+}
+
 /* Prolongator: P = (I - w D_F^{-1} F) P0 (smoothed), or P = P0 (plain),
  * with P0 the aggregate indicator matrix. */
 static int build_prolongator(vm_ctx *ctx, const mat *F, const int32_t *agg, int64_t na,
@@ -569,15 +684,21 @@ static int amg_setup(vm_precond *p, const vm_csr *A) {
     level *L = &M->lev[M->nlev - 1];
     if (L->A.nr <= csize || M->nlev == maxlev) break;
     mat F;
-    st = filter_strong(ctx, &L->A, theta, &F);
-    if (st) goto fail;
-    agg = vm_alloc_array(ctx, (size_t)L->A.nr, sizeof *agg);
-    if (!agg) {
-      mat_free(ctx, &F);
-      st = VM_ERR_NOMEM;
-      goto fail;
+    int64_t na;
+    if (o->block_size == 3 && L->A.nr % 3 == 0) {
+      st = block_aggregate(ctx, &L->A, theta, &F, &agg, &na);
+      if (st) goto fail;
+    } else {
+      st = filter_strong(ctx, &L->A, theta, &F);
+      if (st) goto fail;
+      agg = vm_alloc_array(ctx, (size_t)L->A.nr, sizeof *agg);
+      if (!agg) {
+        mat_free(ctx, &F);
+        st = VM_ERR_NOMEM;
+        goto fail;
+      }
+      na = aggregate(&F, agg);
     }
-    int64_t na = aggregate(&F, agg);
     if (na == 0 || (double)na > 0.8 * (double)L->A.nr) {
       mat_free(ctx, &F);
       break; /* coarsening stalled: this is the coarsest level */

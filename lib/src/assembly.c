@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "hessian_psd_private.h"
 #include "problem_private.h"
 #include "varmesh/problem.h"
 
@@ -14,11 +15,13 @@
 #endif
 
 /* Per-element accumulators: gradient and diagonal blocks by local vertex,
- * off-diagonal block diagonals by element pair (problem->pair). */
+ * off-diagonal block diagonals by element pair (problem->pair), and (full
+ * Hessian) the whole off-diagonal blocks H_ab of the pairs (a < b). */
 typedef struct {
   double g[VM_MAX_ELEM_VERTS][3];
   double h[VM_MAX_ELEM_VERTS][6]; /* symmetric block: xx yy zz xy yz xz */
   double o[VM_MAX_PAIRS][3];
+  double f[VM_MAX_PAIRS][9];
 } elem_acc;
 
 /* What one element's nodes need besides the rule. */
@@ -247,13 +250,106 @@ VM_INLINE void node_b(const vm_nodepat *pt, int d, const double *S, double b[6][
   }
 }
 
+/* The full Hessian of one node (order 3): diagonal blocks into acc->h,
+ * whole off-diagonal blocks into acc->f (oriented as the element pair,
+ * a < b), from gs, gd, b as node_hess (b[u][2] = 0 in 2D), the metric Gm
+ * (3x3), Kd for the d2 det term (H_uv gets [w]_x with w = Kd (b_u x b_v):
+ * Kd = w f_d det Q M in 3D; in 2D column 2 holds w f_d det Q n and the
+ * rest is 0) and nneg rank-1 PSD corrections hn[k][u] (scaled by
+ * sqrt(w |lambda_k|)). */
+VM_INLINE void node_hess_full(const vm_nodepat *pt, double gs[6][3], double gd[6][3],
+                              double b[6][3], const double *f, double wq, const double *Gm,
+                              const double *Kd, int nneg, double hn[9][6][3], elem_acc *acc) {
+  double al = wq * f[3], be = wq * f[4], ga = wq * f[5], fs2 = 2 * wq * f[1];
+  double u1[6][3], u2[6][3];
+  for (int u = 0; u < pt->nloc; u++) {
+    for (int r = 0; r < 3; r++) {
+      u1[u][r] = al * gs[u][r] + be * gd[u][r];
+      u2[u][r] = be * gs[u][r] + ga * gd[u][r];
+    }
+    double kuu = fs2 * (b[u][0] * b[u][0] + b[u][1] * b[u][1] + b[u][2] * b[u][2]);
+    double H[9];
+    for (int r = 0; r < 3; r++)
+      for (int q = r; q < 3; q++) {
+        double a = u1[u][r] * gs[u][q] + u2[u][r] * gd[u][q] + kuu * Gm[3 * r + q];
+        for (int k = 0; k < nneg; k++) a += hn[k][u][r] * hn[k][u][q];
+        H[3 * r + q] = a;
+      }
+    double *h = acc->h[pt->loc[u]];
+    h[0] += H[0];
+    h[1] += H[4];
+    h[2] += H[8];
+    h[3] += H[1];
+    h[4] += H[5];
+    h[5] += H[2];
+  }
+  int k = 0;
+  for (int u = 0; u < pt->nloc; u++)
+    for (int v = u + 1; v < pt->nloc; v++, k++) {
+      const double *bu = b[u], *bv = b[v];
+      double kuv = fs2 * (bu[0] * bv[0] + bu[1] * bv[1] + bu[2] * bv[2]);
+      double c[3] = {bu[1] * bv[2] - bu[2] * bv[1], bu[2] * bv[0] - bu[0] * bv[2],
+                     bu[0] * bv[1] - bu[1] * bv[0]};
+      double w[3];
+      for (int r = 0; r < 3; r++) w[r] = Kd[3 * r] * c[0] + Kd[3 * r + 1] * c[1] + Kd[3 * r + 2] * c[2];
+      double K[9] = {0, w[2], -w[1], -w[2], 0, w[0], w[1], -w[0], 0};
+      double H[9];
+      for (int r = 0; r < 3; r++)
+        for (int q = 0; q < 3; q++) {
+          double a = u1[u][r] * gs[v][q] + u2[u][r] * gd[v][q] + kuv * Gm[3 * r + q] + K[3 * r + q];
+          for (int n = 0; n < nneg; n++) a += hn[n][u][r] * hn[n][v][q];
+          H[3 * r + q] = a;
+        }
+      double *o = acc->f[pt->pidx[k]];
+      if (pt->loc[u] < pt->loc[v]) {
+        for (int e = 0; e < 9; e++) o[e] += H[e];
+      } else {
+        for (int r = 0; r < 3; r++)
+          for (int q = 0; q < 3; q++) o[3 * r + q] += H[3 * q + r];
+      }
+    }
+}
+
+/* The metric as a full 3x3 matrix. */
+static inline void metric_full(const elem_ctx *ec, double Gm[9]) {
+  if (ec->G) {
+    const double *G = ec->G;
+    double t[9] = {G[0], G[3], G[5], G[3], G[1], G[4], G[5], G[4], G[2]};
+    memcpy(Gm, t, sizeof t);
+  } else {
+    for (int k = 0; k < 9; k++) Gm[k] = k % 4 == 0 ? ec->g : 0;
+  }
+}
+
+/* Q with Q^T Q = G_x (upper triangular: the transposed Cholesky factor;
+ * sqrt(g) I for a scalar metric), so C = Q M. */
+static inline void metric_root(const elem_ctx *ec, double Q[9]) {
+  memset(Q, 0, 9 * sizeof *Q);
+  if (ec->G) {
+    const double *G = ec->G;
+    double l00 = sqrt(G[0]), l10 = G[3] / l00, l20 = G[5] / l00;
+    double l11 = sqrt(fmax(G[1] - l10 * l10, 0));
+    double l21 = l11 > 0 ? (G[4] - l20 * l10) / l11 : 0;
+    double l22 = sqrt(fmax(G[2] - l20 * l20 - l21 * l21, 0));
+    Q[0] = l00;
+    Q[1] = l10;
+    Q[2] = l20;
+    Q[4] = l11;
+    Q[5] = l21;
+    Q[8] = l22;
+  } else {
+    double r = sqrt(ec->g);
+    Q[0] = Q[4] = Q[8] = r;
+  }
+}
+
 /* One 3D element: F contribution into *Fe; with order >= 1 the gradient,
  * with order 2 the Hessian pieces, into acc. Nonzero if a node is outside
  * the measure's domain. `order` and `diag` are constants in each caller.
  * All nodes' invariants and measure values come first, so the latencies of
  * the measure's roots and divisions overlap; then the derivative work. */
-VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag, double *Fe,
-                    elem_acc *acc) {
+VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag, int psd,
+                    double *Fe, elem_acc *acc) {
   const vm_qrule *R = ec->R;
   const vm_nodepat *pats = p->pat[ec->t];
   vm_measure_scalar_fn scalar = p->ops->scalar;
@@ -311,13 +407,49 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
         gd[u][r] = ec->dq * (v->cof[3 * r] * b[u][0] + v->cof[3 * r + 1] * b[u][1] +
                              v->cof[3 * r + 2] * b[u][2]);
       }
-    node_hess(pt, 3, gs, gd, b, f, wq, ec->g, ec->G, acc);
+    if (order < 3) {
+      node_hess(pt, 3, gs, gd, b, f, wq, ec->g, ec->G, acc);
+      continue;
+    }
+    double Gm[9], Kd[9], hn[9][6][3];
+    metric_full(ec, Gm);
+    double kd = wq * f[2] * ec->dq;
+    for (int k = 0; k < 9; k++) Kd[k] = kd * v->M[k];
+    int nneg = 0;
+    if (psd) {
+      /* C = Q M; a negative direction D of d2W/dC2 is Q^T D in M */
+      double Q[9], C[9], lam[9], D[9][9];
+      int ident = !ec->G && ec->g == 1.0;
+      if (ident) {
+        memcpy(C, v->M, sizeof C);
+      } else {
+        metric_root(ec, Q);
+        for (int r = 0; r < 3; r++)
+          for (int l = 0; l < 3; l++)
+            C[3 * r + l] = Q[3 * r] * v->M[l] + Q[3 * r + 1] * v->M[3 + l] + Q[3 * r + 2] * v->M[6 + l];
+      }
+      nneg = vm_psd_negative3(C, f, lam, D);
+      for (int k = 0; k < nneg; k++) {
+        double mk[9], sc = sqrt(wq * -lam[k]);
+        if (ident) {
+          for (int e = 0; e < 9; e++) mk[e] = sc * D[k][e];
+        } else {
+          for (int r = 0; r < 3; r++)
+            for (int l = 0; l < 3; l++)
+              mk[3 * r + l] = sc * (Q[r] * D[k][l] + Q[3 + r] * D[k][3 + l] + Q[6 + r] * D[k][6 + l]);
+        }
+        for (int u = 0; u < pt->nloc; u++)
+          for (int r = 0; r < 3; r++)
+            hn[k][u][r] = mk[3 * r] * b[u][0] + mk[3 * r + 1] * b[u][1] + mk[3 * r + 2] * b[u][2];
+      }
+    }
+    node_hess_full(pt, gs, gd, b, f, wq, Gm, Kd, nneg, hn, acc);
   }
   return 0;
 }
 
 /* One 2D element (plane or surface), as elem3. */
-VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, double *Fe,
+VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd, double *Fe,
                     elem_acc *acc) {
   const vm_qrule *R = ec->R;
   const vm_nodepat *pats = p->pat[ec->t];
@@ -356,30 +488,80 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, double *
         gs[u][r] = a2 * (A[0][r] * b[u][0] + A[1][r] * b[u][1]);
         gd[u][r] = v.B[0][r] * b[u][0] + v.B[1][r] * b[u][1];
       }
-    node_hess(pt, 2, gs, gd, b, f, wq, ec->g, ec->G, acc);
+    if (order < 3) {
+      node_hess(pt, 2, gs, gd, b, f, wq, ec->g, ec->G, acc);
+      continue;
+    }
+    for (int u = 0; u < pt->nloc; u++) b[u][2] = 0;
+    double Gm[9], Kd[9] = {0}, hn[9][6][3];
+    metric_full(ec, Gm);
+    double kd = wq * f[2] * ec->dq;
+    for (int r = 0; r < 3; r++) Kd[3 * r + 2] = kd * ec->n[r];
+    int nneg = 0;
+    if (psd) {
+      /* the 6x6 Hessian of W in M (index 3 l + r: column l, row r) */
+      double H6[36], lam[9], D[9][9], sM[2][3];
+      for (int l = 0; l < 2; l++)
+        for (int r = 0; r < 3; r++) sM[l][r] = a2 * A[l][r];
+      for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 6; j++) {
+          int l = i / 3, r = i % 3, l2 = j / 3, r2 = j % 3;
+          double gsi = sM[l][r], gsj = sM[l2][r2], gdi = v.B[l][r], gdj = v.B[l2][r2];
+          double h = f[3] * gsi * gsj + f[4] * (gsi * gdj + gdi * gsj) + f[5] * gdi * gdj;
+          if (l == l2) h += 2 * f[1] * Gm[3 * r + r2];
+          if (l != l2 && r != r2) {
+            /* f_d det Q eps_{r r2 a} n_a, sign by the column order */
+            int a = 3 - r - r2;
+            double e = ((r2 - r + 3) % 3 == 1 ? 1.0 : -1.0) * ec->n[a] * ec->dq * f[2];
+            h += l == 0 ? e : -e;
+          }
+          H6[6 * i + j] = h;
+        }
+      nneg = vm_psd_negative_dense(6, H6, lam, D);
+      for (int k = 0; k < nneg; k++) {
+        double sc = sqrt(wq * -lam[k]);
+        for (int u = 0; u < pt->nloc; u++)
+          for (int r = 0; r < 3; r++)
+            hn[k][u][r] = sc * (D[k][r] * b[u][0] + D[k][3 + r] * b[u][1]);
+      }
+    }
+    node_hess_full(pt, gs, gd, b, f, wq, Gm, Kd, nneg, hn, acc);
   }
   *Fe = F;
   return 0;
 }
 
-/* The element kernels specialized by order (and diagonal S in 3D). */
+/* The element kernels specialized by order (and diagonal S in 3D);
+ * order 3: full Hessian blocks, order 4: the same projected to PSD. */
 static int elem3_o0(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return ec->diag ? elem3(p, ec, 0, 1, Fe, acc) : elem3(p, ec, 0, 0, Fe, acc);
+  return ec->diag ? elem3(p, ec, 0, 1, 0, Fe, acc) : elem3(p, ec, 0, 0, 0, Fe, acc);
 }
 static int elem3_o1(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return ec->diag ? elem3(p, ec, 1, 1, Fe, acc) : elem3(p, ec, 1, 0, Fe, acc);
+  return ec->diag ? elem3(p, ec, 1, 1, 0, Fe, acc) : elem3(p, ec, 1, 0, 0, Fe, acc);
 }
 static int elem3_o2(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return elem3(p, ec, 2, 0, Fe, acc);
+  return elem3(p, ec, 2, 0, 0, Fe, acc);
+}
+static int elem3_o3(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem3(p, ec, 3, 0, 0, Fe, acc);
+}
+static int elem3_o4(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem3(p, ec, 3, 0, 1, Fe, acc);
 }
 static int elem2_o0(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return elem2(p, ec, 0, Fe, acc);
+  return elem2(p, ec, 0, 0, Fe, acc);
 }
 static int elem2_o1(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return elem2(p, ec, 1, Fe, acc);
+  return elem2(p, ec, 1, 0, Fe, acc);
 }
 static int elem2_o2(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
-  return elem2(p, ec, 2, Fe, acc);
+  return elem2(p, ec, 2, 0, Fe, acc);
+}
+static int elem2_o3(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem2(p, ec, 3, 0, Fe, acc);
+}
+static int elem2_o4(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_acc *acc) {
+  return elem2(p, ec, 3, 1, Fe, acc);
 }
 
 static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order, double *Fe,
@@ -390,14 +572,28 @@ static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order,
     memset(acc->g, 0, sizeof acc->g[0] * (size_t)ec.nv);
     if (order > 1) {
       memset(acc->h, 0, sizeof acc->h[0] * (size_t)ec.nv);
-      memset(acc->o, 0, sizeof acc->o[0] * (size_t)p->npair[ec.t]);
+      if (order == 2)
+        memset(acc->o, 0, sizeof acc->o[0] * (size_t)p->npair[ec.t]);
+      else
+        memset(acc->f, 0, sizeof acc->f[0] * (size_t)p->npair[ec.t]);
     }
   }
-  if (p->tdim == 3)
-    return order == 0 ? elem3_o0(p, &ec, Fe, acc)
-                      : order == 1 ? elem3_o1(p, &ec, Fe, acc) : elem3_o2(p, &ec, Fe, acc);
-  return order == 0 ? elem2_o0(p, &ec, Fe, acc)
-                    : order == 1 ? elem2_o1(p, &ec, Fe, acc) : elem2_o2(p, &ec, Fe, acc);
+  if (p->tdim == 3) {
+    switch (order) {
+    case 0: return elem3_o0(p, &ec, Fe, acc);
+    case 1: return elem3_o1(p, &ec, Fe, acc);
+    case 2: return elem3_o2(p, &ec, Fe, acc);
+    case 3: return elem3_o3(p, &ec, Fe, acc);
+    default: return elem3_o4(p, &ec, Fe, acc);
+    }
+  }
+  switch (order) {
+  case 0: return elem2_o0(p, &ec, Fe, acc);
+  case 1: return elem2_o1(p, &ec, Fe, acc);
+  case 2: return elem2_o2(p, &ec, Fe, acc);
+  case 3: return elem2_o3(p, &ec, Fe, acc);
+  default: return elem2_o4(p, &ec, Fe, acc);
+  }
 }
 
 /* Position of v in the sorted neighbour list of u. */
@@ -412,7 +608,8 @@ VM_INLINE int64_t graph_pos(const vm_problem *p, int32_t u, int32_t v) {
   return p->rowptr[u] + lo;
 }
 
-static void scatter(const vm_problem *p, int64_t i, const elem_acc *acc, const vm_eval *out) {
+static void scatter(const vm_problem *p, int64_t i, const elem_acc *acc, const vm_eval *out,
+                    double *hblk) {
   const vm_mesh *m = p->m;
   int32_t e = p->ael[i];
   int t = m->etype[e];
@@ -454,6 +651,20 @@ static void scatter(const vm_problem *p, int64_t i, const elem_acc *acc, const v
       y[0] += o[0];
       y[1] += o[1];
       y[2] += o[2];
+    }
+  if (hblk)
+    for (int k = 0; k < p->npair[t]; k++) {
+      int32_t u = cv[p->pair[t][k][0]], v = cv[p->pair[t][k][1]];
+      const double *o = acc->f[k];
+      int64_t xu = pp ? p->rowptr[u] + pp[2 * k] : graph_pos(p, u, v);
+      int64_t yv = pp ? p->rowptr[v] + pp[2 * k + 1] : graph_pos(p, v, u);
+      double *x = hblk + 9 * xu;
+      double *y = hblk + 9 * yv;
+      for (int r = 0; r < 3; r++)
+        for (int q = 0; q < 3; q++) {
+          x[3 * r + q] += o[3 * r + q];
+          y[3 * q + r] += o[3 * r + q];
+        }
     }
 }
 
@@ -531,13 +742,13 @@ int vm_problem_value(vm_problem *p, const double *x, double *F) {
   return VM_OK;
 }
 
-int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
-  if (!p || !x || !out)
-    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval: NULL argument") : VM_ERR_ARG;
-  int order = out->hdiag || out->hoff ? 2 : out->grad ? 1 : 0;
+/* vm_problem_eval, and with hblk the full blocks (vm_problem_eval_blocks;
+ * out->hoff must then be NULL). */
+static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *hblk, int psd) {
+  int order = hblk ? (psd ? 4 : 3) : out->hdiag || out->hoff ? 2 : out->grad ? 1 : 0;
   if (!order) return out->F ? vm_problem_value(p, x, out->F) : VM_OK;
   int64_t nv = p->m->nv, nnz = p->rowptr[nv];
-  if (out->hoff && !p->ppos_stride) {
+  if ((out->hoff || hblk) && !p->ppos_stride) {
     int st = build_ppos(p);
     if (st) return st;
   }
@@ -557,6 +768,10 @@ int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
 #pragma omp for schedule(static) nowait
       for (int64_t k = 0; k < 3 * nnz; k++) out->hoff[k] = 0;
     }
+    if (hblk) {
+#pragma omp for schedule(static) nowait
+      for (int64_t k = 0; k < 9 * nnz; k++) hblk[k] = 0;
+    }
 #pragma omp barrier
     for (int c = 0; c < p->ncolor; c++) {
 #pragma omp for schedule(dynamic, 1)
@@ -574,7 +789,7 @@ int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
             bad = 1;
             break;
           }
-          scatter(p, i, &acc, out);
+          scatter(p, i, &acc, out, hblk);
         }
       }
     }
@@ -591,6 +806,46 @@ int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
     double s = 0;
     for (int64_t b = 0; b < p->nblock; b++) s += p->part[b];
     *out->F = s;
+  }
+  return VM_OK;
+}
+
+int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
+  if (!p || !x || !out)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval: NULL argument") : VM_ERR_ARG;
+  return assemble(p, x, out, NULL, 0);
+}
+
+int vm_problem_eval_blocks(vm_problem *p, const double *x, vm_eval_blocks *out) {
+  if (!p || !x || !out)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval_blocks: NULL argument")
+             : VM_ERR_ARG;
+  vm_eval ev = {out->F, out->grad, out->hdiag, NULL};
+  if (!out->hblk && out->hdiag) {
+    /* diagonal blocks only: through the full kernel all the same, so
+     * they include the PSD correction when asked */
+    int64_t nnz = p->rowptr[p->m->nv];
+    double *tmp = vm_alloc_array(p->ctx, nnz > 0 ? 9 * (size_t)nnz : 1, sizeof *tmp);
+    if (!tmp) return VM_ERR_NOMEM;
+    int st = assemble(p, x, &ev, tmp, out->psd);
+    vm_free(p->ctx, tmp);
+    return st;
+  }
+  return assemble(p, x, &ev, out->hblk, out->psd);
+}
+
+int vm_problem_graph_coupled(const vm_problem *p, uint8_t *mask) {
+  if (!p || !mask) return VM_ERR_ARG;
+  memset(mask, 0, (size_t)p->rowptr[p->m->nv]);
+  for (int64_t i = 0; i < p->nae; i++) {
+    int32_t e = p->ael[i];
+    int t = p->m->etype[e];
+    const int32_t *cv = p->m->conn + p->m->eoff[e];
+    for (int k = 0; k < p->npair[t]; k++) {
+      int32_t u = cv[p->pair[t][k][0]], v = cv[p->pair[t][k][1]];
+      mask[graph_pos(p, u, v)] = 1;
+      mask[graph_pos(p, v, u)] = 1;
+    }
   }
   return VM_OK;
 }

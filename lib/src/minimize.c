@@ -51,12 +51,12 @@ const char *vm_stop_reason_name(vm_stop_reason r) {
 
 int vm_minimizer_create(vm_ctx *ctx, vm_problem *problem, vm_minimizer_kind kind,
                         vm_minimizer **out) {
-  static const vm_minimizer_ops *const table[] = {&vm_minimizer_explicit_ops,
-                                                  &vm_minimizer_implicit_ops};
+  static const vm_minimizer_ops *const table[] = {
+      &vm_minimizer_explicit_ops, &vm_minimizer_implicit_ops, &vm_minimizer_newton_ops};
   if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: out is NULL");
   *out = NULL;
   if (!problem) return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: problem is NULL");
-  if ((int)kind < 0 || (int)kind > 1)
+  if ((int)kind < 0 || (int)kind > 2)
     return vm_error(ctx, VM_ERR_ARG, "vm_minimizer_create: unknown kind %d", (int)kind);
   vm_minimizer *m = vm_calloc(ctx, 1, sizeof *m);
   if (!m) return VM_ERR_NOMEM;
@@ -83,7 +83,7 @@ int vm_minimizer_set_options(vm_minimizer *m, const vm_minimize_options *o) {
   if (o->max_iter < 0 || !(o->armijo > 0 && o->armijo < 0.5) || o->ls_max_evals < 1 ||
       !(o->pcg_rtol > 0 && o->pcg_rtol < 1) || o->pcg_maxit < 1 || o->rel_decrease_tol < 0 ||
       o->grad_atol < 0 || o->grad_rtol < 0 || o->amg_rebuild_every < 1 ||
-      (int)o->precond < 0 || (int)o->precond > VM_PRECOND_AMG || o->stats_every < 0 ||
+      (int)o->precond < 0 || (int)o->precond > VM_PRECOND_BLOCK_JACOBI || o->stats_every < 0 ||
       o->ls_extrapolate < 0)
     return vm_error(m->ctx, VM_ERR_ARG, "vm_minimizer_set_options: invalid option value");
   m->opt = *o;
@@ -271,7 +271,7 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
     const int64_t *rp;
     const int32_t *adj;
     vm_problem_graph(m->prob, &rp, &adj);
-    b.nhoff = 3 * rp[m->nv];
+    b.nhoff = (m->ops->needs_hoff == 2 ? 9 : 3) * rp[m->nv];
     b.hoff = vm_alloc_array(ctx, b.nhoff > 0 ? (size_t)b.nhoff : 1, sizeof *b.hoff);
     if (!b.hoff) st = VM_ERR_NOMEM;
   }
@@ -289,6 +289,8 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
   if (st) goto done;
   memcpy(b.xa, x, (size_t)m->nv * 3 * sizeof *x);
   memcpy(b.xb, x, (size_t)m->nv * 3 * sizeof *x);
+  m->last_tau = 0;
+  m->last_infeasible = 0;
   st = m->ops->begin(m);
   if (st) goto done;
 
@@ -323,8 +325,13 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
         break;
       }
     }
-    vm_eval ev = {&F, b.g, b.hdiag, m->ops->needs_hoff ? b.hoff : NULL};
-    st = vm_problem_eval(m->prob, x, &ev);
+    if (m->ops->needs_hoff == 2) {
+      vm_eval_blocks eb = {&F, b.g, b.hdiag, b.hoff, 1};
+      st = vm_problem_eval_blocks(m->prob, x, &eb);
+    } else {
+      vm_eval ev = {&F, b.g, b.hdiag, m->ops->needs_hoff ? b.hoff : NULL};
+      st = vm_problem_eval(m->prob, x, &ev);
+    }
     if (st < 0) break;
     if (st > 0 || !isfinite(F)) {
       st = vm_error(ctx, VM_ERR_ARG,
@@ -363,6 +370,8 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
       st = VM_OK;
       break;
     }
+    m->last_tau = ls.tau;
+    m->last_infeasible = ls.infeasible;
     commit(m, ls.x, x);
     st = vm_bc_refresh(m->bc, x);
     if (st) break;

@@ -87,7 +87,12 @@ static int implicit_begin(vm_minimizer *m) {
     cs->prev = vm_alloc_array(ctx, nv, sizeof *cs->prev);
     cs->uvert = vm_alloc_array(ctx, nv, sizeof *cs->uvert);
     if (!cs->vidx || !cs->prev || !cs->uvert) return VM_ERR_NOMEM;
-    int st = vm_precond_create(ctx, m->opt.precond, &m->opt.amg, &cs->pc);
+    /* scalar systems: block Jacobi is plain Jacobi here */
+    vm_precond_kind kind =
+        m->opt.precond == VM_PRECOND_BLOCK_JACOBI ? VM_PRECOND_JACOBI : m->opt.precond;
+    vm_amg_options amg = m->opt.amg;
+    amg.block_size = 1;
+    int st = vm_precond_create(ctx, kind, &amg, &cs->pc);
     if (st) return st;
   }
   return VM_OK;

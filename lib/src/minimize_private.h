@@ -7,7 +7,9 @@
 
 typedef struct vm_minimizer_ops {
   const char *name;
-  int needs_hoff; /* the direction uses the off-diagonal Hessian entries */
+  int needs_hoff; /* 1: the direction uses the off-diagonal Hessian entries
+                     (hoff); 2: the full PSD-projected blocks (hblk of
+                     vm_problem_eval_blocks, passed as hoff; hdiag projected) */
   /* Per-run state, after m->bc exists. */
   int (*begin)(vm_minimizer *m);
   /* Descent direction d (3*nv) at the current iterate from the projected
@@ -31,10 +33,13 @@ struct vm_minimizer {
   int64_t nv;
   int sdim;   /* space dimension of the vertices: 2 or 3 */
   void *impl; /* the member's per-run state */
+  double last_tau;     /* the last accepted step length (0 before the first) */
+  int last_infeasible; /* infeasible trials in its line search */
 };
 
 extern const vm_minimizer_ops vm_minimizer_explicit_ops;
 extern const vm_minimizer_ops vm_minimizer_implicit_ops;
+extern const vm_minimizer_ops vm_minimizer_newton_ops;
 
 /* Newton step in the admissible subspace of one vertex:
  * a = -(Q^T H Q + mu I)^{-1} Q^T g with the smallest mu >= 0 from a short

@@ -129,6 +129,118 @@ static void jacobi_info(const vm_precond *p, vm_precond_info *info) {
 static const vm_precond_ops jacobi_ops = {"jacobi", jacobi_setup, jacobi_setup, jacobi_apply,
                                           jacobi_info, jacobi_destroy};
 
+/* Block Jacobi: z_i = D_i^{-1} r_i with D_i the 3x3 diagonal block of
+ * unknowns 3i..3i+2 (inverted through its Cholesky factor; a block that is
+ * not positive definite falls back to its diagonal). */
+typedef struct {
+  int64_t n;
+  double *binv; /* 9 per block, the symmetric inverse */
+} bjacobi_impl;
+
+static void bjacobi_destroy(vm_precond *p) {
+  bjacobi_impl *J = p->impl;
+  if (!J) return;
+  vm_free(p->ctx, J->binv);
+  vm_free(p->ctx, J);
+  p->impl = NULL;
+}
+
+/* Inverse of the symmetric positive definite 3x3 B into X; nonzero if B
+ * is not numerically positive definite. */
+static int spd3_inverse(const double *B, double *X) {
+  double l00 = B[0], tol = 1e-14 * (fabs(B[0]) + fabs(B[4]) + fabs(B[8]));
+  if (!(l00 > tol)) return 1;
+  l00 = sqrt(l00);
+  double l10 = B[3] / l00, l20 = B[6] / l00;
+  double d1 = B[4] - l10 * l10;
+  if (!(d1 > tol)) return 1;
+  double l11 = sqrt(d1), l21 = (B[7] - l20 * l10) / l11;
+  double d2 = B[8] - l20 * l20 - l21 * l21;
+  if (!(d2 > tol)) return 1;
+  double l22 = sqrt(d2);
+  /* inverse of L (lower), then X = L^{-T} L^{-1} */
+  double i00 = 1 / l00, i11 = 1 / l11, i22 = 1 / l22;
+  double i10 = -l10 * i00 * i11, i21 = -l21 * i11 * i22;
+  double i20 = -(l20 * i00 + l21 * i10) * i22;
+  X[0] = i00 * i00 + i10 * i10 + i20 * i20;
+  X[1] = X[3] = i10 * i11 + i20 * i21;
+  X[2] = X[6] = i20 * i22;
+  X[4] = i11 * i11 + i21 * i21;
+  X[5] = X[7] = i21 * i22;
+  X[8] = i22 * i22;
+  return 0;
+}
+
+static int bjacobi_setup(vm_precond *p, const vm_csr *A) {
+  if (A->n % 3) return vm_error(p->ctx, VM_ERR_ARG, "block jacobi: n = %lld is not a multiple of 3",
+                                (long long)A->n);
+  bjacobi_impl *J = p->impl;
+  if (!J || J->n != A->n) {
+    bjacobi_destroy(p);
+    J = vm_calloc(p->ctx, 1, sizeof *J);
+    if (!J) return VM_ERR_NOMEM;
+    p->impl = J;
+    J->binv = vm_alloc_array(p->ctx, A->n ? (size_t)(3 * A->n) : 1, sizeof *J->binv);
+    if (!J->binv) return VM_ERR_NOMEM;
+    J->n = A->n;
+  }
+  const int64_t nb = A->n / 3;
+  int bad = 0;
+  int nt = vm_nthreads(p->ctx);
+#pragma omp parallel for num_threads(nt) schedule(static) if (nb >= VM_PAR_MIN / 8) \
+    reduction(| : bad)
+  for (int64_t i = 0; i < nb; i++) {
+    double B[9] = {0};
+    for (int r = 0; r < 3; r++) {
+      int64_t row = 3 * i + r;
+      for (int64_t k = A->rowptr[row]; k < A->rowptr[row + 1]; k++) {
+        int64_t c = A->col[k] - 3 * i;
+        if (c >= 0 && c < 3) B[3 * r + c] = A->val[k];
+      }
+    }
+    for (int r = 0; r < 3; r++)
+      for (int c = r + 1; c < 3; c++) B[3 * r + c] = B[3 * c + r] = 0.5 * (B[3 * r + c] + B[3 * c + r]);
+    double *X = J->binv + 9 * i;
+    if (spd3_inverse(B, X)) {
+      for (int k = 0; k < 9; k++) X[k] = 0;
+      for (int r = 0; r < 3; r++) {
+        if (B[4 * r] > 0)
+          X[4 * r] = 1 / B[4 * r];
+        else {
+          X[4 * r] = 1;
+          bad = 1;
+        }
+      }
+    }
+  }
+  if (bad) return vm_error(p->ctx, VM_ERR_NUMERIC, "block jacobi: non-positive diagonal");
+  return VM_OK;
+}
+
+static void bjacobi_apply(vm_precond *p, const double *r, double *z) {
+  const bjacobi_impl *J = p->impl;
+  int nt = vm_nthreads(p->ctx);
+  const int64_t nb = J->n / 3;
+#pragma omp parallel for num_threads(nt) schedule(static) if (nb >= VM_PAR_MIN / 4)
+  for (int64_t i = 0; i < nb; i++) {
+    const double *X = J->binv + 9 * i, *ri = r + 3 * i;
+    double *zi = z + 3 * i;
+    zi[0] = X[0] * ri[0] + X[1] * ri[1] + X[2] * ri[2];
+    zi[1] = X[3] * ri[0] + X[4] * ri[1] + X[5] * ri[2];
+    zi[2] = X[6] * ri[0] + X[7] * ri[1] + X[8] * ri[2];
+  }
+}
+
+static void bjacobi_info(const vm_precond *p, vm_precond_info *info) {
+  const bjacobi_impl *J = p->impl;
+  info->levels = 1;
+  info->coarse_n = J ? J->n : 0;
+  info->op_complexity = 1.0;
+}
+
+static const vm_precond_ops bjacobi_ops = {"block-jacobi", bjacobi_setup, bjacobi_setup,
+                                           bjacobi_apply, bjacobi_info, bjacobi_destroy};
+
 /* Identity: z = r. */
 typedef struct {
   int64_t n;
@@ -173,12 +285,14 @@ vm_amg_options vm_amg_options_default(void) {
   o.coarse_size = 400;
   o.max_levels = 12;
   o.update_coarse = 1;
+  o.block_size = 1;
   return o;
 }
 
 int vm_precond_create(vm_ctx *ctx, vm_precond_kind kind, const vm_amg_options *amg,
                       vm_precond **out) {
-  static const vm_precond_ops *const table[] = {&identity_ops, &jacobi_ops, &vm_precond_amg_ops};
+  static const vm_precond_ops *const table[] = {&identity_ops, &jacobi_ops, &vm_precond_amg_ops,
+                                                &bjacobi_ops};
   if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_precond_create: out is NULL");
   *out = NULL;
   if ((int)kind < 0 || (int)kind >= (int)(sizeof table / sizeof table[0]))

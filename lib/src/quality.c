@@ -120,7 +120,10 @@ static void tq_init(vm_type_quality *t) {
   t->phi_min = t->psi_min = t->sj_min = INFINITY;
 }
 
-int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q) {
+/* The figures of q, and per element (if esj / ephi are not NULL) the scaled
+ * Jacobian and the minimum phi, NAN for elements not measured. */
+static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q, double *esj,
+                   double *ephi) {
   vm_ctx *ctx = m->ctx;
   vm_quality_opts o = {VM_RULE_CORNER, 0};
   if (opts) o = *opts;
@@ -162,6 +165,8 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
     int d = vm_elem_dim(t);
     if (d != q->top_dim) {
       q->skipped++;
+      if (esj) esj[e] = NAN;
+      if (ephi) ephi[e] = NAN;
       continue;
     }
     int k = vm_elem_nverts(t);
@@ -192,6 +197,7 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
     vm_type_quality *tq = &q->type[t];
     tq->count++;
     int inv = 0;
+    double ephi_min = INFINITY;
     const vm_qrule *R = rules[t];
     for (int n = 0; n < R->nnodes; n++) {
       node_val v = eval_node(&R->nodes[n], d, x, tinv[t] + 9 * n, nrm);
@@ -203,6 +209,7 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
       }
       double phi = s > 0 ? detc / (d == 3 ? pow(s / 3, 1.5) : s / 2) : -INFINITY;
       if (phi < tq->phi_min) tq->phi_min = phi;
+      if (phi < ephi_min) ephi_min = phi;
       if (have_size) {
         double psi = 2 * detc / (1 + detc * detc);
         if (psi < tq->psi_min) tq->psi_min = psi;
@@ -221,6 +228,8 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
     if (sjm > 1) sjm = 1; /* rounding above the ideal */
     if (sjm < tq->sj_min) tq->sj_min = sjm;
     sj[nsj++] = sjm;
+    if (esj) esj[e] = sjm;
+    if (ephi) ephi[e] = ephi_min;
     if (inv) tq->inverted_elems++;
   }
   for (int t = 0; t < VM_NTYPES; t++) {
@@ -253,4 +262,14 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
   }
   vm_free(ctx, sj);
   return VM_OK;
+}
+
+int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q) {
+  return measure(m, opts, q, NULL, NULL);
+}
+
+int vm_mesh_element_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
+                            double *sj, double *phi) {
+  vm_quality tmp;
+  return measure(m, opts, q ? q : &tmp, sj, phi);
 }

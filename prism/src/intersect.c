@@ -1,9 +1,10 @@
-/* prism/src/intersect.c: intersecting triangle pairs found with Embree's
- * BVH collision query (rtcCollide) and decided by sign tests in double,
- * collected and sorted so the result never depends on thread timing. */
+/* prism/src/intersect.c: intersecting triangle pairs: every edge of the
+ * triangle soup is cast as an Embree ray against a user geometry holding
+ * the triangles in double precision; each candidate on the ray's path is
+ * decided by sign tests in double; hits are collected, then sorted, so the
+ * result never depends on thread timing. */
 #include <embree3/rtcore.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,16 +16,11 @@ typedef struct {
   const int32_t *tri;
   const int32_t *group;
   int64_t ntri;
-  float *box; /* 6 per triangle, rounded outwards */
-  /* results, appended under the spin lock */
-  atomic_flag lock;
-  int64_t n, cap;
-  int64_t *pairs;
-  int nomem;
-} collide_data;
+  float *box; /* 6 per triangle, rounded outwards and padded */
+} soup;
 
 static void tri_bounds(const struct RTCBoundsFunctionArguments *a) {
-  const collide_data *d = a->geometryUserPtr;
+  const soup *d = a->geometryUserPtr;
   const float *b = d->box + 6 * (size_t)a->primID;
   a->bounds_o->lower_x = b[0];
   a->bounds_o->lower_y = b[1];
@@ -60,62 +56,69 @@ static int seg_tri(const double *p, const double *q, const double *a, const doub
   return s1 != 0 && s1 == s2 && s2 == s3;
 }
 
-/* Triangles i, j of the data intersect (see vm_prism_find_intersections). */
-static int tri_pair(const collide_data *d, int64_t i, int64_t j) {
-  const int32_t *A = d->tri + 3 * i, *B = d->tri + 3 * j;
-  int shared = 0, sa = -1, sb = -1;
-  for (int a = 0; a < 3; a++)
-    for (int b = 0; b < 3; b++)
-      if (A[a] == B[b]) {
-        shared++;
-        sa = a;
-        sb = b;
-      }
-  if (shared >= 2) return 0;
-  const double *x = d->xyz;
-#define P(v) (x + 3 * (int64_t)(v))
-  if (shared == 1) {
-    int a1 = A[(sa + 1) % 3], a2 = A[(sa + 2) % 3], b1 = B[(sb + 1) % 3], b2 = B[(sb + 2) % 3];
-    return seg_tri(P(a1), P(a2), P(B[0]), P(B[1]), P(B[2])) ||
-           seg_tri(P(b1), P(b2), P(A[0]), P(A[1]), P(A[2]));
+/* One edge of the soup, cast as a ray; hits are triangles its segment
+ * crosses, collected in a growing list (plain malloc: these run on many
+ * threads, and the context's allocator is not thread-safe). */
+typedef struct {
+  struct RTCIntersectContext rtc; /* first: Embree passes a pointer to it */
+  const soup *d;
+  int32_t a, b;    /* the edge's vertices */
+  int32_t group;   /* group of the edge (-1: none) */
+  int64_t n, cap;
+  int32_t *hit;
+  int nomem;
+} edge_ray;
+
+static void push_hit(edge_ray *r, int32_t t) {
+  if (r->n == r->cap) {
+    int64_t nc = r->cap ? 2 * r->cap : 16;
+    int32_t *np = realloc(r->hit, (size_t)nc * sizeof *np);
+    if (!np) {
+      r->nomem = 1;
+      return;
+    }
+    r->hit = np;
+    r->cap = nc;
   }
-  for (int k = 0; k < 3; k++) {
-    if (seg_tri(P(A[k]), P(A[(k + 1) % 3]), P(B[0]), P(B[1]), P(B[2]))) return 1;
-    if (seg_tri(P(B[k]), P(B[(k + 1) % 3]), P(A[0]), P(A[1]), P(A[2]))) return 1;
-  }
-  return 0;
-#undef P
+  r->hit[r->n++] = t;
 }
 
-static void collide(void *user, struct RTCCollision *c, unsigned int n) {
-  collide_data *d = user;
-  for (unsigned int k = 0; k < n; k++) {
-    int64_t i = c[k].primID0, j = c[k].primID1;
-    if (i >= j) continue;
-    if (d->group && d->group[i] >= 0 && d->group[i] == d->group[j]) continue;
-    const float *bi = d->box + 6 * i, *bj = d->box + 6 * j;
-    if (bi[0] > bj[3] || bj[0] > bi[3] || bi[1] > bj[4] || bj[1] > bi[4] || bi[2] > bj[5] ||
-        bj[2] > bi[5])
-      continue;
-    if (!tri_pair(d, i, j)) continue;
-    while (atomic_flag_test_and_set_explicit(&d->lock, memory_order_acquire)) {
-    }
-    if (d->n == d->cap) {
-      int64_t nc = d->cap ? 2 * d->cap : 256;
-      int64_t *np = realloc(d->pairs, (size_t)nc * 2 * sizeof *np);
-      if (!np) {
-        d->nomem = 1;
-        atomic_flag_clear_explicit(&d->lock, memory_order_release);
-        continue;
-      }
-      d->pairs = np;
-      d->cap = nc;
-    }
-    d->pairs[2 * d->n] = i;
-    d->pairs[2 * d->n + 1] = j;
-    d->n++;
-    atomic_flag_clear_explicit(&d->lock, memory_order_release);
-  }
+static void edge_intersect(const struct RTCIntersectFunctionNArguments *args) {
+  if (!args->valid[0]) return;
+  edge_ray *r = (edge_ray *)args->context;
+  const soup *d = r->d;
+  int32_t t = (int32_t)args->primID;
+  const int32_t *T = d->tri + 3 * (int64_t)t;
+  if (T[0] == r->a || T[1] == r->a || T[2] == r->a || T[0] == r->b || T[1] == r->b ||
+      T[2] == r->b)
+    return; /* touching at a shared vertex only, unless coplanar */
+  if (r->group >= 0 && d->group && d->group[t] == r->group) return;
+  const double *x = d->xyz;
+  if (seg_tri(x + 3 * (int64_t)r->a, x + 3 * (int64_t)r->b, x + 3 * (int64_t)T[0],
+              x + 3 * (int64_t)T[1], x + 3 * (int64_t)T[2]))
+    push_hit(r, t);
+  /* the hit is never committed, so traversal visits every candidate */
+}
+
+static void edge_occluded(const struct RTCOccludedFunctionNArguments *args) { (void)args; }
+
+typedef struct {
+  int32_t a, b, t;
+} half_edge;
+
+struct pr_soup {
+  int64_t ntri, ned;
+  int32_t *tri;   /* 3 per triangle */
+  int32_t *group; /* NULL or 1 per triangle */
+  half_edge *he;  /* half-edges sorted by (a, b, t) */
+  int64_t *eb;    /* edge k: he[eb[k] .. eb[k+1]) */
+};
+
+static int cmp_he(const void *x, const void *y) {
+  const half_edge *a = x, *b = y;
+  if (a->a != b->a) return a->a < b->a ? -1 : 1;
+  if (a->b != b->b) return a->b < b->b ? -1 : 1;
+  return (a->t > b->t) - (a->t < b->t);
 }
 
 static int cmp_pair(const void *a, const void *b) {
@@ -135,25 +138,28 @@ static float up(double v) {
   return f;
 }
 
-int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
-                                const int32_t *tri, const int32_t *group, int64_t *npairs,
-                                int64_t **pairs) {
-  if (npairs) *npairs = 0;
+int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int64_t *npairs,
+                          int64_t **pairs) {
+  *npairs = 0;
   if (pairs) *pairs = NULL;
-  if (!xyz || !tri || ntri < 0 || !npairs)
-    return vm_error(ctx, VM_ERR_ARG, "vm_prism_find_intersections: bad argument");
-  if (ntri > UINT32_MAX / 2)
-    return vm_error(ctx, VM_ERR_ARG, "vm_prism_find_intersections: too many triangles");
+  int64_t ntri = so->ntri;
   if (ntri < 2) return VM_OK;
-  collide_data d;
-  memset(&d, 0, sizeof d);
-  atomic_flag_clear(&d.lock);
-  d.xyz = xyz;
-  d.tri = tri;
-  d.group = group;
-  d.ntri = ntri;
+  const int32_t *tri = so->tri, *group = so->group;
+  const half_edge *he = so->he;
+  const int64_t *eb = so->eb;
+  int64_t ned = so->ned;
+  soup d = {xyz, tri, group, ntri, NULL};
   d.box = vm_alloc_array(ctx, (size_t)ntri * 6, sizeof *d.box);
   if (!d.box) return VM_ERR_NOMEM;
+  double glo[3] = {INFINITY, INFINITY, INFINITY}, ghi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int64_t t = 0; t < 3 * ntri; t++)
+    for (int k = 0; k < 3; k++) {
+      double v = xyz[3 * (int64_t)tri[t] + k];
+      glo[k] = v < glo[k] ? v : glo[k];
+      ghi[k] = v > ghi[k] ? v : ghi[k];
+    }
+  /* padding covers the rounding of the rays to float */
+  double pad = 1e-6 * (ghi[0] - glo[0] + ghi[1] - glo[1] + ghi[2] - glo[2]);
   for (int64_t t = 0; t < ntri; t++) {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < 3; i++)
@@ -163,10 +169,11 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
         hi[k] = v > hi[k] ? v : hi[k];
       }
     for (int k = 0; k < 3; k++) {
-      d.box[6 * t + k] = down(lo[k]);
-      d.box[6 * t + 3 + k] = up(hi[k]);
+      d.box[6 * t + k] = down(lo[k] - pad);
+      d.box[6 * t + 3 + k] = up(hi[k] + pad);
     }
   }
+
   int st = VM_OK;
   RTCDevice dev = rtcNewDevice(NULL);
   if (!dev) {
@@ -174,51 +181,225 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
     return vm_error(ctx, VM_ERR_BACKEND, "embree: cannot create a device");
   }
   RTCScene scene = rtcNewScene(dev);
-  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
   RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
   rtcSetGeometryUserPrimitiveCount(g, (unsigned int)ntri);
   rtcSetGeometryUserData(g, &d);
   rtcSetGeometryBoundsFunction(g, tri_bounds, NULL);
+  rtcSetGeometryIntersectFunction(g, edge_intersect);
+  rtcSetGeometryOccludedFunction(g, edge_occluded);
   rtcCommitGeometry(g);
   rtcAttachGeometry(scene, g);
   rtcReleaseGeometry(g);
   rtcCommitScene(scene);
   enum RTCError err = rtcGetDeviceError(dev);
+  /* found[k] lists (edge, triangle) hits of the edges of chunk k */
+  int64_t nfound = 0, capfound = 0;
+  int64_t *found = NULL;
+  int nomem = 0;
   if (err == RTC_ERROR_NONE) {
-    rtcCollide(scene, scene, collide, &d);
+#pragma omp parallel
+    {
+      edge_ray r;
+      memset(&r, 0, sizeof r);
+      r.d = &d;
+      int64_t ln = 0, lcap = 0;
+      int64_t *loc = NULL;
+#pragma omp for schedule(dynamic, 256)
+      for (int64_t e = 0; e < ned; e++) {
+        int32_t a = he[eb[e]].a, b = he[eb[e]].b;
+        const double *pa = xyz + 3 * (int64_t)a, *pb = xyz + 3 * (int64_t)b;
+        double dir[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+        double len = pr_normalize(dir);
+        if (!(len > 0)) continue;
+        /* an edge whose triangles are all of one group tests only others */
+        r.group = -1;
+        if (group) {
+          int32_t g0 = group[he[eb[e]].t];
+          int same = g0 >= 0;
+          for (int64_t k = eb[e]; k < eb[e + 1] && same; k++) same = group[he[k].t] == g0;
+          if (same) r.group = g0;
+        }
+        r.a = a;
+        r.b = b;
+        r.n = 0;
+        rtcInitIntersectContext(&r.rtc);
+        struct RTCRayHit rh;
+        memset(&rh, 0, sizeof rh);
+        rh.ray.org_x = (float)pa[0];
+        rh.ray.org_y = (float)pa[1];
+        rh.ray.org_z = (float)pa[2];
+        rh.ray.dir_x = (float)dir[0];
+        rh.ray.dir_y = (float)dir[1];
+        rh.ray.dir_z = (float)dir[2];
+        rh.ray.tnear = 0;
+        rh.ray.tfar = (float)(len * (1 + 1e-5) + 2 * pad);
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene, &r.rtc, &rh);
+        for (int64_t k = 0; k < r.n; k++) {
+          if (ln == lcap) {
+            int64_t nc = lcap ? 2 * lcap : 64;
+            int64_t *np = realloc(loc, (size_t)nc * 2 * sizeof *np);
+            if (!np) {
+              r.nomem = 1;
+              break;
+            }
+            loc = np;
+            lcap = nc;
+          }
+          loc[2 * ln] = e;
+          loc[2 * ln + 1] = r.hit[k];
+          ln++;
+        }
+      }
+#pragma omp critical(vm_prism_found)
+      {
+        if (r.nomem) nomem = 1;
+        if (ln && !nomem) {
+          if (nfound + ln > capfound) {
+            int64_t nc = (nfound + ln) * 2;
+            int64_t *np = realloc(found, (size_t)nc * 2 * sizeof *np);
+            if (np) {
+              found = np;
+              capfound = nc;
+            } else {
+              nomem = 1;
+            }
+          }
+          if (!nomem) {
+            memcpy(found + 2 * nfound, loc, (size_t)ln * 2 * sizeof *loc);
+            nfound += ln;
+          }
+        }
+      }
+      free(loc);
+      free(r.hit);
+    }
     err = rtcGetDeviceError(dev);
   }
   rtcReleaseScene(scene);
   rtcReleaseDevice(dev);
   vm_free(ctx, d.box);
-  if (err != RTC_ERROR_NONE) {
-    free(d.pairs);
-    return vm_error(ctx, VM_ERR_BACKEND, "embree: collision query failed (error %d)", (int)err);
+  if (err != RTC_ERROR_NONE || nomem) {
+    free(found);
+    if (nomem) return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting hits");
+    return vm_error(ctx, VM_ERR_BACKEND, "embree: ray query failed (error %d)", (int)err);
   }
-  if (d.nomem) {
-    free(d.pairs);
-    return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting intersections");
-  }
-  /* Embree may report a pair more than once: sort, then drop repeats */
-  if (d.n > 1) qsort(d.pairs, (size_t)d.n, 2 * sizeof *d.pairs, cmp_pair);
-  int64_t n = 0;
-  for (int64_t k = 0; k < d.n; k++)
-    if (n == 0 || cmp_pair(d.pairs + 2 * k, d.pairs + 2 * (n - 1))) {
-      d.pairs[2 * n] = d.pairs[2 * k];
-      d.pairs[2 * n + 1] = d.pairs[2 * k + 1];
+  /* (edge, triangle) hits -> pairs of triangles (every triangle on the
+   * edge against the one it crosses), sorted, repeats dropped */
+  int64_t n = 0, cap = 0;
+  int64_t *pp = NULL;
+  for (int64_t k = 0; k < nfound && st == VM_OK; k++) {
+    int64_t e = found[2 * k], t = found[2 * k + 1];
+    for (int64_t j = eb[e]; j < eb[e + 1]; j++) {
+      int64_t s = he[j].t;
+      if (s == t) continue;
+      if (group && group[s] >= 0 && group[s] == group[t]) continue;
+      const int32_t *A = tri + 3 * s, *B = tri + 3 * t;
+      int shared = 0;
+      for (int i = 0; i < 3; i++)
+        for (int m = 0; m < 3; m++) shared += A[i] == B[m];
+      if (shared >= 2) continue;
+      if (n == cap) {
+        int64_t nc = cap ? 2 * cap : 64;
+        int64_t *np = vm_realloc(ctx, pp, (size_t)nc * 2 * sizeof *np);
+        if (!np) {
+          st = VM_ERR_NOMEM;
+          break;
+        }
+        pp = np;
+        cap = nc;
+      }
+      pp[2 * n] = s < t ? s : t;
+      pp[2 * n + 1] = s < t ? t : s;
       n++;
     }
-  *npairs = n;
-  if (pairs && n) {
-    *pairs = vm_alloc_array(ctx, (size_t)(2 * n), sizeof **pairs);
-    if (!*pairs) st = VM_ERR_NOMEM;
-    else memcpy(*pairs, d.pairs, (size_t)(2 * n) * sizeof **pairs);
   }
-  free(d.pairs);
+  free(found);
+  if (st) {
+    vm_free(ctx, pp);
+    return st;
+  }
+  if (n > 1) qsort(pp, (size_t)n, 2 * sizeof *pp, cmp_pair);
+  int64_t u = 0;
+  for (int64_t k = 0; k < n; k++)
+    if (u == 0 || cmp_pair(pp + 2 * k, pp + 2 * (u - 1))) {
+      pp[2 * u] = pp[2 * k];
+      pp[2 * u + 1] = pp[2 * k + 1];
+      u++;
+    }
+  *npairs = u;
+  if (pairs && u) *pairs = pp;
+  else vm_free(ctx, pp);
+  return VM_OK;
+}
+
+void pr_soup_destroy(vm_ctx *ctx, pr_soup **ps) {
+  if (!ps || !*ps) return;
+  pr_soup *s = *ps;
+  vm_free(ctx, s->tri);
+  vm_free(ctx, s->group);
+  vm_free(ctx, s->he);
+  vm_free(ctx, s->eb);
+  vm_free(ctx, s);
+  *ps = NULL;
+}
+
+int pr_soup_create(vm_ctx *ctx, int64_t ntri, const int32_t *tri, const int32_t *group,
+                   pr_soup **out) {
+  *out = NULL;
+  if (ntri < 0 || ntri > INT32_MAX / 4)
+    return vm_error(ctx, VM_ERR_ARG, "intersections: %lld triangles", (long long)ntri);
+  pr_soup *s = vm_calloc(ctx, 1, sizeof *s);
+  if (!s) return VM_ERR_NOMEM;
+  size_t n = (size_t)(ntri ? ntri : 1);
+  s->ntri = ntri;
+  s->tri = vm_alloc_array(ctx, 3 * n, sizeof *s->tri);
+  s->group = group ? vm_alloc_array(ctx, n, sizeof *s->group) : NULL;
+  s->he = vm_alloc_array(ctx, 3 * n, sizeof *s->he);
+  s->eb = vm_alloc_array(ctx, 3 * n + 1, sizeof *s->eb);
+  if (!s->tri || (group && !s->group) || !s->he || !s->eb) {
+    pr_soup_destroy(ctx, &s);
+    return VM_ERR_NOMEM;
+  }
+  memcpy(s->tri, tri, (size_t)(3 * ntri) * sizeof *tri);
+  if (group) memcpy(s->group, group, (size_t)ntri * sizeof *group);
+  for (int64_t t = 0; t < ntri; t++)
+    for (int i = 0; i < 3; i++) {
+      int32_t a = tri[3 * t + i], b = tri[3 * t + (i + 1) % 3];
+      s->he[3 * t + i] = (half_edge){a < b ? a : b, a < b ? b : a, (int32_t)t};
+    }
+  qsort(s->he, (size_t)(3 * ntri), sizeof *s->he, cmp_he);
+  for (int64_t k = 0; k < 3 * ntri; k++)
+    if (k == 0 || s->he[k].a != s->he[k - 1].a || s->he[k].b != s->he[k - 1].b)
+      s->eb[s->ned++] = k;
+  s->eb[s->ned] = 3 * ntri;
+  *out = s;
+  return VM_OK;
+}
+
+int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
+                                const int32_t *tri, const int32_t *group, int64_t *npairs,
+                                int64_t **pairs) {
+  if (npairs) *npairs = 0;
+  if (pairs) *pairs = NULL;
+  if (!xyz || !tri || ntri < 0 || !npairs)
+    return vm_error(ctx, VM_ERR_ARG, "vm_prism_find_intersections: bad argument");
+  if (ntri < 2) return VM_OK;
+  pr_soup *s = NULL;
+  int st = pr_soup_create(ctx, ntri, tri, group, &s);
+  if (st) return st;
+  st = pr_soup_intersections(ctx, s, xyz, npairs, pairs);
+  pr_soup_destroy(ctx, &s);
   return st;
 }
 
-int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
+/* The faces of the single layer: [0, nt) tops, [nt, nt + 2 ned) sides (two
+ * triangles per wall edge), then the wall (group 0). */
+static int layer_soup(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt, ned = p->ned;
   int64_t nf = nt + 2 * ned + nt;
@@ -249,11 +430,22 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
     s[5] = (int32_t)(a + nw);
     grp[nt + 2 * e] = grp[nt + 2 * e + 1] = -1;
   }
-  int64_t np = 0, *pairs = NULL;
-  int st = vm_prism_find_intersections(ctx, p->layer->xyz, nf, tri, grp, &np,
-                                       mark ? &pairs : NULL);
+  int st = pr_soup_create(ctx, nf, tri, grp, &p->soup);
   vm_free(ctx, tri);
   vm_free(ctx, grp);
+  if (st) return st;
+  return VM_OK;
+}
+
+int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt, ned = p->ned;
+  if (!p->soup) {
+    int st = layer_soup(p);
+    if (st) return st;
+  }
+  int64_t np = 0, *pairs = NULL;
+  int st = pr_soup_intersections(ctx, p->soup, p->layer->xyz, &np, mark ? &pairs : NULL);
   if (st) return st;
   if (mark) {
     memset(mark, 0, (size_t)nw);

@@ -337,6 +337,7 @@ void vm_prism_destroy(vm_prism **pp) {
   vm_prism *p = *pp;
   vm_ctx *ctx = p->ctx;
   vm_problem_destroy(&p->prob);
+  pr_soup_destroy(ctx, &p->soup);
   vm_mesh_destroy(&p->layer);
   void *arrays[] = {p->wall, p->tri, p->fnrm, p->vnrm, p->dir, p->elen, p->smooth,
                     p->vt_off, p->vt, p->vv_off, p->vv, p->edge, p->etri, p->h,

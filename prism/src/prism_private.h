@@ -36,6 +36,7 @@ struct vm_prism {
   int32_t *edge;   /* 2*ned, a < b */
   int32_t *etri;   /* 2*ned triangles on each side (-1: open edge) */
 
+  struct pr_soup *soup; /* the layer's faces for intersection queries */
   vm_mesh *layer;  /* single layer: 2nw vertices, nt prisms, target field */
   vm_problem *prob;
   double *h;       /* nw target heights */
@@ -118,6 +119,17 @@ int64_t pr_count_invalid(const vm_mesh *m, double *qmin);
  * `mark` (nw, may be NULL). Returns the number of intersecting face pairs
  * in *npairs. */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
+
+/* A triangle soup with its edges, for repeated intersection queries at
+ * changing coordinates (the topology is fixed). */
+typedef struct pr_soup pr_soup;
+int pr_soup_create(vm_ctx *ctx, int64_t ntri, const int32_t *tri, const int32_t *group,
+                   pr_soup **out);
+void pr_soup_destroy(vm_ctx *ctx, pr_soup **s);
+/* Pairs of intersecting triangles at coordinates xyz (see
+ * vm_prism_find_intersections). */
+int pr_soup_intersections(vm_ctx *ctx, const pr_soup *s, const double *xyz, int64_t *npairs,
+                          int64_t **pairs);
 
 /* Write the top vertices of the layer from thickness t along unit
  * directions d: top_v = wall_v + t_v d_v. */

@@ -56,20 +56,20 @@ static void layer_quality(const vm_prism *p, double *q) {
   }
 }
 
-/* Set the top from t; where a prism became worse than min(QMIN, its old
- * quality qold), put its vertices back to t_old and halve their step,
- * until no prism is. */
+/* Set the top from t; where a prism became worse than min(QMIN, half its
+ * quality at the start q0), put its vertices back to t_old and halve their
+ * step, until no prism is (t_old passed the same test). */
 #define QMIN 0.03
 static void apply_quality(vm_prism *p, double *t, const double *t_old, const double *d,
-                          const double *qold, double *q, double *alpha, uint8_t *bad) {
+                          const double *q0, double *q, double *alpha, uint8_t *bad) {
   for (int round = 0; round < 200; round++) {
     pr_set_top(p, t, d);
     layer_quality(p, q);
     memset(bad, 0, (size_t)p->nw);
     int64_t nbad = 0;
     for (int64_t e = 0; e < p->nt; e++) {
-      double lim = qold[e] < QMIN ? qold[e] : QMIN;
-      if (q[e] >= lim && q[e] > 1e-3) continue;
+      double lim = 0.5 * q0[e] < QMIN ? 0.5 * q0[e] : QMIN;
+      if (q[e] >= lim) continue;
       nbad++;
       for (int i = 0; i < 3; i++) bad[p->tri[3 * e + i]] = 1;
     }
@@ -133,6 +133,10 @@ int vm_prism_restore(vm_prism *p) {
     p->cap[v] = T;
     alpha[v] = 1;
   }
+  /* positions exactly wall + t d from here on, so going back to an old t
+   * gives back the old prism bit for bit */
+  pr_set_top(p, t, d);
+  layer_quality(p, qold);
   mark_zone(p, 3, zone, tmp);
   for (int64_t v = 0; v < nw; v++)
     if (zone[v]) alpha[v] = 0.5;
@@ -144,13 +148,12 @@ int vm_prism_restore(vm_prism *p) {
     }
     mean_value_proj(p, d, tp);
     memcpy(told, t, (size_t)nw * sizeof *t);
-    layer_quality(p, qold);
     double change = 0;
     for (int64_t v = 0; v < nw; v++) {
       double goal = p->cap[v] < T ? p->cap[v] : T;
-      /* near cuts: one Laplace-Beltrami step (mean-value weights) of the
-       * offset surface along the side edge, then restoration towards T */
-      double s = zone[v] ? 0.5 * (t[v] + tp[v]) : t[v];
+      /* cut columns: one Laplace-Beltrami step (mean-value weights) of the
+       * offset surface along the side edge; all: restoration towards T */
+      double s = p->cut[v] ? 0.5 * (t[v] + tp[v]) : t[v];
       double nt = s + alpha[v] * (goal - s);
       if (nt > goal) nt = goal;
       if (nt < 0.5 * t[v]) nt = 0.5 * t[v];

@@ -19,11 +19,11 @@
 vm_adapt_opts vm_adapt_opts_default(void) {
   vm_adapt_opts o;
   memset(&o, 0, sizeof o);
-  o.c = -2.0;
+  o.c = -4.0;
   o.filter.threshold = -4.0;
   o.filter.cap = -1.0;
   o.filter.smooth = 2;
-  o.feature_angle = 40.0;
+  o.feature_angle = 20.0;
   o.corner_angle = 50.0;
   o.theta = 0.8;
   o.max_iter = 200;
@@ -255,7 +255,7 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   prm.theta = o.theta;
   if ((st = vm_problem_set_measure(prob, VM_MEASURE_BALANCED, &prm))) goto done;
   adapt_state as = {m, prob, hproj, Href, c, g, Hx, sqrt(3.0) / 4.0};
-  if ((st = vm_minimizer_create(ctx, prob, VM_MINIMIZER_EXPLICIT, &mz))) goto done;
+  if ((st = vm_minimizer_create(ctx, prob, o.implicit ? VM_MINIMIZER_IMPLICIT : VM_MINIMIZER_EXPLICIT, &mz))) goto done;
   if ((st = vm_minimizer_set_surfaces(mz, &ops))) goto done;
   monitor_state ms = {&o, 0, 0};
   int per_round = (o.max_iter + o.rounds - 1) / o.rounds;
@@ -267,6 +267,7 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
     mo.rel_decrease_tol = 1e-7;
     mo.grad_rtol = 1e-8;
     mo.stats_every = 0;
+    mo.precond = VM_PRECOND_JACOBI;
     if (o.time_limit > 0) {
       double left = o.time_limit - (omp_get_wtime() - t0);
       if (left <= 0) {

@@ -14,11 +14,13 @@
 #include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <set>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -43,6 +45,7 @@ typedef std::vector<std::size_t> Polygon;
 // What orient_polygon_soup met on the way (the visitor is copied by CGAL,
 // so it records through a pointer).
 struct OrientLog {
+  std::set<std::pair<std::size_t, std::size_t>> nm_edge_set;
   std::size_t nm_edges = 0, nm_vertices = 0, duplicated = 0, reversed = 0;
   std::size_t edge_a = 0, edge_b = 0, edge_n = 0, vertex = 0;
 };
@@ -50,6 +53,8 @@ struct OrientVisitor : public PMP::Default_orientation_visitor {
   OrientLog *log;
   explicit OrientVisitor(OrientLog *l) : log(l) {}
   void non_manifold_edge(std::size_t a, std::size_t b, std::size_t n) {
+    // reported once per polygon on the edge: count each edge once
+    if (!log->nm_edge_set.insert(std::make_pair(std::min(a, b), std::max(a, b))).second) return;
     if (!log->nm_edges++) {
       log->edge_a = a;
       log->edge_b = b;
@@ -167,6 +172,21 @@ bool to_surface_mesh(const vm_mesh *m, SMesh &sm, int64_t *bad_elem) {
   return true;
 }
 
+// Faces whose doubled area is below 1e-12 times the squared longest edge.
+std::size_t numerically_degenerate(const SMesh &sm) {
+  std::size_t n = 0;
+  for (face_descriptor f : sm.faces()) {
+    halfedge_descriptor h = sm.halfedge(f);
+    const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)),
+                &c = sm.point(sm.target(sm.next(h)));
+    K::Vector_3 u = b - a, v = c - a, w = c - b;
+    double l2 = std::max({u.squared_length(), v.squared_length(), w.squared_length()});
+    double a2 = std::sqrt(CGAL::cross_product(u, v).squared_length());
+    if (!(a2 > 1e-12 * l2)) n++;
+  }
+  return n;
+}
+
 Point face_centroid(const SMesh &sm, face_descriptor f) {
   double s[3] = {0, 0, 0};
   int n = 0;
@@ -194,6 +214,7 @@ extern "C" vm_remesh_opts vm_remesh_opts_default(void) {
   o.target_edge_length = 0;
   o.iterations = 5;
   o.relaxation_steps = 1;
+  o.keep_angle = 10;
   return o;
 }
 
@@ -247,9 +268,27 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   PMP::polygon_soup_to_polygon_mesh(pts, polys, sm);
   PMP::triangulate_faces(sm);
   r.stitched = static_cast<int64_t>(PMP::stitch_borders(sm));
-  const std::size_t nf_before = sm.number_of_faces();
-  PMP::remove_degenerate_faces(sm);
-  r.removed_degenerate = static_cast<int64_t>(nf_before) - static_cast<int64_t>(sm.number_of_faces());
+  {
+    std::vector<face_descriptor> deg;
+    PMP::degenerate_faces(sm, std::back_inserter(deg));
+    r.removed_degenerate = static_cast<int64_t>(deg.size());
+    if (!deg.empty() && !PMP::remove_degenerate_faces(sm))
+      return vm_error(ctx, VM_ERR_FORMAT,
+                      "repair: %zu zero-area faces could not all be removed", deg.size());
+    // faces of zero area to working precision (not exactly collinear after
+    // rounding): caps within 1e-6 rad of 180 degrees, needles of ratio 1e8
+    std::size_t ndeg = numerically_degenerate(sm);
+    if (ndeg > 0) {
+      r.removed_degenerate += static_cast<int64_t>(ndeg);
+      PMP::experimental::remove_almost_degenerate_faces(sm, -1.0 + 5e-13, 1e8, 0.0);
+      std::size_t left = numerically_degenerate(sm);
+      if (left > 0)
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "repair: %zu faces of zero area (to working precision) could not be "
+                        "removed",
+                        left);
+    }
+  }
   r.removed_isolated += static_cast<int64_t>(PMP::remove_isolated_vertices(sm));
   sm.collect_garbage();
   if (sm.number_of_faces() == 0)
@@ -283,7 +322,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     halfedge_descriptor h = cycles.front();
     const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h));
     return vm_error(ctx, VM_ERR_FORMAT,
-                    "open surface: %lld border edges around %lld holes; e.g. the border edge "
+                    "open surface: %lld border edges around %lld hole(s); e.g. the border edge "
                     "(%g, %g, %g)-(%g, %g, %g)",
                     static_cast<long long>(r.border_edges), static_cast<long long>(r.holes), a.x(),
                     a.y(), a.z(), b.x(), b.y(), b.z());
@@ -374,7 +413,7 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
   if (!m || !o) return VM_ERR_ARG;
   vm_ctx *ctx = m->ctx;
   if (!(o->target_edge_length > 0) || !std::isfinite(o->target_edge_length) ||
-      o->iterations < 1 || o->relaxation_steps < 0)
+      o->iterations < 1 || o->relaxation_steps < 0 || !(o->keep_angle >= 0))
     return vm_error(ctx, VM_ERR_ARG, "remesh: target edge length %g, %d iterations",
                     o->target_edge_length, o->iterations);
   if (f && f->nv != m->nv)
@@ -388,6 +427,7 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
                     static_cast<long long>(bad));
   auto ecm = sm.add_property_map<edge_descriptor, bool>("e:vm_constrained", false).first;
   auto vcm = sm.add_property_map<vertex_descriptor, bool>("v:vm_constrained", false).first;
+  auto vcorner = sm.add_property_map<vertex_descriptor, bool>("v:vm_corner", false).first;
   if (f) {
     for (int64_t k = 0; k < f->nedge; k++) {
       halfedge_descriptor h = sm.halfedge(vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k])),
@@ -398,7 +438,28 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
       ecm[sm.edge(h)] = true;
     }
     for (int64_t v = 0; v < m->nv; v++)
-      if (f->vclass[v] == VM_FEATURE_CORNER) vcm[vertex_descriptor(static_cast<SMesh::size_type>(v))] = true;
+      if (f->vclass[v] == VM_FEATURE_CORNER)
+        vcm[vertex_descriptor(static_cast<SMesh::size_type>(v))] =
+            vcorner[vertex_descriptor(static_cast<SMesh::size_type>(v))] = true;
+    // line vertices where the line bends: kept, so collapses only straighten
+    // nearly straight stretches (the chord error stays small)
+    std::vector<std::vector<int32_t>> nb(static_cast<std::size_t>(m->nv));
+    for (int64_t k = 0; k < f->nedge; k++) {
+      nb[static_cast<std::size_t>(f->edge[2 * k])].push_back(f->edge[2 * k + 1]);
+      nb[static_cast<std::size_t>(f->edge[2 * k + 1])].push_back(f->edge[2 * k]);
+    }
+    const double ckeep = std::cos(o->keep_angle * 3.14159265358979323846 / 180);
+    for (int64_t v = 0; v < m->nv; v++) {
+      const std::vector<int32_t> &n = nb[static_cast<std::size_t>(v)];
+      if (f->vclass[v] != VM_FEATURE_LINE || n.size() != 2) continue;
+      const double *p = m->xyz + 3 * v, *a = m->xyz + 3 * static_cast<int64_t>(n[0]),
+                   *b = m->xyz + 3 * static_cast<int64_t>(n[1]);
+      double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]}, w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
+      double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      double lw = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+      if (lu > 0 && lw > 0 && (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (lu * lw) < ckeep)
+        vcm[vertex_descriptor(static_cast<SMesh::size_type>(v))] = true;
+    }
   }
   PMP::isotropic_remeshing(faces(sm), o->target_edge_length, sm,
                            CGAL::parameters::number_of_iterations(static_cast<unsigned>(o->iterations))
@@ -406,8 +467,11 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
                                .edge_is_constrained_map(ecm)
                                .vertex_is_constrained_map(vcm)
                                .protect_constraints(false)
+                               .collapse_constraints(true)
                                .relax_constraints(false));
   sm.collect_garbage();
+  // Feature vertices are not relaxed along their lines: CGAL 5.5 then also
+  // moves constrained vertices (corners).
   // the new mesh's features: constrained edges and corners, in the new numbering
   std::vector<int32_t> fe;
   std::vector<uint8_t> corner(sm.number_of_vertices(), 0);
@@ -417,7 +481,7 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
       fe.push_back(static_cast<int32_t>(sm.target(sm.halfedge(e)).idx()));
     }
   for (vertex_descriptor v : sm.vertices())
-    if (vcm[v]) corner[v.idx()] = 1;
+    if (vcorner[v]) corner[v.idx()] = 1;
   int st = replace_mesh(m, sm);
   if (st) return st;
   if (f) {

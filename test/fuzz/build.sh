@@ -30,7 +30,7 @@ common=(-std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -fno-omit-frame-pointer
         -I"$root/lib/include" -I"$root/lib/src" -I"$root/surface/include")
 san=(-fsanitize=address,undefined -fno-sanitize-recover=all)
 read -r -a extra <<<"${FUZZ_CFLAGS:-}"
-common+=("${extra[@]}")
+san+=("${extra[@]}") # last, so that they can turn sanitizer checks off
 
 mkdir -p "$out/obj-fuzz" "$out/obj-san"
 # library objects twice: with fuzzer coverage (for the harnesses) and without

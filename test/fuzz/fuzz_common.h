@@ -1,14 +1,17 @@
 /* test/fuzz/fuzz_common.h: what a fuzzed reader must do, shared by the
  * libFuzzer entry point (fuzz_reader.c) and the corpus replay (replay.c):
- * read one buffer through vm_mesh_read_memory, then check the contract. */
+ * read one buffer through vm_mesh_read_memory, then check the contract, and
+ * that what was read survives a round trip through .vmsh and .vmsht. */
 #ifndef VM_FUZZ_COMMON_H
 #define VM_FUZZ_COMMON_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "varmesh/ctx.h"
 #include "varmesh/io.h"
@@ -50,6 +53,90 @@ static inline void vm_fuzz_discard_log(void *user, int level, const char *msg) {
   (void)msg;
 }
 
+/* A private directory for round-trip files (in /dev/shm when there is one),
+ * removed at exit. */
+static void vm_fuzz_rmdir(void);
+static char vm_fuzz_dir[64];
+static void vm_fuzz_rmdir(void) { rmdir(vm_fuzz_dir); }
+static inline const char *vm_fuzz_tmpdir(void) {
+  if (!vm_fuzz_dir[0]) {
+    strcpy(vm_fuzz_dir, "/dev/shm/vm-fuzz-XXXXXX");
+    if (!mkdtemp(vm_fuzz_dir)) {
+      strcpy(vm_fuzz_dir, "/tmp/vm-fuzz-XXXXXX");
+      VM_FUZZ_REQUIRE(mkdtemp(vm_fuzz_dir) != NULL, "cannot make a temporary directory");
+    }
+    atexit(vm_fuzz_rmdir);
+  }
+  return vm_fuzz_dir;
+}
+
+/* Are the f64 values the same bits, or (nan_payload_free) NaNs of one sign?
+ * (.vmsht keeps the sign of a NaN but not its payload: docs/vmsh.md.) */
+static inline int vm_fuzz_same_f64(const double *x, const double *y, size_t n,
+                                   int nan_payload_free) {
+  if (!n || !memcmp(x, y, n * sizeof *x)) return 1;
+  for (size_t i = 0; i < n; i++) {
+    if (!memcmp(&x[i], &y[i], sizeof *x)) continue;
+    if (!nan_payload_free || !isnan(x[i]) || !isnan(y[i]) || !signbit(x[i]) != !signbit(y[i]))
+      return 0;
+  }
+  return 1;
+}
+
+/* NULL if b is a bit for bit copy of a, else what differs. */
+static inline const char *vm_fuzz_mesh_diff(const vm_mesh *a, const vm_mesh *b,
+                                            int nan_payload_free) {
+  if (a->dim != b->dim) return "dim";
+  if (a->nv != b->nv || a->ne != b->ne) return "counts";
+  if (a->nfield != b->nfield) return "number of fields";
+  if (a->nattr != b->nattr) return "number of attributes";
+  size_t nv = (size_t)a->nv, ne = (size_t)a->ne, nc = (size_t)a->eoff[a->ne];
+  if (nv && memcmp(a->xyz, b->xyz, 3 * nv * sizeof *a->xyz)) return "coordinates";
+  if (nv && memcmp(a->vflag, b->vflag, nv * sizeof *a->vflag)) return "vertex flags";
+  if (nv && memcmp(a->vsurf, b->vsurf, nv * sizeof *a->vsurf)) return "slip surface ids";
+  if (ne && (memcmp(a->etype, b->etype, ne * sizeof *a->etype) ||
+             memcmp(a->eoff, b->eoff, (ne + 1) * sizeof *a->eoff)))
+    return "element types";
+  if (nc && memcmp(a->conn, b->conn, nc * sizeof *a->conn)) return "connectivity";
+  for (int i = 0; i < a->nfield; i++) {
+    const vm_field *f = &a->fields[i], *g = &b->fields[i];
+    if (strcmp(f->name, g->name)) return "field name";
+    if (f->location != g->location || f->type != g->type || f->ncomp != g->ncomp)
+      return "field location, type or components";
+    size_t n = (size_t)vm_field_count(a, f) * (size_t)f->ncomp;
+    if (f->type == VM_FIELD_F64 ? !vm_fuzz_same_f64(f->data, g->data, n, nan_payload_free)
+                                : n && memcmp(f->data, g->data, n * sizeof(int32_t)))
+      return "field values";
+  }
+  for (int i = 0; i < a->nattr; i++) {
+    if (strcmp(a->attrs[i].key, b->attrs[i].key)) return "attribute key";
+    if (strcmp(a->attrs[i].value, b->attrs[i].value)) return "attribute value";
+  }
+  return NULL;
+}
+
+/* Whatever a reader accepts, the native formats must carry exactly: write m
+ * as .vmsh and .vmsht and read it back, bit for bit. */
+static inline void vm_fuzz_roundtrip(vm_ctx *ctx, const vm_mesh *m) {
+  static const int fmts[2] = {VM_FMT_VMSH, VM_FMT_VMSH_TEXT};
+  for (int k = 0; k < 2; k++) {
+    char path[128];
+    snprintf(path, sizeof path, "%s/rt.%s", vm_fuzz_tmpdir(), k ? "vmsht" : "vmsh");
+    int st = vm_mesh_write(ctx, m, path, fmts[k], NULL);
+    if (st != VM_OK) fprintf(stderr, "fuzz: round trip: write: %d %s\n", st, vm_ctx_error(ctx));
+    VM_FUZZ_REQUIRE(st == VM_OK, "a mesh the reader accepted cannot be written losslessly");
+    vm_mesh *b = NULL;
+    st = vm_mesh_read(ctx, path, fmts[k], &b);
+    remove(path);
+    if (st != VM_OK) fprintf(stderr, "fuzz: round trip: read: %d %s\n", st, vm_ctx_error(ctx));
+    VM_FUZZ_REQUIRE(st == VM_OK, "the native format does not read back what it wrote");
+    const char *diff = vm_fuzz_mesh_diff(m, b, fmts[k] == VM_FMT_VMSH_TEXT);
+    if (diff) fprintf(stderr, "fuzz: round trip through %s: %s differ\n", path, diff);
+    VM_FUZZ_REQUIRE(!diff, "the native format changed the mesh");
+    vm_mesh_destroy(&b);
+  }
+}
+
 /* One read with allocation `fail_at` failing (0: none). Returns the status;
  * *nalloc receives the number of allocations made. Checks: a status of 0 or
  * negative (readers give no warnings), a mesh exactly on success, a
@@ -73,6 +160,7 @@ static inline int vm_fuzz_read(const vm_fuzz_reader *r, const uint8_t *data, siz
     VM_FUZZ_REQUIRE(m->ctx == ctx, "mesh bound to another context");
     VM_FUZZ_REQUIRE(m->dim == 2 || m->dim == 3, "mesh dimension");
     VM_FUZZ_REQUIRE(vm_mesh_check(m) == VM_OK, "mesh invariants");
+    if (fail_at == 0) vm_fuzz_roundtrip(ctx, m);
     vm_mesh_destroy(&m);
     VM_FUZZ_REQUIRE(m == NULL, "destroy did not clear the handle");
   } else {

@@ -353,12 +353,26 @@ end_header
 5 0 1 4 2 3 6
 """
 
+def vtk_binary_nan():
+    """Legacy VTK binary (big-endian) with NaN payloads, -NaN, -0 and a
+    subnormal in a point field: round trips through .vmsht keep the sign of
+    a NaN but not its payload."""
+    pts = struct.pack(">12d", 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1)
+    vals = struct.pack(">Q", 0x7FF8000000000001) + struct.pack(">Q", 0xFFF0000000000123) + \
+        struct.pack(">d", -0.0) + struct.pack(">Q", 1)
+    return (b"# vtk DataFile Version 3.0\nnan payloads\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
+            b"POINTS 4 double\n" + pts + b"\nCELLS 1 5\n" + struct.pack(">5i", 4, 0, 1, 2, 3) +
+            b"\nCELL_TYPES 1\n" + struct.pack(">i", 10) +
+            b"\nPOINT_DATA 4\nSCALARS w double 1\nLOOKUP_TABLE default\n" + vals + b"\n")
+
+
 put("vtu", "zlib-inline-u64", vtu_zlib(False, "Q"))
 put("vtu", "zlib-appended-u32", vtu_zlib(True, "I"))
 put("vtu", "ascii-bigendian", VTU_ASCII)
 put("vtu", "appended-raw", vtu_raw())
 put("vtk", "polydata", VTK_POLY)
 put("vtk", "v51-offsets", VTK_51)
+put("vtk", "binary-nan-payload", vtk_binary_nan())
 put("medit", "keywords", MEDIT_KW)
 put("medit", "planar", MEDIT_2D)
 put("msh", "v41-entities", MSH41_ENT)

@@ -212,4 +212,148 @@ fail:
   return st;
 }
 
+/* Closed unit cube [0,1]^3, n x n squares per face, each split into two
+ * triangles; outward orientation. */
+static inline int shp_cube(vm_ctx *ctx, int n, vm_mesh **out) {
+  vm_mesh *m = NULL;
+  int st = vm_mesh_create(ctx, &m);
+  if (st) return st;
+  /* vertices on the surface of the (n+1)^3 lattice */
+  int N = n + 1;
+  int32_t *id = malloc(sizeof *id * (size_t)N * N * N);
+  for (int i = 0; i < N; i++)
+    for (int j = 0; j < N; j++)
+      for (int k = 0; k < N; k++) {
+        int32_t *p = id + (i * N + j) * N + k;
+        *p = -1;
+        if (i == 0 || j == 0 || k == 0 || i == n || j == n || k == n) {
+          int64_t v;
+          if ((st = vm_mesh_add_vertex(m, (double)i / n, (double)j / n, (double)k / n, &v)))
+            goto fail;
+          *p = (int32_t)v;
+        }
+      }
+  /* faces: axis a fixed at side s; (u, v) the other two axes with u x v = +e_a */
+  for (int a = 0; a < 3; a++)
+    for (int side = 0; side < 2; side++) {
+      int u = (a + 1) % 3, w = (a + 2) % 3;
+      for (int p = 0; p < n; p++)
+        for (int q = 0; q < n; q++) {
+          int c[4][3];
+          int du[4] = {0, 1, 1, 0}, dw[4] = {0, 0, 1, 1};
+          for (int r = 0; r < 4; r++) {
+            c[r][a] = side * n;
+            c[r][u] = p + du[r];
+            c[r][w] = q + dw[r];
+          }
+          int32_t v[4];
+          for (int r = 0; r < 4; r++) v[r] = id[(c[r][0] * N + c[r][1]) * N + c[r][2]];
+          int32_t t1[3] = {v[0], v[1], v[2]}, t2[3] = {v[0], v[2], v[3]};
+          if (!side) { /* normal -e_a: reverse */
+            t1[1] = v[2], t1[2] = v[1];
+            t2[1] = v[3], t2[2] = v[2];
+          }
+          if ((st = vm_mesh_add_element(m, VM_TRI, t1)) || (st = vm_mesh_add_element(m, VM_TRI, t2)))
+            goto fail;
+        }
+    }
+  free(id);
+  *out = m;
+  return VM_OK;
+fail:
+  free(id);
+  vm_mesh_destroy(&m);
+  return st;
+}
+
+/* Stitch ring a (na vertices from a0, angles 2 pi (i + oa) / na) to ring b
+ * (outer, nb from b0) with triangles oriented along +z x radial (flip: the
+ * other way), advancing on the ring whose next angle is smaller. */
+static inline int shp_stitch(vm_mesh *m, int32_t a0, int na, double oa, int32_t b0, int nb,
+                             double ob, int flip) {
+  int i = 0, k = 0, st = 0;
+  while (i < na || k < nb) {
+    double an = 2 * M_PI * (i + 1 + oa) / na, bn = 2 * M_PI * (k + 1 + ob) / nb;
+    int32_t A = a0 + i % na, B = b0 + k % nb, t[3];
+    if (k >= nb || (i < na && an < bn)) {
+      t[0] = A, t[1] = B, t[2] = a0 + (i + 1) % na;
+      i++;
+    } else {
+      t[0] = A, t[1] = B, t[2] = b0 + (k + 1) % nb;
+      k++;
+    }
+    if (flip) {
+      int32_t s = t[1];
+      t[1] = t[2];
+      t[2] = s;
+    }
+    if ((st = vm_mesh_add_element(m, VM_TRI, t))) return st;
+  }
+  return VM_OK;
+}
+
+/* A lens: two spherical caps of radius R, centres (0, 0, -d) (upper cap,
+ * z >= 0) and (0, 0, d) (lower), meeting at the sharp circular ridge
+ * z = 0, r = sqrt(R^2 - d^2), where the normals turn by 2 asin(d/R).
+ * Rings of nearly equilateral triangles of edge about h; outward. */
+static inline int shp_lens(vm_ctx *ctx, double R, double d, double h, vm_mesh **out) {
+  vm_mesh *m = NULL;
+  int st = vm_mesh_create(ctx, &m);
+  if (st) return st;
+  double phim = acos(d / R);
+  int nr = (int)ceil(R * phim / h);
+  int *cnt = malloc(sizeof *cnt * (size_t)(nr + 1));
+  int32_t *start = malloc(sizeof *start * (size_t)(2 * nr + 1));
+  double *off = malloc(sizeof *off * (size_t)(2 * nr + 1));
+  for (int j = 1; j <= nr; j++) {
+    double rj = R * sin(phim * j / nr);
+    cnt[j] = (int)fmax(6, round(2 * M_PI * rj / h));
+  }
+  /* ring index r = 0..2nr-2: upper rings j = 1..nr then lower j = nr-1..1 */
+  int nring = 2 * nr - 1;
+  int64_t v;
+  for (int r = 0; r < nring; r++) {
+    int j = r < nr ? r + 1 : 2 * nr - 1 - r;
+    double sgn = r < nr ? 1 : -1;
+    double phi = phim * j / nr, rr = R * sin(phi), z = j == nr ? 0.0 : sgn * (R * cos(phi) - d);
+    off[r] = 0.5 * (j % 2);
+    start[r] = (int32_t)m->nv;
+    for (int i = 0; i < cnt[j]; i++) {
+      double th = 2 * M_PI * (i + off[r]) / cnt[j];
+      if ((st = vm_mesh_add_vertex(m, rr * cos(th), rr * sin(th), z, &v))) goto fail;
+    }
+  }
+  int64_t top, bot;
+  if ((st = vm_mesh_add_vertex(m, 0, 0, R - d, &top)) ||
+      (st = vm_mesh_add_vertex(m, 0, 0, -(R - d), &bot)))
+    goto fail;
+  for (int i = 0; i < cnt[1]; i++) { /* pole fans */
+    int32_t t1[3] = {(int32_t)top, start[0] + i, start[0] + (i + 1) % cnt[1]};
+    int32_t t2[3] = {(int32_t)bot, start[nring - 1] + (i + 1) % cnt[1], start[nring - 1] + i};
+    if ((st = vm_mesh_add_element(m, VM_TRI, t1)) || (st = vm_mesh_add_element(m, VM_TRI, t2)))
+      goto fail;
+  }
+  for (int r = 0; r + 1 < nr; r++) { /* upper: ring r inside ring r+1 */
+    int ja = r + 1, jb = r + 2;
+    if ((st = shp_stitch(m, start[r], cnt[ja], off[r], start[r + 1], cnt[jb], off[r + 1], 0)))
+      goto fail;
+  }
+  for (int r = nr; r < nring; r++) { /* lower: ring r inside ring r-1 */
+    int ja = 2 * nr - 1 - r, jb = ja + 1;
+    if ((st = shp_stitch(m, start[r], cnt[ja], off[r], start[r - 1], cnt[jb], off[r - 1], 1)))
+      goto fail;
+  }
+  free(cnt);
+  free(start);
+  free(off);
+  *out = m;
+  return VM_OK;
+fail:
+  free(cnt);
+  free(start);
+  free(off);
+  vm_mesh_destroy(&m);
+  return st;
+}
+
 #endif

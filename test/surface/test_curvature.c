@@ -76,7 +76,7 @@ static void accuracy_table(vm_ctx *ctx) {
       double jit = 0.1 * ij;
       for (int smooth = 0; smooth <= (ij ? 2 : 0); smooth += 2) {
         err_t prev = {0, 0};
-        for (int nu = 32; nu <= 512; nu *= 2) {
+        for (int nu = 32; nu <= (ij ? 256 : 512); nu *= 2) {
           err_t e = torus_err(ctx, nu, kind, jit, smooth);
           double order = prev.rms > 0 ? log2(prev.rms / e.rms) : NAN;
           char size[32];
@@ -102,7 +102,7 @@ static void accuracy_table(vm_ctx *ctx) {
   for (int ij = 0; ij < 3; ij++) {
     double jit = 0.1 * ij;
     err_t prev = {0, 0};
-    for (int level = 2; level <= 6; level++) {
+    for (int level = 2; level <= (ij ? 5 : 6); level++) {
       err_t e = sphere_err(ctx, level, jit, 0);
       double order = prev.rms > 0 ? log2(prev.rms / e.rms) : NAN;
       char size[32];

@@ -199,6 +199,12 @@ static int run_phase(ut_state *s, const char *phase, vm_minimizer_kind kind, int
     mo.time_limit = o->time_limit - (now() - s->t0);
     if (mo.time_limit <= 0) mo.time_limit = 1e-3;
   }
+  if (kind == VM_MINIMIZER_NEWTON) {
+    /* the coupled 3n system: block Jacobi beats the block AMG per second
+     * while the Hessian changes fast (untangling) */
+    mo.precond = VM_PRECOND_BLOCK_JACOBI;
+    mo.pcg_maxit = 200;
+  }
   mo.monitor = monitor;
   mo.before_iteration = hook;
   mo.user = s;

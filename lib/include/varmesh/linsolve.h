@@ -35,7 +35,9 @@ void vm_csr_matvec(vm_ctx *ctx, const vm_csr *A, const double *x, double *y);
 typedef enum {
   VM_PRECOND_NONE = 0,   /* identity */
   VM_PRECOND_JACOBI = 1, /* inverse diagonal */
-  VM_PRECOND_AMG = 2     /* smoothed-aggregation algebraic multigrid V-cycle */
+  VM_PRECOND_AMG = 2,    /* smoothed-aggregation algebraic multigrid V-cycle */
+  VM_PRECOND_BLOCK_JACOBI = 3 /* inverse 3x3 diagonal blocks: unknowns 3i, 3i+1,
+                                 3i+2 form block i (n a multiple of 3) */
 } vm_precond_kind;
 
 /* AMG parameters. strength: a_ij is a strong connection when
@@ -53,10 +55,16 @@ typedef struct vm_amg_options {
   int update_coarse; /* vm_precond_update: 1 recompute the coarse operators
                         (Galerkin), 0 keep them (only the finest smoother
                         follows the new matrix) */
+  int block_size;    /* 1 (default): scalar aggregation; 3: unknowns 3i..3i+2
+                        are the coordinates of one node (n a multiple of 3):
+                        nodes are aggregated by the Frobenius norms of the
+                        3x3 blocks and each coordinate is coarsened on its
+                        own within a node aggregate ("unknown-based"), so
+                        every level keeps the 3x3 block structure */
 } vm_amg_options;
 
 /* Defaults: strength 0.25, smoothed, 1 sweep, coarse_size 400, 12 levels,
- * update_coarse 1. */
+ * update_coarse 1, block_size 1. */
 vm_amg_options vm_amg_options_default(void);
 
 /* A preconditioner: an opaque object with a table of operations chosen

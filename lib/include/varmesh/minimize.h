@@ -18,7 +18,14 @@ extern "C" {
 
 typedef enum {
   VM_MINIMIZER_EXPLICIT = 0, /* H_ij = 0 for i != j (34) */
-  VM_MINIMIZER_IMPLICIT = 1  /* off-diagonal entries of the 3x3 blocks dropped */
+  VM_MINIMIZER_IMPLICIT = 1, /* off-diagonal entries of the 3x3 blocks dropped */
+  VM_MINIMIZER_NEWTON = 2    /* full 3x3 blocks of the Hessian, each node's part
+                                projected to positive semidefinite, one coupled
+                                system (3 unknowns per vertex) by PCG with a
+                                block preconditioner (precond AMG: block AMG
+                                aggregating vertices; JACOBI or BLOCK_JACOBI:
+                                3x3 block Jacobi), plus a Levenberg-Marquardt
+                                shift adapted from the line search */
 } vm_minimizer_kind;
 
 /* Why a run stopped. */
@@ -42,7 +49,8 @@ typedef struct vm_iter_info {
   double tau;          /* accepted step length */
   int ls_evals;        /* functional evaluations of the line search */
   int ls_infeasible;   /* of those, trial points outside the measure's domain (F = +inf) */
-  int pcg_iters;       /* implicit: CG iterations summed over the coordinate systems */
+  int pcg_iters;       /* implicit: CG iterations summed over the coordinate systems;
+                          newton: CG iterations of the coupled system */
   double elapsed;      /* seconds since vm_minimizer_run started */
   int64_t inverted;    /* quadrature nodes with det C <= 0 after the step (-1: not computed) */
   double min_det;      /* min det C over all nodes after the step (NAN: not computed) */
@@ -66,10 +74,12 @@ typedef struct vm_minimize_options {
   double armijo;           /* sufficient decrease constant c1 (default 1e-4) */
   int ls_max_evals;        /* evaluations per line search (default 40) */
   int ls_extrapolate;      /* tries of a longer step after tau = 1 passed (default 2) */
-  /* implicit minimizer */
+  /* implicit and newton minimizers */
   double pcg_rtol;         /* relative residual of the inexact Newton step (default 1e-2) */
   int pcg_maxit;           /* CG iteration cap per system (default 100) */
-  vm_precond_kind precond; /* default VM_PRECOND_AMG */
+  vm_precond_kind precond; /* default VM_PRECOND_AMG (newton: block AMG, vertices
+                              aggregated; JACOBI means block Jacobi there, and
+                              BLOCK_JACOBI means Jacobi for implicit) */
   vm_amg_options amg;      /* AMG parameters (vm_amg_options_default, but
                               update_coarse 0) */
   int amg_rebuild_every;   /* new AMG hierarchy every k-th iteration, vm_precond_update
@@ -112,7 +122,7 @@ const vm_minimize_options *vm_minimizer_options(const vm_minimizer *m);
 /* Constraint surfaces for the SLIP vertices of the problem's mesh
  * (copied; NULL removes them). */
 int vm_minimizer_set_surfaces(vm_minimizer *m, const vm_surface_ops *surf);
-/* The family member's name: "explicit" or "implicit". */
+/* The family member's name: "explicit", "implicit" or "newton". */
 const char *vm_minimizer_name(const vm_minimizer *m);
 
 /* Minimize F over x (3*nv, in/out; e.g. the mesh's own xyz). Vertex

@@ -94,6 +94,41 @@ typedef struct vm_eval {
 } vm_eval;
 int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out);
 
+/* Newton's method: F, the gradient and the full Hessian in 3x3 blocks.
+ *   F, grad  as vm_eval;
+ *   hdiag    9*nv, the diagonal blocks H_vv (row-major);
+ *   hblk     9 per entry of the vertex graph (vm_problem_graph), u != v:
+ *            the full block H_uv (row-major, rows: u's coordinates) at the
+ *            position of v in u's row, so H_vu = H_uv^T.
+ * With psd != 0 the Hessian of W with respect to C at every node is first
+ * projected to positive semidefinite (its negative eigenvalues set to 0,
+ * see vm_measure_hessian_psd), so the assembled H is positive semidefinite;
+ * where nothing is clamped it is the exact Hessian. Outputs may be NULL.
+ * Same determinism, return values and scratch use as vm_problem_eval. */
+typedef struct vm_eval_blocks {
+  double *F;
+  double *grad;
+  double *hdiag;
+  double *hblk;
+  int psd;
+} vm_eval_blocks;
+int vm_problem_eval_blocks(vm_problem *p, const double *x, vm_eval_blocks *out);
+
+/* Which entries of the vertex graph can carry a nonzero Hessian block for
+ * the current rule: mask[k] = 1 if some node couples the two vertices
+ * (e.g. not the body diagonals of hexahedra under the corner rule), else
+ * 0; rowptr[nv] values. */
+int vm_problem_graph_coupled(const vm_problem *p, uint8_t *mask);
+
+/* The Hessian d2W/dC2 of one d x d Jacobian C (d = 2, 3; W, G, H as in
+ * vm_measure_eval) projected to positive semidefinite: in 3D through the
+ * analytic eigensystem of isotropic energies f(tr C^T C, det C) (twists,
+ * flips and the 3x3 scaling block at the signed SVD of C), in 2D by a dense
+ * eigen-decomposition; negative eigenvalues are set to 0. *nclamped (may be
+ * NULL) gets their number. Returns as vm_measure_eval. */
+int vm_measure_hessian_psd(const vm_measure_ops *ops, const vm_measure_params *prm, int d,
+                           const double *C, double *W, double *G, double *H, int *nclamped);
+
 /* F only, stopping early at the first node outside the domain (for line
  * searches). Same value as vm_problem_eval's F. */
 int vm_problem_value(vm_problem *p, const double *x, double *F);

@@ -49,6 +49,13 @@ typedef struct vm_quality {
  * a lone triangle cannot be inverted. opts may be NULL. */
 int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q);
 
+/* The same, and per element: sj[e] the scaled Jacobian and phi[e] the
+ * minimum of det C/(tr C^T C/d)^{d/2} over the element's quadrature
+ * simplices (rule of opts), NAN for elements not measured (not of the top
+ * dimension). sj and phi: m->ne doubles each, or NULL; q may be NULL. */
+int vm_mesh_element_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
+                            double *sj, double *phi);
+
 #ifdef __cplusplus
 }
 #endif

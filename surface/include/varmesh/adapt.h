@@ -31,20 +31,22 @@ typedef void (*vm_adapt_monitor_fn)(void *user, const vm_adapt_progress *p);
 
 typedef struct vm_adapt_opts {
   /* metric G_x = (1 + c |H|) I, H the filtered mean curvature; c in units
-   * of length. c < 0: automatic, c = -c * h (h the mean edge length), so
-   * the default -2 gives 1 + c|H| = 3 where |H| = 1/h. */
+   * of length. c < 0: relative, c = -c * h (h the mean edge length), so
+   * the default -4 gives 1 + c|H| = 5 where |H| = 1/h. */
   double c;
   /* filter of |H| (curvature.h). threshold < 0 / cap < 0: automatic,
    * |threshold| / D and |cap| / h (D the bounding box diagonal, h the mean
    * edge length): the defaults -4 and -1 zero out radii of curvature above
    * D/8 and cap radii below h. */
   vm_curvature_filter filter;
-  double feature_angle; /* dihedral angle of sharp edges, degrees (default 40) */
+  double feature_angle; /* dihedral angle of sharp edges, degrees (default 20: the
+                           creases of a faceted STL model are kept exactly) */
   double corner_angle;  /* turning angle of a feature line at a corner (default 50) */
   double theta;         /* balanced measure weight (default 0.8) */
   int max_iter;         /* minimizer iterations in all (default 200) */
   int rounds;           /* the metric is re-evaluated at the moved vertices and the
                            reference normals refreshed this many times (default 5) */
+  int implicit;         /* 1: the implicit minimizer, 0: the explicit one (default) */
   double time_limit;    /* seconds, <= 0: none */
   vm_adapt_monitor_fn monitor;
   void *user;

@@ -30,7 +30,7 @@ typedef struct vm_repair_report {
   int64_t nv, nf;                /* after (triangles) */
   int64_t merged_vertices;       /* duplicate points merged */
   int64_t removed_polygons;      /* duplicate or invalid (repeated vertex) faces removed */
-  int64_t removed_degenerate;    /* zero-area faces removed (net face count change) */
+  int64_t removed_degenerate;    /* zero-area faces found and removed (by edge collapses/flips) */
   int64_t removed_isolated;      /* vertices used by no face */
   int64_t reoriented;            /* faces whose orientation was reversed */
   int64_t stitched;              /* border edge pairs stitched */
@@ -68,6 +68,8 @@ typedef struct vm_remesh_opts {
   double target_edge_length; /* > 0 */
   int iterations;            /* (default 5) */
   int relaxation_steps;      /* tangential relaxation per iteration (default 1) */
+  double keep_angle;         /* feature-line vertices where the line turns by more than
+                                this (degrees, default 10) are kept like corners */
 } vm_remesh_opts;
 
 vm_remesh_opts vm_remesh_opts_default(void);
@@ -75,9 +77,10 @@ vm_remesh_opts vm_remesh_opts_default(void);
 /* Isotropic remeshing (CGAL PMP::isotropic_remeshing) of the triangle mesh
  * m in place to edge length o->target_edge_length, new vertices projected
  * onto the input surface. Features in f (of m; may be NULL) are protected:
- * feature edges are constrained (they may be split or collapsed along
- * their line, never flipped; their vertices move only along the line) and
- * corners never move. On success m holds the new mesh (fields and flags
+ * feature edges are constrained (split, or collapsed along their line,
+ * never flipped; their vertices never move off the line) and corners, and
+ * line vertices where the line turns by more than o->keep_angle, are kept
+ * in place (so a line loses only vertices where it is nearly straight). On success m holds the new mesh (fields and flags
  * dropped) and f, if given, the features of the new mesh (same corners,
  * the constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG
  * (not a closed-or-open manifold triangle mesh, bad options), VM_ERR_NOMEM,

@@ -1,0 +1,78 @@
+/* apps/cli_report.c: --report DIR for vm-quality and vm-volume. */
+#include "cli_report.h"
+
+#include <stdio.h>
+
+#include "varmesh/ctx.h"
+
+int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm_report **out) {
+  int st = vm_report_create(cli->ctx, dir, title, out);
+  if (st >= 0) return VM_EXIT_OK;
+  vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+  return st == VM_ERR_UNSUPPORTED ? VM_EXIT_USAGE : VM_EXIT_INPUT;
+}
+
+static int finish(const vm_cli *cli, vm_report **r, const char *dir, int st) {
+  if (st >= 0) st = vm_report_write(*r);
+  vm_report_destroy(r);
+  if (st < 0) {
+    vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+    return st == VM_ERR_ARG ? VM_EXIT_USAGE : VM_EXIT_INPUT; /* e.g. no such field */
+  }
+  if (!cli->quiet) fprintf(stderr, "%s: report in %s/index.html\n", cli->prog, dir);
+  return VM_EXIT_OK;
+}
+
+int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
+                          const vm_mesh *m, const vm_quality_opts *qo, const char *field) {
+  vm_report *r;
+  char title[512];
+  snprintf(title, sizeof title, "vm-quality: %s", path);
+  int rc = vm_cli_report_open(cli, dir, title, &r);
+  if (rc != VM_EXIT_OK) return rc;
+  int st = vm_report_heading(r, "input");
+  if (st >= 0) st = vm_report_row(r, "file", "%s", path);
+  if (st >= 0)
+    st = vm_report_row(r, "vertices, elements", "%lld, %lld", (long long)m->nv,
+                       (long long)m->ne);
+  if (st >= 0) st = vm_report_mesh(r, "", "quality", m, qo, field);
+  return finish(cli, &r, dir, st);
+}
+
+int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, const char *in,
+                         const char *out, const vm_mesh *before, const vm_mesh *after,
+                         const vm_report_history *hist, const vm_volume_opts *o,
+                         const vm_volume_report *rep) {
+  vm_report *rp = *r;
+  int st = vm_report_heading(rp, "run");
+  if (st >= 0) st = vm_report_row(rp, "input, output", "%s, %s", in, out);
+  if (st >= 0)
+    st = vm_report_row(rp, "vertices, elements, quadrature simplices", "%lld, %lld, %lld",
+                       (long long)after->nv, (long long)after->ne, (long long)rep->nodes);
+  if (st >= 0)
+    st = vm_report_row(rp, "untangling method, rule", "%s, %s",
+                       vm_untangle_method_name(o->method),
+                       o->rule == VM_RULE_GEOMETRIC ? "geometric" : "corner");
+  if (st >= 0)
+    st = vm_report_row(rp, "M: start, max, end", "%lld, %lld, %lld", (long long)rep->M_init,
+                       (long long)rep->M_max, (long long)rep->M_final);
+  if (st >= 0)
+    st = vm_report_row(rp, "iterations: untangling, local, optimization", "%d, %d, %d",
+                       rep->iter_untangle, rep->iter_local, rep->iter_opt);
+  if (st >= 0)
+    st = vm_report_row(rp, "time: untangled after, total", "%.2f s, %.2f s", rep->time_untangle,
+                       rep->time_total);
+  if (st >= 0)
+    st = vm_report_row(rp, "valid (M = 0)", "%s", rep->valid ? "yes" : "no");
+  if (st >= 0)
+    st = vm_report_convergence(rp, "convergence",
+                               "Convergence of the run: M (inverted quadrature simplices, log "
+                               "scale, 0 on the bottom edge), the functional F and epsilon per "
+                               "iteration; dashed lines separate the phases.",
+                               hist);
+  vm_quality_opts qo = {o->rule == VM_RULE_GEOMETRIC ? VM_RULE_GEOMETRIC : VM_RULE_CORNER,
+                        o->target_size};
+  if (st >= 0) st = vm_report_mesh(rp, "before-", "before", before, &qo, NULL);
+  if (st >= 0) st = vm_report_mesh(rp, "after-", "after", after, &qo, NULL);
+  return finish(cli, r, dir, st);
+}

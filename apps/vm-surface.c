@@ -1,0 +1,462 @@
+/* apps/vm-surface.c: the surface stage: repair an imported surface,
+ * remesh it uniformly when it needs it, compute its mean curvature and
+ * adapt the mesh to it with the 2D functional (20); or any step alone. */
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "varmesh/adapt.h"
+#include "varmesh/curvature.h"
+#include "varmesh/features.h"
+#include "varmesh/io.h"
+#include "varmesh/repair.h"
+
+static const char usage[] =
+    "usage: vm-surface [STEP] [options] IN OUT\n"
+    "The surface stage. STEP is one of\n"
+    "  all        (default) repair -> remesh (if needed) -> curvature -> adapt\n"
+    "  repair     repair only\n"
+    "  remesh     repair -> isotropic remeshing\n"
+    "  curvature  mean curvature fields only\n"
+    "  adapt      curvature -> curvature-adapted node movement (no remeshing)\n"
+    "OUT is written in the format of its extension (.vmsh keeps the curvature fields\n"
+    "'mean_curvature' and 'mean_curvature_filtered').\n"
+    "  --repair auto|yes|no    repair the input (auto: for .stl .obj .off .ply inputs,\n"
+    "                          and always for the steps all, repair and remesh)\n"
+    "  --open-ok               accept an open surface (borders become feature lines)\n"
+    "  --no-intersection-check skip the self-intersection check of the repair\n"
+    "  --remesh auto|yes|no    uniform remeshing in 'all' (auto: if the smallest angle\n"
+    "                          is below --sliver-angle)\n"
+    "  --sliver-angle DEG      (default 15)\n"
+    "  --target-edge-length L  remeshing edge length (default: the mean edge length)\n"
+    "  --remesh-iter N         remeshing iterations (default 5)\n"
+    "  --feature-angle DEG     dihedral angle of a sharp edge (default 20)\n"
+    "  --corner-angle DEG      turning angle of a feature line at a corner (default 50)\n"
+    "  --c C                   metric G = (1 + C|H|) I, C a length (default 4 h, h the\n"
+    "                          mean edge length); --c-rel K sets C = K h\n"
+    "  --threshold T           |H| < T -> 0 (default 4/D, D the bounding box diagonal)\n"
+    "  --cap X                 |H| > X -> X (default 1/h)\n"
+    "  --smooth N              smoothing passes of the curvature (default 2)\n"
+    "  --iter N                adaptation iterations in all (default 200)\n"
+    "  --rounds N              metric / normal updates during adaptation (default 5)\n"
+    "  --theta T               balanced measure weight (default 0.8)\n"
+    "  --implicit              implicit minimizer instead of the explicit one\n"
+    "  --time-limit S          seconds for the adaptation\n"
+    "  --threads N             OpenMP threads (results do not depend on it)\n"
+    "  --format F, --binary    output format; binary where the format has both\n"
+    "  --progress-every N      a progress line every N iterations (default 20)\n"
+    "  --json                  JSON summary on stdout\n"
+    "  -q, --quiet             no progress\n"
+    "  --help, --version\n"
+    "exit: 0 done; 1 bad input (what is wrong and where is printed) or I/O; 2 usage;\n"
+    "3 the adapted mesh has flipped elements; 4 interrupted (last iterate written)\n";
+
+static volatile int interrupted;
+
+static void on_signal(int sig) {
+  if (interrupted) _exit(128 + sig);
+  interrupted = 1;
+}
+
+typedef struct {
+  vm_cli *cli;
+  int every;
+} progress_state;
+
+static void progress(void *user, const vm_adapt_progress *p) {
+  progress_state *ps = user;
+  if (ps->cli->quiet || (p->iter % ps->every && p->iter != 1)) return;
+  fprintf(stderr, "vm-surface: adapt round %d it %5d  F %.8e  |grad| %.3e  tau %.2e  %7.2fs\n",
+          p->round, p->iter, p->F, p->grad_norm, p->tau, p->elapsed);
+}
+
+static int pick(const char *v, const char *const *names, int n) {
+  for (int i = 0; v && i < n; i++)
+    if (!strcmp(v, names[i])) return i;
+  return -1;
+}
+
+enum { STEP_ALL, STEP_REPAIR, STEP_REMESH, STEP_CURVATURE, STEP_ADAPT };
+enum { TRI_AUTO, TRI_YES, TRI_NO };
+
+static double mean_edge(const vm_mesh *m) {
+  double s = 0;
+  int64_t n = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (vm_elem_dim(m->etype[e]) != 2) continue;
+    int k = vm_elem_nverts(m->etype[e]);
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int a = 0; a < k; a++) {
+      const double *p = m->xyz + 3 * (int64_t)c[a], *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
+      s += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                (p[2] - q[2]) * (p[2] - q[2]));
+      n++;
+    }
+  }
+  return n ? s / (double)n : 0;
+}
+
+int main(int argc, char **argv) {
+  vm_cli cli;
+  vm_cli_init(&cli, "vm-surface");
+  static const char *const steps[] = {"all", "repair", "remesh", "curvature", "adapt"};
+  static const char *const tri[] = {"auto", "yes", "no"};
+  vm_adapt_opts ao = vm_adapt_opts_default();
+  vm_repair_opts ro = vm_repair_opts_default();
+  vm_remesh_opts mo = vm_remesh_opts_default();
+  vm_write_opts wo = vm_write_opts_default();
+  const char *in = NULL, *out = NULL;
+  int step = STEP_ALL, repair = TRI_AUTO, remesh = TRI_AUTO, json = 0, fout = VM_FMT_AUTO;
+  double sliver = 15, c_abs = -1, thr = -1, cap = -1;
+  long every = 20, lv;
+  int rc = VM_EXIT_OK, st = VM_OK;
+  vm_mesh *m = NULL, *input = NULL;
+  vm_surface_features fin;
+  memset(&fin, 0, sizeof fin);
+  vm_surface_projector *ref = NULL;
+  int argi = 1;
+  if (argc > 1 && pick(argv[1], steps, 5) >= 0) step = pick(argv[argi++], steps, 5);
+  for (int i = argi; i < argc; i++) {
+    const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+    int k;
+    double x;
+    if (!strcmp(a, "--help")) {
+      fputs(usage, stdout);
+      goto done;
+    } else if (!strcmp(a, "--version")) {
+      printf("vm-surface (varmesh) %s\n", vm_version());
+      goto done;
+    } else if (!strcmp(a, "--json")) {
+      json = 1;
+    } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+      cli.quiet = 1;
+    } else if (!strcmp(a, "--open-ok")) {
+      ro.require_closed = 0;
+    } else if (!strcmp(a, "--no-intersection-check")) {
+      ro.check_self_intersections = 0;
+    } else if (!strcmp(a, "--implicit")) {
+      ao.implicit = 1;
+    } else if (!strcmp(a, "--binary")) {
+      wo.binary = 1;
+    } else if (!strcmp(a, "--repair") || !strcmp(a, "--remesh")) {
+      i++;
+      if ((k = pick(val, tri, 3)) < 0) {
+        rc = vm_cli_usage_error(&cli, "%s expects auto, yes or no", a);
+        goto done;
+      }
+      if (!strcmp(a, "--repair"))
+        repair = k;
+      else
+        remesh = k;
+    } else if (!strcmp(a, "--sliver-angle") || !strcmp(a, "--feature-angle") ||
+               !strcmp(a, "--corner-angle") || !strcmp(a, "--theta") ||
+               !strcmp(a, "--target-edge-length") || !strcmp(a, "--c") ||
+               !strcmp(a, "--c-rel") || !strcmp(a, "--threshold") || !strcmp(a, "--cap") ||
+               !strcmp(a, "--time-limit")) {
+      i++;
+      int angle = strstr(a, "angle") && strcmp(a, "--target-edge-length");
+      double lo = angle ? 1e-6 : 0, hi = angle ? 180 : !strcmp(a, "--theta") ? 1 : 1e300;
+      if (vm_cli_double(&cli, a, val, lo, hi, &x)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+      if (!strcmp(a, "--sliver-angle"))
+        sliver = x;
+      else if (!strcmp(a, "--feature-angle"))
+        ao.feature_angle = x;
+      else if (!strcmp(a, "--corner-angle"))
+        ao.corner_angle = x;
+      else if (!strcmp(a, "--theta"))
+        ao.theta = x;
+      else if (!strcmp(a, "--target-edge-length")) {
+        if (!(x > 0)) {
+          rc = vm_cli_usage_error(&cli, "--target-edge-length must be positive");
+          goto done;
+        }
+        mo.target_edge_length = x;
+      } else if (!strcmp(a, "--c"))
+        c_abs = x;
+      else if (!strcmp(a, "--c-rel"))
+        ao.c = -x;
+      else if (!strcmp(a, "--threshold"))
+        thr = x;
+      else if (!strcmp(a, "--cap"))
+        cap = x;
+      else
+        ao.time_limit = x;
+    } else if (!strcmp(a, "--iter") || !strcmp(a, "--rounds") || !strcmp(a, "--smooth") ||
+               !strcmp(a, "--remesh-iter") || !strcmp(a, "--threads") ||
+               !strcmp(a, "--progress-every")) {
+      i++;
+      long lo = !strcmp(a, "--rounds") || !strcmp(a, "--remesh-iter") ||
+                        !strcmp(a, "--progress-every")
+                    ? 1
+                    : 0;
+      if (vm_cli_int(&cli, a, val, lo, 100000000, &lv)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
+      if (!strcmp(a, "--iter"))
+        ao.max_iter = (int)lv;
+      else if (!strcmp(a, "--rounds"))
+        ao.rounds = (int)lv;
+      else if (!strcmp(a, "--smooth"))
+        ao.filter.smooth = (int)lv;
+      else if (!strcmp(a, "--remesh-iter"))
+        mo.iterations = (int)lv;
+      else if (!strcmp(a, "--threads"))
+        vm_ctx_set_threads(cli.ctx, (int)lv);
+      else
+        every = lv;
+    } else if (!strcmp(a, "--format")) {
+      i++;
+      fout = val ? vm_format_from_name(val) : VM_FMT_AUTO;
+      if (fout == VM_FMT_AUTO) {
+        rc = vm_cli_usage_error(&cli, "unknown format '%s'", val ? val : "");
+        goto done;
+      }
+    } else if (a[0] == '-' && a[1]) {
+      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
+      goto done;
+    } else if (!in) {
+      in = a;
+    } else if (!out) {
+      out = a;
+    } else {
+      rc = vm_cli_usage_error(&cli, "too many arguments");
+      goto done;
+    }
+  }
+  if (!in || !out) {
+    rc = vm_cli_usage_error(&cli, "need IN and OUT");
+    goto done;
+  }
+  if (c_abs >= 0) ao.c = c_abs;
+  if (thr >= 0) ao.filter.threshold = thr;
+  if (cap >= 0) ao.filter.cap = cap;
+  if (fout == VM_FMT_AUTO && vm_format_from_path(out) == VM_FMT_AUTO)
+    fout = vm_format_from_path(in);
+
+  if (vm_mesh_read(cli.ctx, in, VM_FMT_AUTO, &m) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  int64_t counts[VM_NTYPES];
+  if (vm_mesh_count_types(m, counts) != 2 || m->dim != 3) {
+    vm_cli_error(&cli, "%s: not a surface mesh in 3D (it needs triangles or quads and "
+                 "nothing else)", in);
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  vm_mesh_apply_fixed_field(m);
+  int fin_fmt = vm_format_from_path(in);
+  int soup = fin_fmt == VM_FMT_STL || fin_fmt == VM_FMT_OBJ || fin_fmt == VM_FMT_OFF ||
+             fin_fmt == VM_FMT_PLY;
+  int do_repair = repair == TRI_YES ||
+                  (repair == TRI_AUTO && (soup || step == STEP_ALL || step == STEP_REPAIR ||
+                                          step == STEP_REMESH));
+  if (step == STEP_REPAIR) do_repair = 1;
+  if (!cli.quiet)
+    fprintf(stderr, "vm-surface: %s: %lld vertices, %lld faces\n", in, (long long)m->nv,
+            (long long)m->ne);
+
+  vm_repair_report rr;
+  memset(&rr, 0, sizeof rr);
+  rr.self_intersections = -1;
+  if (do_repair) {
+    st = vm_surface_repair(m, &ro, &rr);
+    if (st < 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    if (!cli.quiet)
+      fprintf(stderr,
+              "vm-surface: repair: %lld vertices, %lld triangles; merged %lld points, removed "
+              "%lld invalid/duplicate and %lld degenerate faces and %lld isolated vertices, "
+              "reoriented %lld faces, stitched %lld edges; %s, %lld components%s\n",
+              (long long)rr.nv, (long long)rr.nf, (long long)rr.merged_vertices,
+              (long long)rr.removed_polygons, (long long)rr.removed_degenerate,
+              (long long)rr.removed_isolated, (long long)rr.reoriented, (long long)rr.stitched,
+              rr.border_edges ? "open" : "closed", (long long)rr.components,
+              rr.self_intersections > 0 ? ", SELF-INTERSECTING" : "");
+  }
+
+  double min_angle_in = vm_surface_min_angle(m), h_in = mean_edge(m);
+  int did_remesh = 0;
+  int64_t nv_before_remesh = m->nv;
+  if (step == STEP_REMESH || (step == STEP_ALL && (remesh == TRI_YES ||
+                                                    (remesh == TRI_AUTO && min_angle_in < sliver)))) {
+    if (mo.target_edge_length <= 0) mo.target_edge_length = h_in;
+    vm_surface_features f;
+    memset(&f, 0, sizeof f);
+    st = vm_mesh_clone(m, &input);
+    if (!st) st = vm_surface_detect_features(m, ao.feature_angle, ao.corner_angle, &f);
+    if (!st) st = vm_surface_remesh(m, &f, &mo, ao.corner_angle);
+    vm_surface_features_free(cli.ctx, &f);
+    if (st < 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    did_remesh = 1;
+    if (!cli.quiet)
+      fprintf(stderr, "vm-surface: remesh: target edge length %g: %lld -> %lld vertices, "
+              "smallest angle %.2f -> %.2f deg\n", mo.target_edge_length,
+              (long long)nv_before_remesh, (long long)m->nv, min_angle_in,
+              vm_surface_min_angle(m));
+  }
+
+  vm_curvature_stats cs;
+  memset(&cs, 0, sizeof cs);
+  vm_adapt_result ar;
+  memset(&ar, 0, sizeof ar);
+  int adapted = 0;
+  if (step == STEP_CURVATURE) {
+    double h = mean_edge(m), diag = 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->nv; v++)
+      for (int r = 0; r < 3; r++) {
+        lo[r] = fmin(lo[r], m->xyz[3 * v + r]);
+        hi[r] = fmax(hi[r], m->xyz[3 * v + r]);
+      }
+    for (int r = 0; r < 3; r++) diag += (hi[r] - lo[r]) * (hi[r] - lo[r]);
+    diag = sqrt(diag);
+    vm_curvature_filter f = ao.filter;
+    if (f.threshold < 0) f.threshold = -f.threshold / diag;
+    if (f.cap < 0) f.cap = h > 0 ? -f.cap / h : 0;
+    ar.threshold = f.threshold;
+    ar.cap = f.cap;
+    st = vm_surface_curvature(m, &f, &cs);
+    if (st < 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    if (!cli.quiet)
+      fprintf(stderr, "vm-surface: curvature: H in [%g, %g], mean |H| %g; filter: threshold "
+              "%g, cap %g, %d smoothing passes\n", cs.min, cs.max, cs.mean_abs, f.threshold,
+              f.cap, f.smooth);
+  } else if (step == STEP_ALL || step == STEP_ADAPT) {
+    /* the reference surface: the (repaired) input, before any remeshing */
+    const vm_mesh *refm = input ? input : m;
+    st = vm_surface_detect_features(refm, ao.feature_angle, ao.corner_angle, &fin);
+    if (!st) st = vm_surface_projector_create(cli.ctx, refm, &fin, &ref);
+    if (st < 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    progress_state ps = {&cli, (int)every};
+    ao.monitor = progress;
+    ao.user = &ps;
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    vm_ctx_set_interrupt(cli.ctx, &interrupted);
+    st = vm_surface_adapt(m, ref, &ao, &ar);
+    if (st < 0 && st != VM_ERR_INTERRUPTED) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    adapted = 1;
+    if (st == VM_ERR_INTERRUPTED) rc = VM_EXIT_INTERRUPTED;
+    if (ar.flipped > 0) rc = VM_EXIT_CHECK;
+    if (!cli.quiet)
+      fprintf(stderr,
+              "vm-surface: adapt: %d iterations in %d rounds (%s), F %.8e -> %.8e; c %g, "
+              "threshold %g, cap %g; %lld smooth, %lld feature-line vertices on %d lines, %lld "
+              "fixed; smallest angle %.2f -> %.2f deg; %lld flipped; %.2f s%s\n",
+              ar.iterations, ar.rounds, ar.stop, ar.F_initial, ar.F, ar.c, ar.threshold,
+              ar.cap, (long long)ar.nsmooth, (long long)ar.nline_vertices, ar.nline,
+              (long long)ar.nfixed, ar.min_angle_before, ar.min_angle_after,
+              (long long)ar.flipped, ar.elapsed, rc == VM_EXIT_CHECK ? "  -- FLIPPED ELEMENTS" : "");
+  }
+
+  int wst = vm_mesh_write(cli.ctx, m, out, fout, &wo);
+  if (wst < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  if (json) {
+    printf("{\"input\": ");
+    vm_json_string(stdout, in);
+    printf(", \"output\": ");
+    vm_json_string(stdout, out);
+    printf(", \"step\": \"%s\", \"exit\": %d, \"vertices\": %lld, \"faces\": %lld",
+           steps[step], rc, (long long)m->nv, (long long)m->ne);
+    if (do_repair)
+      printf(", \"repair\": {\"vertices\": %lld, \"faces\": %lld, \"merged_vertices\": %lld, "
+             "\"removed_faces\": %lld, \"removed_degenerate\": %lld, \"removed_isolated\": %lld, "
+             "\"reoriented\": %lld, \"stitched\": %lld, \"border_edges\": %lld, \"holes\": %lld, "
+             "\"components\": %lld, \"self_intersections\": %lld, \"volume\": ",
+             (long long)rr.nv, (long long)rr.nf, (long long)rr.merged_vertices,
+             (long long)rr.removed_polygons, (long long)rr.removed_degenerate,
+             (long long)rr.removed_isolated, (long long)rr.reoriented, (long long)rr.stitched,
+             (long long)rr.border_edges, (long long)rr.holes, (long long)rr.components,
+             (long long)rr.self_intersections);
+    if (do_repair) {
+      vm_json_double(stdout, rr.volume);
+      printf("}");
+    }
+    printf(", \"remeshed\": %s", did_remesh ? "true" : "false");
+    if (did_remesh) {
+      printf(", \"target_edge_length\": ");
+      vm_json_double(stdout, mo.target_edge_length);
+    }
+    if (step == STEP_CURVATURE) {
+      printf(", \"curvature\": {\"min\": ");
+      vm_json_double(stdout, cs.min);
+      printf(", \"max\": ");
+      vm_json_double(stdout, cs.max);
+      printf(", \"mean_abs\": ");
+      vm_json_double(stdout, cs.mean_abs);
+      printf(", \"threshold\": ");
+      vm_json_double(stdout, ar.threshold);
+      printf(", \"cap\": ");
+      vm_json_double(stdout, ar.cap);
+      printf(", \"degenerate\": %lld, \"boundary\": %lld}", (long long)cs.degenerate,
+             (long long)cs.boundary);
+    }
+    if (adapted) {
+      printf(", \"adapt\": {\"iterations\": %d, \"rounds\": %d, \"stop\": \"%s\", \"F_initial\": ",
+             ar.iterations, ar.rounds, ar.stop);
+      vm_json_double(stdout, ar.F_initial);
+      printf(", \"F\": ");
+      vm_json_double(stdout, ar.F);
+      printf(", \"c\": ");
+      vm_json_double(stdout, ar.c);
+      printf(", \"threshold\": ");
+      vm_json_double(stdout, ar.threshold);
+      printf(", \"cap\": ");
+      vm_json_double(stdout, ar.cap);
+      printf(", \"smooth_vertices\": %lld, \"line_vertices\": %lld, \"fixed_vertices\": %lld, "
+             "\"lines\": %d, \"corners\": %lld, \"flipped\": %lld, \"min_angle_before\": ",
+             (long long)ar.nsmooth, (long long)ar.nline_vertices, (long long)ar.nfixed, ar.nline,
+             (long long)ar.ncorner, (long long)ar.flipped);
+      vm_json_double(stdout, ar.min_angle_before);
+      printf(", \"min_angle_after\": ");
+      vm_json_double(stdout, ar.min_angle_after);
+      printf(", \"max_distance\": ");
+      vm_json_double(stdout, ar.max_distance);
+      printf(", \"time\": ");
+      vm_json_double(stdout, ar.elapsed);
+      printf("}");
+    }
+    printf(", \"min_angle\": ");
+    vm_json_double(stdout, vm_surface_min_angle(m));
+    printf("}\n");
+  }
+done:
+  vm_surface_projector_destroy(&ref);
+  vm_surface_features_free(cli.ctx, &fin);
+  vm_mesh_destroy(&input);
+  vm_mesh_destroy(&m);
+  vm_cli_finish(&cli);
+  return rc;
+}

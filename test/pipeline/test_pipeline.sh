@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# test/pipeline/test_pipeline.sh: examples/Makefile on a tiny generated
+# aircraft: the first run builds every stage that exists (vm-prism is left
+# out until it is built); a second run does nothing; changing one stage's
+# options re-runs that stage and its dependents only; a failing stage makes
+# make fail with the stage's exit code and leaves no target and no
+# temporary file. Exit 77 if make is not installed.
+set -u
+examples=$1 bin=$(dirname "$2") make=${3:-}
+if [ -z "$make" ]; then
+  echo "skip: make is not installed"
+  exit 77
+fi
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+have_prism=0
+[ -x "$bin/vm-prism" ] && have_prism=1
+
+# run the pipeline with stage options "$@" (VAR=value ...); the log lists
+# the stages that ran, one "== stage: target" line each
+run() {
+  "$make" -C "$examples" --no-print-directory VM_BIN="$bin" OUT="$dir/out" \
+    GEN_OPTS="--resolution 1" "$@" >"$dir/log" 2>&1
+}
+ran() { grep -c "^== $1:" "$dir/log"; }
+stages() { grep "^== " "$dir/log" | sed 's/^== \([a-z]*\):.*/\1/' | sort | uniq -c | tr -s ' ' | tr '\n' ';'; }
+base=(SURFACE_OPTS="curvature -q")
+
+run "${base[@]}"
+rc=$?
+check '[ $rc -eq 0 ]' "first run succeeds (exit $rc)"
+[ $rc -eq 0 ] || tail -n 20 "$dir/log"
+out=$dir/out
+for f in aircraft.stl aircraft.surface.vmsh aircraft.msh aircraft.vtu \
+         aircraft-report-surface/index.html aircraft-report-surface/surface.png \
+         aircraft-report-surface/quality.txt; do
+  check '[ -s "$out/$f" ]' "$f made"
+done
+if [ $have_prism -eq 1 ]; then
+  check '[ -s "$out/aircraft.prism.vmsh" ] && [ -s "$out/aircraft-report-prism/index.html" ]' "prism stage made"
+fi
+check '[ $(ran model) -eq 1 ] && [ $(ran surface) -eq 1 ] && [ $(ran exports) -eq 2 ]' "each stage once: $(stages)"
+
+run "${base[@]}"
+check '[ $? -eq 0 ] && grep -q "Nothing to be done" "$dir/log" && [ -z "$(grep "^== " "$dir/log")" ]' "second run does nothing: $(cat "$dir/log")"
+"$make" -C "$examples" --no-print-directory -q VM_BIN="$bin" OUT="$dir/out" GEN_OPTS="--resolution 1" "${base[@]}" all
+check '[ $? -eq 0 ]' "make -q: everything is up to date"
+
+run "${base[@]}" CONVERT_OPTS="--binary"
+check '[ $? -eq 0 ] && [ "$(stages)" = " 2 exports;" ]' "changing CONVERT_OPTS re-runs the exports only: $(stages)"
+run "${base[@]}" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
+check '[ $? -eq 0 ] && [ "$(stages)" = " $((1 + have_prism)) reports;" ]' "changing REPORT_OPTS re-runs the reports only: $(stages)"
+run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
+want=" 2 exports; $((1 + have_prism)) reports; 1 surface;"
+[ $have_prism -eq 1 ] && want=" 2 exports; 1 prism; 2 reports; 1 surface;"
+check '[ $? -eq 0 ] && [ "$(stages)" = "$want" ]' "changing SURFACE_OPTS re-runs the surface and what depends on it, not the model: $(stages)"
+run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
+check '[ $? -eq 0 ] && grep -q "Nothing to be done" "$dir/log"' "and then nothing again"
+touch "$out/aircraft.stl"
+run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
+check '[ $? -eq 0 ] && [ "$(stages)" = "$want" ]' "a newer model re-runs everything after it: $(stages)"
+
+# a failing stage: vm-surface's usage error (exit 2)
+run SURFACE_OPTS="--no-such-option"
+rc=$?
+check '[ $rc -ne 0 ] && grep -q "aircraft.surface.vmsh\] Error 2" "$dir/log"' "a failing stage fails make with its exit code (make $rc): $(grep Error "$dir/log")"
+check '[ ! -e "$out/aircraft.surface.vmsh" ]' "no stale surface left"
+check '[ -z "$(find "$out" -name ".tmp.*" -o -name "*.tmp")" ]' "no temporary files left"
+run "${base[@]}" CONVERT_OPTS="--no-such-option"
+rc=$?
+check '[ $rc -ne 0 ] && [ ! -e "$out/aircraft.msh" ] && grep -q "Error 2" "$dir/log"' "a failing export leaves no export (make $rc)"
+run "${base[@]}" REPORT_OPTS="--report-field nope"
+rc=$?
+check '[ $rc -ne 0 ] && [ ! -e "$out/aircraft-report-surface" ] && [ ! -e "$out/aircraft-report-surface.tmp" ]' "a failing report leaves no report directory (make $rc)"
+run "${base[@]}"
+check '[ $? -eq 0 ] && [ -s "$out/aircraft-report-surface/index.html" ]' "back to working options: rebuilt"
+
+# a model given by path, named after its file
+cp "$out/aircraft.stl" "$dir/wing.stl"
+run "${base[@]}" MODEL="$dir/wing.stl" surface
+check '[ $? -eq 0 ] && [ -s "$out/wing.surface.vmsh" ] && [ "$(stages)" = " 1 surface;" ]' "MODEL=path: the surface of wing.stl only: $(stages)"
+if [ $have_prism -eq 0 ]; then
+  run "${base[@]}" prism
+  check '[ $? -ne 0 ] && grep -q "vm-prism is not built" "$dir/log"' "make prism says vm-prism is not built"
+fi
+run "${base[@]}" clean
+check '[ $? -eq 0 ] && [ -z "$(ls "$out" | grep aircraft)" ]' "clean removes the aircraft's files: $(ls "$out" | tr '\n' ' ')"
+exit $fail

@@ -1,0 +1,58 @@
+/* test/surface/gen_shape.c: writes the generated test surfaces of shapes.h
+ * (and broken variants) to a file, for the vm-surface CLI tests.
+ * usage: gen_shape lens|sphere|cube|open|fin|flipped|needle OUT */
+#include <stdio.h>
+#include <string.h>
+
+#include "shapes.h"
+#include "varmesh/io.h"
+#include "varmesh/surface_io.h"
+
+int main(int argc, char **argv) {
+  if (argc != 3) {
+    fprintf(stderr, "usage: gen_shape lens|sphere|cube|open|fin|flipped|needle OUT\n");
+    return 2;
+  }
+  vm_ctx *ctx = NULL;
+  vm_mesh *m = NULL;
+  if (vm_ctx_create(&ctx)) return 1;
+  vm_surface_register_formats(ctx);
+  const char *k = argv[1];
+  int st = 0;
+  if (!strcmp(k, "lens")) {
+    st = shp_lens(ctx, 1.0, 0.5, 0.1, &m);
+  } else if (!strcmp(k, "cube") || !strcmp(k, "fin")) {
+    st = shp_cube(ctx, 3, &m);
+    if (!st && !strcmp(k, "fin")) { /* a third face on the edge of face 0 */
+      int64_t v;
+      vm_mesh_add_vertex(m, 0.5, -1, 0.5, &v);
+      int32_t t[3] = {m->conn[0], m->conn[1], (int32_t)v};
+      st = vm_mesh_add_element(m, VM_TRI, t);
+    }
+  } else {
+    st = shp_icosphere(ctx, 1.0, 3, 0, 0, &m);
+    if (!st && !strcmp(k, "open")) m->ne -= 2;
+    if (!st && !strcmp(k, "flipped"))
+      for (int64_t e = 10; e < 13; e++) {
+        int32_t *c = m->conn + 3 * e, s = c[1];
+        c[1] = c[2];
+        c[2] = s;
+      }
+    if (!st && !strcmp(k, "needle")) { /* zero-area triangle in a closed surface */
+      int32_t a = m->conn[0], b = m->conn[1], c = m->conn[2];
+      int64_t mid;
+      vm_mesh_add_vertex(m, 0.5 * (m->xyz[3 * a] + m->xyz[3 * b]),
+                         0.5 * (m->xyz[3 * a + 1] + m->xyz[3 * b + 1]),
+                         0.5 * (m->xyz[3 * a + 2] + m->xyz[3 * b + 2]), &mid);
+      m->conn[1] = (int32_t)mid;
+      int32_t t2[3] = {(int32_t)mid, b, c}, deg[3] = {a, b, (int32_t)mid};
+      st = vm_mesh_add_element(m, VM_TRI, t2);
+      if (!st) st = vm_mesh_add_element(m, VM_TRI, deg);
+    }
+  }
+  if (!st) st = vm_mesh_write(ctx, m, argv[2], VM_FMT_AUTO, NULL);
+  if (st < 0) fprintf(stderr, "gen_shape: %s\n", vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
+  vm_ctx_destroy(&ctx);
+  return st < 0;
+}

@@ -1,0 +1,231 @@
+/* test/surface/test_adapt.c: curvature-adapted node movement on a lens
+ * with a sharp circular ridge: vertices condense near the ridge
+ * (quantified), stay on the surface (Hausdorff bound), nothing flips,
+ * connectivity and flags are kept, runs are deterministic; open surfaces,
+ * fixed vertices and bad input. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shapes.h"
+#include "varmesh/adapt.h"
+#include "varmesh/curvature.h"
+#include "varmesh/features.h"
+#include "varmesh/repair.h"
+#include "vmtest.h"
+
+/* Lens R = 1, d = 0.5: the ridge is the circle z = 0, r = sqrt(3)/2. */
+static double ridge_distance(const double *p) {
+  double r = sqrt(p[0] * p[0] + p[1] * p[1]) - sqrt(0.75);
+  return sqrt(r * r + p[2] * p[2]);
+}
+
+typedef struct {
+  double near_frac;   /* vertices within 0.2 of the ridge / all */
+  double len_near;    /* mean length of edges with midpoint within 0.2 of the ridge */
+  double len_far;     /* ... farther than 0.4 */
+} ridge_stats;
+
+static ridge_stats measure(const vm_mesh *m) {
+  ridge_stats s = {0, 0, 0};
+  int64_t nn = 0, cn = 0, cf = 0;
+  for (int64_t v = 0; v < m->nv; v++) nn += ridge_distance(m->xyz + 3 * v) < 0.2;
+  s.near_frac = (double)nn / (double)m->nv;
+  for (int64_t e = 0; e < m->ne; e++)
+    for (int a = 0; a < 3; a++) {
+      const double *p = m->xyz + 3 * m->conn[3 * e + a], *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
+      double mid[3] = {0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])};
+      double l = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                      (p[2] - q[2]) * (p[2] - q[2]));
+      double d = ridge_distance(mid);
+      if (d < 0.2) {
+        s.len_near += l;
+        cn++;
+      } else if (d > 0.4) {
+        s.len_far += l;
+        cf++;
+      }
+    }
+  s.len_near /= (double)cn;
+  s.len_far /= (double)cf;
+  return s;
+}
+
+static void test_lens(vm_ctx *ctx) {
+  vm_mesh *m = NULL, *in = NULL;
+  CHECK(shp_lens(ctx, 1.0, 0.5, 0.08, &m) == 0, "lens");
+  vm_repair_report rr;
+  CHECK(vm_surface_repair(m, NULL, &rr) == 0 && rr.border_edges == 0 && rr.reoriented == 0,
+        "the lens is closed and outward: %s", vm_ctx_error(ctx));
+  /* a vertex fixed by the user and the flags to be kept */
+  int64_t fixed_v = 5;
+  m->vflag[fixed_v] = VM_VERTEX_FIXED;
+  double fixed_p[3];
+  memcpy(fixed_p, m->xyz + 3 * fixed_v, sizeof fixed_p);
+  vm_mesh_clone(m, &in);
+  ridge_stats s0 = measure(m);
+  double min0 = vm_surface_min_angle(m);
+
+  vm_adapt_opts o = vm_adapt_opts_default();
+  o.max_iter = 150;
+  vm_adapt_result r;
+  int st = vm_surface_adapt(m, NULL, &o, &r);
+  CHECK(st == 0, "adapt: %d %s", st, vm_ctx_error(ctx));
+  ridge_stats s1 = measure(m);
+  double ab, ba;
+  vm_surface_hausdorff(m, in, 0.01, &ab, &ba);
+  printf("lens: %lld vertices, %d iterations, F %.6g -> %.6g (%s); ridge: %d line(s), %lld "
+         "corners\n",
+         (long long)m->nv, r.iterations, r.F_initial, r.F, r.stop, r.nline, (long long)r.ncorner);
+  printf("  vertices within 0.2 of the ridge: %.3f -> %.3f; edge length near/far: %.4f/%.4f = "
+         "%.3f -> %.4f/%.4f = %.3f\n",
+         s0.near_frac, s1.near_frac, s0.len_near, s0.len_far, s0.len_near / s0.len_far,
+         s1.len_near, s1.len_far, s1.len_near / s1.len_far);
+  printf("  min angle %.2f -> %.2f, flipped %lld, Hausdorff %.2e / %.2e (diagonal 2.45), max "
+         "vertex distance %.2e\n",
+         min0, r.min_angle_after, (long long)r.flipped, ab, ba, r.max_distance);
+  /* condensation near the ridge, quantified */
+  CHECK(s1.near_frac > 1.25 * s0.near_frac, "near-ridge vertex fraction %g -> %g", s0.near_frac,
+        s1.near_frac);
+  CHECK(s1.len_near / s1.len_far < 0.85 * (s0.len_near / s0.len_far),
+        "near/far edge length ratio %g -> %g", s0.len_near / s0.len_far,
+        s1.len_near / s1.len_far);
+  /* on the surface, nothing flipped, quality kept */
+  CHECK(r.max_distance < 1e-12, "vertex distance to the surface %g", r.max_distance);
+  CHECK(ab < 0.002 * 2.45 && ba < 0.002 * 2.45, "Hausdorff %g %g within 0.2%% of the diagonal", ab,
+        ba);
+  CHECK(r.flipped == 0, "flipped %lld", (long long)r.flipped);
+  CHECK(r.min_angle_after >= 15, "min angle %g", r.min_angle_after);
+  CHECK(r.nline == 1 && r.ncorner == 0, "one closed ridge line, no corner");
+  /* connectivity, flags, the fixed vertex, the fields */
+  CHECK(m->nv == in->nv && m->ne == in->ne &&
+            !memcmp(m->conn, in->conn, sizeof *m->conn * (size_t)m->eoff[m->ne]),
+        "connectivity unchanged");
+  CHECK(!memcmp(m->vflag, in->vflag, (size_t)m->nv) &&
+            !memcmp(m->vsurf, in->vsurf, sizeof *m->vsurf * (size_t)m->nv),
+        "flags restored");
+  CHECK(!memcmp(fixed_p, m->xyz + 3 * fixed_v, sizeof fixed_p), "fixed vertex kept");
+  CHECK(vm_mesh_find_field(m, VM_FIELD_MEAN_CURVATURE, VM_FIELD_VERTEX) &&
+            vm_mesh_find_field(m, VM_FIELD_MEAN_CURVATURE_FILTERED, VM_FIELD_VERTEX),
+        "curvature fields written");
+  /* ridge vertices still on the ridge polygon: in z = 0, between its
+   * chords (about 68 of them) and the circle */
+  int on = 1, nridge = 0;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (in->xyz[3 * v + 2] == 0) {
+      const double *p = m->xyz + 3 * v;
+      double rad = sqrt(p[0] * p[0] + p[1] * p[1]);
+      on &= fabs(p[2]) < 1e-14 && rad <= sqrt(0.75) + 1e-12 && rad > sqrt(0.75) * 0.998;
+      nridge++;
+    }
+  CHECK(on && nridge > 30, "%d ridge vertices slid along the ridge", nridge);
+
+  /* deterministic: the same bits again; and with a separate reference */
+  vm_mesh *m2 = NULL;
+  vm_mesh_clone(in, &m2);
+  CHECK(vm_surface_adapt(m2, NULL, &o, NULL) == 0, "second run");
+  CHECK(!memcmp(m->xyz, m2->xyz, sizeof *m->xyz * 3 * (size_t)m->nv), "deterministic");
+  vm_mesh_destroy(&m2);
+  vm_surface_features f;
+  vm_surface_projector *ref = NULL;
+  vm_surface_detect_features(in, o.feature_angle, o.corner_angle, &f);
+  vm_surface_projector_create(ctx, in, &f, &ref);
+  vm_mesh_clone(in, &m2);
+  CHECK(vm_surface_adapt(m2, ref, &o, &r) == 0 && r.nline_vertices > 0, "with a reference");
+  CHECK(!memcmp(m->xyz, m2->xyz, sizeof *m->xyz * 3 * (size_t)m->nv),
+        "a reference equal to the mesh gives the same result");
+  vm_mesh_destroy(&m2);
+  vm_surface_projector_destroy(&ref);
+  vm_surface_features_free(ctx, &f);
+  vm_mesh_destroy(&m);
+  vm_mesh_destroy(&in);
+}
+
+static void test_open_cylinder(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  shp_cylinder(ctx, 0.5, 1.0, 32, 12, 0.2, 9, &m);
+  vm_adapt_opts o = vm_adapt_opts_default();
+  o.max_iter = 30;
+  vm_adapt_result r;
+  CHECK(vm_surface_adapt(m, NULL, &o, &r) == 0, "open cylinder: %s", vm_ctx_error(ctx));
+  int ok = 1;
+  for (int64_t v = 0; v < m->nv; v++) {
+    const double *p = m->xyz + 3 * v;
+    /* on the (faceted) cylinder: radius between the chord's and 0.5 */
+    double rad = sqrt(p[0] * p[0] + p[1] * p[1]);
+    ok &= rad <= 0.5 + 1e-12 && rad >= 0.5 * cos(M_PI / 32 * 1.3);
+    if (v < 32 || v >= m->nv - 32) ok &= p[2] == (v < 32 ? 0.0 : 1.0); /* border rows */
+  }
+  CHECK(ok, "vertices on the cylinder, borders on their circles");
+  CHECK(r.flipped == 0 && r.nline == 2, "flipped %lld, lines %d", (long long)r.flipped, r.nline);
+  vm_mesh_destroy(&m);
+}
+
+static void test_bad(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_adapt_result r;
+  vm_adapt_opts o = vm_adapt_opts_default();
+  /* volume mesh */
+  vm_mesh_create(ctx, &m);
+  for (int i = 0; i < 4; i++) vm_mesh_add_vertex(m, i == 1, i == 2, i == 3, NULL);
+  int32_t tet[4] = {0, 1, 2, 3};
+  vm_mesh_add_element(m, VM_TET, tet);
+  CHECK(vm_surface_adapt(m, NULL, &o, &r) == VM_ERR_ARG, "volume mesh refused");
+  vm_mesh_destroy(&m);
+  /* non-manifold: two cubes sharing a corner */
+  vm_mesh *a = NULL, *b = NULL;
+  shp_cube(ctx, 2, &a);
+  shp_cube(ctx, 2, &b);
+  int64_t base = a->nv;
+  for (int64_t v = 0; v < b->nv; v++)
+    vm_mesh_add_vertex(a, b->xyz[3 * v] + 1, b->xyz[3 * v + 1] + 1, b->xyz[3 * v + 2] + 1, NULL);
+  for (int64_t e = 0; e < b->ne; e++) {
+    int32_t t[3];
+    for (int k = 0; k < 3; k++) t[k] = (int32_t)(b->conn[3 * e + k] + base);
+    vm_mesh_add_element(a, VM_TRI, t);
+  }
+  /* merge the touching corners into one vertex: a pinched surface */
+  int64_t corner_b = -1, corner_a = -1;
+  for (int64_t v = 0; v < a->nv; v++) {
+    const double *p = a->xyz + 3 * v;
+    if (p[0] == 1 && p[1] == 1 && p[2] == 1) {
+      if (corner_a < 0)
+        corner_a = v;
+      else
+        corner_b = v;
+    }
+  }
+  for (int64_t k = 0; k < a->eoff[a->ne]; k++)
+    if (a->conn[k] == corner_b) a->conn[k] = (int32_t)corner_a;
+  double *x0 = malloc(sizeof *x0 * 3 * (size_t)a->nv);
+  memcpy(x0, a->xyz, sizeof *x0 * 3 * (size_t)a->nv);
+  CHECK(vm_surface_adapt(a, NULL, &o, &r) == VM_ERR_FORMAT, "non-manifold refused: %s",
+        vm_ctx_error(ctx));
+  CHECK(!memcmp(x0, a->xyz, sizeof *x0 * 3 * (size_t)a->nv), "refused mesh unchanged");
+  free(x0);
+  vm_mesh_destroy(&a);
+  vm_mesh_destroy(&b);
+  /* bad options */
+  shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
+  o.rounds = 0;
+  CHECK(vm_surface_adapt(m, NULL, &o, &r) == VM_ERR_ARG, "rounds 0 refused");
+  o = vm_adapt_opts_default();
+  o.theta = 2;
+  CHECK(vm_surface_adapt(m, NULL, &o, &r) == VM_ERR_ARG, "theta 2 refused");
+  o = vm_adapt_opts_default();
+  o.max_iter = 0;
+  CHECK(vm_surface_adapt(m, NULL, &o, &r) == 0 && r.iterations == 0, "zero iterations: no-op");
+  vm_mesh_destroy(&m);
+}
+
+int main(void) {
+  vm_ctx *ctx = NULL;
+  if (vm_ctx_create(&ctx)) return 1;
+  vm_ctx_set_threads(ctx, 1);
+  test_lens(ctx);
+  test_open_cylinder(ctx);
+  test_bad(ctx);
+  CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("adapt");
+}

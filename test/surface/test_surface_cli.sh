@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# test/surface/test_surface_cli.sh: vm-surface end to end: the default run
+# and each step alone on generated shapes; bad input (open, non-manifold,
+# empty, truncated) exits 1 with a message saying what and where and writes
+# nothing; repairable input (flipped faces, a zero-area face) is repaired;
+# usage errors exit 2.
+set -u
+gen=$1 surf=$2 conv=$3
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; else echo "ok: $2"; fi; }
+
+"$gen" lens "$dir/lens.stl"
+"$surf" --json --iter 60 "$dir/lens.stl" "$dir/lens.vmsh" >"$dir/sum.json" 2>"$dir/err.txt"
+rc=$?
+check '[ $rc -eq 0 ]' "default run on the lens exits 0 (got $rc)"
+check 'grep -q "\"flipped\": 0" "$dir/sum.json"' "no flipped element"
+check 'grep -q "\"remeshed\": false" "$dir/sum.json"' "a good mesh is not remeshed"
+check 'grep -q "\"lines\": 1" "$dir/sum.json"' "the ridge is one feature line"
+check 'grep -q "vm-surface: adapt round 1 it" "$dir/err.txt"' "progress lines on stderr"
+"$conv" -q "$dir/lens.vmsh" "$dir/lens.vtk"
+check 'grep -q "mean_curvature_filtered" "$dir/lens.vtk"' "the output carries the curvature fields"
+
+"$surf" curvature -q --json "$dir/lens.vmsh" "$dir/curv.vmsh" >"$dir/c.json"
+check '[ $? -eq 0 ] && grep -q "\"curvature\": {\"min\"" "$dir/c.json"' "curvature step alone"
+"$surf" remesh -q --json --target-edge-length 0.15 "$dir/lens.stl" "$dir/r.stl" >"$dir/r.json"
+check '[ $? -eq 0 ] && grep -q "\"remeshed\": true" "$dir/r.json"' "remesh step alone"
+"$surf" adapt -q --json --iter 20 --c 0.5 --cap 5 --threshold 0.1 --smooth 1 "$dir/r.stl" "$dir/a.obj" >"$dir/a.json"
+check '[ $? -eq 0 ] && grep -q "\"c\": 0.5," "$dir/a.json" && [ -s "$dir/a.obj" ]' "adapt step alone with options"
+"$surf" repair -q "$dir/lens.stl" "$dir/rep.off"
+check '[ $? -eq 0 ] && [ -s "$dir/rep.off" ]' "repair step alone"
+
+"$gen" flipped "$dir/flipped.obj"
+"$surf" repair -q --json "$dir/flipped.obj" "$dir/f.vmsh" >"$dir/f.json"
+check '[ $? -eq 0 ] && grep -q "\"reoriented\": 3" "$dir/f.json"' "inconsistent orientation repaired"
+"$gen" needle "$dir/needle.obj"
+"$surf" repair -q --json "$dir/needle.obj" "$dir/n.vmsh" >"$dir/n.json"
+check '[ $? -eq 0 ] && grep -q "\"removed_degenerate\": 1" "$dir/n.json"' "zero-area face removed"
+
+bad() { # file, expected message, description
+  "$surf" -q "$1" "$dir/bad_out.vmsh" 2>"$dir/bad.txt"
+  rc=$? want=$2
+  check '[ $rc -eq 1 ]' "$3 exits 1 (got $rc)"
+  check 'grep -q "error: .*$want" "$dir/bad.txt"' "$3: message '$(grep error "$dir/bad.txt" | head -c 200)'"
+  check '[ ! -e "$dir/bad_out.vmsh" ]' "$3 writes no output"
+}
+"$gen" open "$dir/open.stl"
+bad "$dir/open.stl" "open surface: 4 border edges around 1 hole(s); e.g. the border edge (" "open surface"
+"$surf" -q --open-ok --iter 5 "$dir/open.stl" "$dir/open_ok.vmsh"
+check '[ $? -eq 0 ]' "open surface accepted with --open-ok"
+"$gen" fin "$dir/fin.stl"
+bad "$dir/fin.stl" "non-manifold surface: 1 edges are shared by more than two faces" "non-manifold edge"
+: >"$dir/empty.stl"
+bad "$dir/empty.stl" "empty.stl: empty" "empty file"
+head -c 300 "$dir/lens.stl" >"$dir/trunc.stl"
+bad "$dir/trunc.stl" "trunc.stl: line [0-9]*: .*end of file" "truncated file"
+"$gen" cube "$dir/cube.vtk"
+"$surf" -q --binary "$dir/cube.vtk" "$dir/cube.stl"
+check '[ $? -eq 0 ]' "a cube (all vertices on features) goes through"
+
+"$surf" --bogus "$dir/lens.stl" "$dir/x.vmsh" 2>/dev/null
+check '[ $? -eq 2 ]' "unknown option exits 2"
+"$surf" --c -1 "$dir/lens.stl" "$dir/x.vmsh" 2>/dev/null
+check '[ $? -eq 2 ]' "negative c exits 2"
+"$surf" "$dir/lens.stl" 2>/dev/null
+check '[ $? -eq 2 ]' "missing OUT exits 2"
+"$surf" --help | grep -q "usage: vm-surface"
+check '[ $? -eq 0 ]' "--help"
+exit $fail
