@@ -6,12 +6,14 @@ set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="$root/build"
 setup_args=()
+test_args=()
 if [ "${1:-}" = "--sanitize" ]; then
   shift
   build="$root/build-sanitize"
   setup_args=(-Dsanitize=true)
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  test_args=(--timeout-multiplier 6) # instrumented code runs several times slower
 fi
 if [ ! -f "$build/build.ninja" ]; then
   meson setup "$build" "$root" "${setup_args[@]}" >"$build.setup.log" 2>&1 || {
@@ -22,7 +24,7 @@ if ! ninja -C "$build" >"$build.ninja.log" 2>&1; then
   echo "0 passed, 1 failed"
   exit 1
 fi
-meson test -C "$build" --print-errorlogs --num-processes 2 "$@" | tee "$build.test.log"
+meson test -C "$build" --print-errorlogs --num-processes 2 "${test_args[@]}" "$@" | tee "$build.test.log"
 rc=${PIPESTATUS[0]}
 count() { awk -v k="$1" '$0 ~ "^"k":" {print $NF}' "$build.test.log" | tail -n 1; }
 ok=$(count "Ok"); xf=$(count "Expected Fail"); fail=$(count "Fail")
