@@ -22,6 +22,7 @@ static const char usage[] =
     "  --axis X,Y,Z    rotation axis (default 0,0,1)\n"
     "  --inner S       inner cube half-size (default 1/(2 sqrt 2))\n"
     "  --tets          split every hex into 6 tets\n"
+    "  --free-boundary leave the outer boundary free (for vm-volume --slip-boundary)\n"
     "  --mixed         hexes, prisms, pyramids and tets by (i+j+k) mod 4\n"
     "  --binary        binary output where the format has both\n"
     "  --help, --version\n"
@@ -107,6 +108,8 @@ int main(int argc, char **argv) {
       }
     } else if (!strcmp(a, "--tets")) {
       o.cells = VM_GEN_TETS;
+    } else if (!strcmp(a, "--free-boundary")) {
+      o.free_boundary = 1;
     } else if (!strcmp(a, "--mixed")) {
       o.cells = VM_GEN_MIXED;
     } else if (!strcmp(a, "--binary")) {

@@ -6,9 +6,9 @@
 
 #include "cli.h"
 #include "cli_report.h"
+#include "cli_verify.h"
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
-#include "varmesh/verify.h"
 
 static const char usage[] =
     "usage: vm-quality [options] MESH\n"
@@ -101,49 +101,6 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q) 
   for (int b = 0; b < VM_QUALITY_NBINS; b++)
     printf("%s%lld", b ? ", " : "", (long long)q->sj_hist[b]);
   printf("]}\n");
-}
-
-/* --verify: exact orientation of every quadrature simplex, then the prism
- * layer's outer faces. One line on stdout (text mode) when all is well, one
- * line on stderr naming the first bad element otherwise. */
-static int verify_mesh(const vm_cli *cli, const char *path, const vm_mesh *m, int rule,
-                       int text) {
-  int64_t bn, be, first, ip, wc, fp[2], counts[VM_NTYPES];
-  const char *rname = rule == VM_RULE_GEOMETRIC ? "geometric" : "corner";
-  if (vm_verify_orientation(m, rule, &bn, &be, &first) < 0) {
-    vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
-    return VM_EXIT_INPUT;
-  }
-  if (bn > 0) {
-    vm_cli_error(cli,
-                 "%s: verify: element %lld (%s) has a quadrature simplex (%s rule) that is not "
-                 "positively oriented; %lld such simplices in %lld elements (exact test)",
-                 path, (long long)first, vm_elem_name(m->etype[first]), rname, (long long)bn,
-                 (long long)be);
-    return VM_EXIT_CHECK;
-  }
-  vm_mesh_count_types(m, counts);
-  if (counts[VM_PRISM]) {
-    if (vm_verify_prism_layer(m, &ip, &wc, fp) < 0) {
-      vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
-      return VM_EXIT_INPUT;
-    }
-    if (ip > 0 || wc > 0) {
-      vm_cli_error(cli,
-                   "%s: verify: prisms %lld and %lld: %s; %lld intersecting pairs of outer "
-                   "faces, %lld outer faces crossing the wall (exact test)",
-                   path, (long long)fp[0], (long long)fp[1],
-                   ip > 0 ? "outer faces intersect" : "an outer face crosses the wall",
-                   (long long)ip, (long long)wc);
-      return VM_EXIT_CHECK;
-    }
-  }
-  if (text)
-    printf("verify: every quadrature simplex (%s rule) positively oriented%s (exact)\n", rname,
-           counts[VM_PRISM] ? "; prism layer: outer faces intersect neither each other nor the "
-                              "wall"
-                            : "");
-  return VM_EXIT_OK;
 }
 
 int main(int argc, char **argv) {
@@ -247,7 +204,7 @@ int main(int argc, char **argv) {
       rc = VM_EXIT_CHECK;
     }
     if (verify) {
-      int vrc = verify_mesh(&cli, path, m, qo.rule, !json);
+      int vrc = vm_cli_verify(&cli, path, m, qo.rule, !json, stdout);
       if (vrc != VM_EXIT_OK) rc = vrc;
     }
     if (report) {

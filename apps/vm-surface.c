@@ -3,8 +3,11 @@
  * adapt the mesh to it with the 2D functional (20); or any step alone. */
 #include <math.h>
 #include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -99,7 +102,51 @@ static double mean_edge(const vm_mesh *m) {
   return n ? s / (double)n : 0;
 }
 
+static double wall_seconds(void) {
+  struct timespec ts;
+  timespec_get(&ts, TIME_UTC);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* A border edge (an element side no other element shares) of a surface
+ * mesh: 1 and its vertices, 0 if the surface is closed, -1 out of memory. */
+static int border_edge(const vm_mesh *m, int32_t *a, int32_t *b) {
+  size_t n = 0;
+  for (int64_t e = 0; e < m->ne; e++) n += (size_t)vm_elem_nverts(m->etype[e]);
+  uint64_t *key = malloc((n ? n : 1) * sizeof *key);
+  if (!key) return -1;
+  n = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int k = vm_elem_nverts(m->etype[e]);
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int i = 0; i < k; i++) {
+      uint32_t p = (uint32_t)c[i], q = (uint32_t)c[(i + 1) % k];
+      key[n++] = (uint64_t)(p < q ? p : q) << 32 | (p < q ? q : p);
+    }
+  }
+  qsort(key, n, sizeof *key, cmp_u64);
+  int found = 0;
+  for (size_t i = 0; i < n && !found;) {
+    size_t j = i;
+    while (j + 1 < n && key[j + 1] == key[i]) j++;
+    if (j == i) {
+      *a = (int32_t)(key[i] >> 32);
+      *b = (int32_t)(key[i] & 0xffffffffu);
+      found = 1;
+    }
+    i = j + 1;
+  }
+  free(key);
+  return found;
+}
+
 int main(int argc, char **argv) {
+  double t0 = wall_seconds();
   vm_cli cli;
   vm_cli_init(&cli, "vm-surface");
   static const char *const steps[] = {"all", "repair", "remesh", "curvature", "adapt"};
@@ -344,6 +391,21 @@ int main(int argc, char **argv) {
   } else if (step == STEP_ALL || step == STEP_ADAPT) {
     /* the reference surface: the (repaired) input, before any remeshing */
     const vm_mesh *refm = input ? input : m;
+    /* without the repair nothing has checked that the surface is closed */
+    int32_t ba, bb;
+    int open = do_repair || !ro.require_closed ? 0 : border_edge(refm, &ba, &bb);
+    if (open < 0) {
+      vm_cli_error(&cli, "out of memory");
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    if (open) {
+      const double *p = refm->xyz + 3 * (int64_t)ba, *q = refm->xyz + 3 * (int64_t)bb;
+      vm_cli_error(&cli, "%s: open surface: e.g. the border edge (%g, %g, %g)-(%g, %g, %g) "
+                   "(--open-ok accepts it)", in, p[0], p[1], p[2], q[0], q[1], q[2]);
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
     st = vm_surface_detect_features(refm, ao.feature_angle, ao.corner_angle, &fin);
     if (!st) st = vm_surface_projector_create(cli.ctx, refm, &fin, &ref);
     if (st < 0) {
@@ -383,6 +445,10 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INPUT;
     goto done;
   }
+  if (!cli.quiet)
+    fprintf(stderr, "vm-surface: wrote %s: %lld vertices, %lld faces, smallest angle %.2f deg; "
+            "%.2f s\n", out, (long long)m->nv, (long long)m->ne, vm_surface_min_angle(m),
+            wall_seconds() - t0);
   if (json) {
     printf("{\"input\": ");
     vm_json_string(stdout, in);
@@ -450,6 +516,8 @@ int main(int argc, char **argv) {
     }
     printf(", \"min_angle\": ");
     vm_json_double(stdout, vm_surface_min_angle(m));
+    printf(", \"time\": ");
+    vm_json_double(stdout, wall_seconds() - t0);
     printf("}\n");
   }
 done:

@@ -9,8 +9,10 @@
 
 #include "cli.h"
 #include "cli_report.h"
+#include "cli_verify.h"
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
+#include "varmesh/slip.h"
 #include "varmesh/topology.h"
 #include "varmesh/untangle.h"
 
@@ -33,6 +35,10 @@ static const char usage[] =
     "  --time-limit S       seconds for the whole run\n"
     "  --threads N          OpenMP threads (results do not depend on it)\n"
     "  --free-boundary      do not fix the boundary (only 'fixed' vertices stay)\n"
+    "  --slip-boundary      boundary vertices slide on the input's boundary surface:\n"
+    "                       along its sharp edges, its corners fixed ('fixed' ones stay)\n"
+    "  --feature-angle D    dihedral angle making a boundary edge sharp (default 40)\n"
+    "  --corner-angle D     turn of a sharp edge making a corner (default 60)\n"
     "  --format F           output format\n"
     "  --binary             binary output where the format has both\n"
     "  --progress-every N   a progress line every N iterations (default 10)\n"
@@ -41,9 +47,10 @@ static const char usage[] =
     "                       histograms and slices before and after\n"
     "  -q, --quiet          no progress\n"
     "  --help, --version\n"
-    "exit: 0 valid result; 1 bad input or I/O; 2 usage; 3 inverted elements remain\n"
-    "(the best mesh is still written); 4 interrupted (best valid-so-far mesh written;\n"
-    "a second interrupt exits at once without writing)\n";
+    "exit: 0 valid result (checked as vm-quality --verify does, with exact predicates);\n"
+    "1 bad input or I/O; 2 usage; 3 inverted elements remain or the exact check failed\n"
+    "(the best mesh is still written); 4 interrupted or --time-limit reached (the best\n"
+    "state so far written; a second interrupt exits at once without writing)\n";
 
 static volatile int interrupted;
 
@@ -89,10 +96,14 @@ int main(int argc, char **argv) {
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
   vm_mesh *before = NULL;
-  int json = 0, free_boundary = 0, fout = VM_FMT_AUTO;
+  int json = 0, free_boundary = 0, slip_boundary = 0, fout = VM_FMT_AUTO, verified = 0;
   long every = 10, lv;
   int rc = VM_EXIT_OK;
   vm_mesh *m = NULL;
+  vm_volume_slip *slip = NULL;
+  uint8_t *vflag0 = NULL;
+  int32_t *vsurf0 = NULL;
+  double feature_deg = 40, corner_deg = 60;
   static const char *const methods[] = {"penalty", "oneway", "barrier"};
   static const char *const solvers[] = {"explicit", "implicit", "newton"};
   static const char *const rules[] = {"corner", "geometric"};
@@ -111,6 +122,15 @@ int main(int argc, char **argv) {
       cli.quiet = 1;
     } else if (!strcmp(a, "--free-boundary")) {
       free_boundary = 1;
+    } else if (!strcmp(a, "--slip-boundary")) {
+      slip_boundary = 1;
+    } else if (!strcmp(a, "--feature-angle") || !strcmp(a, "--corner-angle")) {
+      i++;
+      if (vm_cli_double(&cli, a, val, 1e-3, 180, !strcmp(a, "--feature-angle") ? &feature_deg
+                                                                              : &corner_deg)) {
+        rc = VM_EXIT_USAGE;
+        goto done;
+      }
     } else if (!strcmp(a, "--binary")) {
       wo.binary = 1;
     } else if (!strcmp(a, "--untangle")) {
@@ -207,6 +227,10 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "need IN and OUT");
     goto done;
   }
+  if (free_boundary && slip_boundary) {
+    rc = vm_cli_usage_error(&cli, "--free-boundary and --slip-boundary exclude each other");
+    goto done;
+  }
   if (fout == VM_FMT_AUTO && vm_format_from_path(out) == VM_FMT_AUTO)
     fout = vm_format_from_path(in);
   if (vm_mesh_read(cli.ctx, in, VM_FMT_AUTO, &m) < 0) {
@@ -220,18 +244,48 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INPUT;
     goto done;
   }
-  int64_t nfixed = vm_mesh_apply_fixed_field(m), nbnd = 0;
-  if (!free_boundary && vm_mesh_mark_boundary(m, VM_VERTEX_FIXED, &nbnd) < 0) {
+  /* the file's own flags are written back unchanged: the stage's boundary
+   * conditions below are for this run only */
+  vflag0 = vm_malloc(cli.ctx, (size_t)m->nv + 1);
+  vsurf0 = vm_alloc_array(cli.ctx, (size_t)m->nv + 1, sizeof *vsurf0);
+  if (!vflag0 || !vsurf0) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
     rc = VM_EXIT_INPUT;
     goto done;
   }
-  int64_t nfree = 0;
-  for (int64_t v = 0; v < m->nv; v++) nfree += m->vflag[v] == VM_VERTEX_FREE;
+  memcpy(vflag0, m->vflag, (size_t)m->nv);
+  memcpy(vsurf0, m->vsurf, (size_t)m->nv * sizeof *vsurf0);
+  /* slip vertices of the file have no surface here: they stay put */
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->vflag[v] == VM_VERTEX_SLIP) m->vflag[v] = VM_VERTEX_FIXED;
+  int64_t nfixed = vm_mesh_apply_fixed_field(m), nbnd = 0;
+  if (slip_boundary) {
+    vm_volume_slip_info si;
+    if (vm_volume_slip_create(cli.ctx, m, feature_deg, corner_deg, &slip, &si) < 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    nbnd = si.nboundary;
+    if (!cli.quiet)
+      fprintf(stderr, "vm-volume: slip boundary: %lld boundary vertices: %lld slide on the "
+              "surface, %lld along %d sharp edge lines, %lld corners and %lld fixed ones stay\n",
+              (long long)si.nboundary, (long long)si.nsurface, (long long)si.nline, si.lines,
+              (long long)si.ncorner, (long long)si.nkept_fixed);
+  } else if (!free_boundary && vm_mesh_mark_boundary(m, VM_VERTEX_FIXED, &nbnd) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  int64_t nfree = 0, nslip = 0;
+  for (int64_t v = 0; v < m->nv; v++) {
+    nfree += m->vflag[v] == VM_VERTEX_FREE;
+    nslip += m->vflag[v] == VM_VERTEX_SLIP;
+  }
   if (!cli.quiet)
-    fprintf(stderr, "vm-volume: %s: %lld vertices (%lld free; %lld fixed by field, %lld on the "
-            "boundary), %lld elements\n", in, (long long)m->nv, (long long)nfree,
-            (long long)nfixed, (long long)nbnd, (long long)m->ne);
+    fprintf(stderr, "vm-volume: %s: %lld vertices (%lld free, %lld sliding; %lld fixed by field, "
+            "%lld on the boundary), %lld elements\n", in, (long long)m->nv, (long long)nfree,
+            (long long)nslip, (long long)nfixed, (long long)nbnd, (long long)m->ne);
   if (report_dir) {
     char title[512];
     snprintf(title, sizeof title, "vm-volume: %s", in);
@@ -249,7 +303,9 @@ int main(int argc, char **argv) {
   signal(SIGTERM, on_signal);
   vm_ctx_set_interrupt(cli.ctx, &interrupted);
   vm_volume_report rep;
-  int st = vm_volume_run(cli.ctx, m, NULL, &o, &rep);
+  vm_surface_ops sops;
+  if (slip) sops = vm_volume_slip_ops(slip);
+  int st = vm_volume_run(cli.ctx, m, slip ? &sops : NULL, &o, &rep);
   if (st < 0 && st != VM_ERR_INTERRUPTED) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
     rc = VM_EXIT_INPUT;
@@ -263,16 +319,34 @@ int main(int argc, char **argv) {
   qo.rule = VM_RULE_GEOMETRIC;
   vm_mesh_quality(m, &qo, &qg);
   int64_t bad = q.all.inverted_nodes + (o.rule == VM_RULE_GEOMETRIC ? qg.all.inverted_nodes : 0);
+  double slip_dist = 0;
+  if (slip && vm_volume_slip_distance(slip, m, &slip_dist) < 0) {
+    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  memcpy(m->vflag, vflag0, (size_t)m->nv);
+  memcpy(m->vsurf, vsurf0, (size_t)m->nv * sizeof *vsurf0);
   int wst = vm_mesh_write(cli.ctx, m, out, fout, &wo);
   if (wst < 0) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
     rc = VM_EXIT_INPUT;
     goto done;
   }
-  if (st == VM_ERR_INTERRUPTED)
+  if (st == VM_ERR_INTERRUPTED || rep.timed_out)
     rc = VM_EXIT_INTERRUPTED;
   else if (bad > 0 || !rep.valid)
     rc = VM_EXIT_CHECK;
+  else {
+    /* before success is reported, vm-quality --verify's exact checks (CGAL
+     * predicates, no arithmetic shared with the solver) on the written mesh */
+    int vrc = vm_cli_verify(&cli, out, m, o.rule, 0, NULL);
+    if (vrc != VM_EXIT_OK) rc = vrc;
+    verified = vrc == VM_EXIT_OK;
+    if (verified && !cli.quiet)
+      fprintf(stderr, "vm-volume: %s: verify: every quadrature simplex (%s rule) positively "
+              "oriented (exact)\n", out, rules[o.rule]);
+  }
   if (!cli.quiet) {
     fprintf(stderr, "vm-volume: %s: M %lld -> %lld (max %lld), %d untangling + %d local + %d "
             "optimization iterations, %.2f s (untangled after %.2f s)\n", out,
@@ -281,8 +355,15 @@ int main(int argc, char **argv) {
     fprintf(stderr, "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
             "corner tets %lld in %lld elements%s\n", rep.phi_min, rep.psi_min, q.all.sj_min,
             (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems,
-            rc == VM_EXIT_CHECK ? "  -- NOT VALID" : rc == VM_EXIT_INTERRUPTED ? "  -- interrupted" : "");
+            rc == VM_EXIT_CHECK ? "  -- NOT VALID"
+            : rc == VM_EXIT_INTERRUPTED ? (rep.timed_out && st != VM_ERR_INTERRUPTED
+                                               ? "  -- time limit reached"
+                                               : "  -- interrupted")
+                                        : "");
   }
+  if (slip && !cli.quiet)
+    fprintf(stderr, "vm-volume: slip boundary: largest distance of a boundary vertex from the "
+            "input's boundary surface %.3e\n", slip_dist);
   if (report) {
     int rrc = vm_cli_report_volume(&cli, &report, report_dir, in, out, before, m, hist, &o, &rep);
     if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
@@ -292,12 +373,13 @@ int main(int argc, char **argv) {
     vm_json_string(stdout, in);
     printf(", \"output\": ");
     vm_json_string(stdout, out);
-    printf(", \"valid\": %s, \"interrupted\": %s, \"method\": \"%s\", \"rule\": \"%s\", "
+    printf(", \"valid\": %s, \"interrupted\": %s, \"timed_out\": %s, \"method\": \"%s\", \"rule\": \"%s\", "
            "\"nodes\": %lld, \"M_init\": %lld, \"M_max\": %lld, \"M_final\": %lld, "
            "\"inverted_corner_tets\": %lld, \"inverted_elements\": %lld, \"iter_untangle\": %d, "
            "\"iter_local\": %d, \"iter_opt\": %d, \"time_untangle\": %.3f, \"time_total\": %.3f, "
            "\"phi_min\": ",
-           rc == VM_EXIT_OK ? "true" : "false", st == VM_ERR_INTERRUPTED ? "true" : "false",
+           rep.valid && bad == 0 && rc != VM_EXIT_CHECK ? "true" : "false",
+           st == VM_ERR_INTERRUPTED ? "true" : "false", rep.timed_out ? "true" : "false",
            vm_untangle_method_name(o.method), rules[o.rule], (long long)rep.nodes,
            (long long)rep.M_init, (long long)rep.M_max, (long long)rep.M_final,
            (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems, rep.iter_untangle,
@@ -307,11 +389,18 @@ int main(int argc, char **argv) {
     vm_json_double(stdout, rep.psi_min);
     printf(", \"sj_min\": ");
     vm_json_double(stdout, q.all.sj_min);
+    if (slip) {
+      printf(", \"slip_max_distance\": ");
+      vm_json_double(stdout, slip_dist);
+    }
     printf(", \"t_reached\": ");
     vm_json_double(stdout, rep.t_reached);
-    printf("}\n");
+    printf(", \"verified\": %s}\n", verified ? "true" : "false");
   }
 done:
+  vm_volume_slip_destroy(&slip);
+  if (vflag0) vm_free(cli.ctx, vflag0);
+  if (vsurf0) vm_free(cli.ctx, vsurf0);
   vm_report_destroy(&report);
   vm_report_history_destroy(&hist);
   vm_mesh_destroy(&before);

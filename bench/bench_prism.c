@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "varmesh/aircraft.h"
 #include "varmesh/io.h"
@@ -34,6 +35,63 @@ static double model_length(const vm_mesh *m) {
   return fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
 }
 
+/* Where the worst prisms are: the 8 lowest corner qualities with their
+ * layer, column, column thickness / T and the layer's height there. */
+static void worst_prisms(const vm_mesh *res, const vm_prism_report *r) {
+  const vm_qrule *R = vm_qrule_get(VM_PRISM, VM_RULE_CORNER);
+  int64_t nw = r->wall_vertices, nt = r->wall_triangles;
+  enum { NW = 8 };
+  double wq[NW];
+  int64_t we[NW];
+  int nwq = 0;
+  int64_t below[3] = {0, 0, 0};
+  for (int64_t e = 0; e < res->ne; e++) {
+    if (res->etype[e] != VM_PRISM) continue;
+    const int32_t *c = res->conn + res->eoff[e];
+    double q = INFINITY;
+    for (int j = 0; j < R->nnodes; j++) {
+      double u[3][3];
+      for (int k = 0; k < 3; k++)
+        for (int d = 0; d < 3; d++)
+          u[k][d] = res->xyz[3 * (int64_t)c[R->nodes[j].head[k]] + d] -
+                    res->xyz[3 * (int64_t)c[R->nodes[j].tail[k]] + d];
+      double det = u[0][0] * (u[1][1] * u[2][2] - u[1][2] * u[2][1]) -
+                   u[0][1] * (u[1][0] * u[2][2] - u[1][2] * u[2][0]) +
+                   u[0][2] * (u[1][0] * u[2][1] - u[1][1] * u[2][0]);
+      double l = 1;
+      for (int k = 0; k < 3; k++)
+        l *= sqrt(u[k][0] * u[k][0] + u[k][1] * u[k][1] + u[k][2] * u[k][2]);
+      q = fmin(q, det / l / (sqrt(3.0) / 2));
+    }
+    below[0] += q < 0.01;
+    below[1] += q < 0.05;
+    below[2] += q < 0.1;
+    int pos = nwq < NW ? nwq++ : NW;
+    if (pos == NW && !(q < wq[NW - 1])) continue;
+    if (pos == NW) pos = NW - 1;
+    while (pos > 0 && wq[pos - 1] > q) {
+      wq[pos] = wq[pos - 1];
+      we[pos] = we[pos - 1];
+      pos--;
+    }
+    wq[pos] = q;
+    we[pos] = e;
+  }
+  fprintf(stderr, "  prisms with scaled Jacobian < 0.01: %lld, < 0.05: %lld, < 0.1: %lld\n",
+          (long long)below[0], (long long)below[1], (long long)below[2]);
+  const vm_field *th = vm_mesh_find_field(res, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX);
+  for (int i = 0; i < nwq; i++) {
+    const int32_t *c = res->conn + res->eoff[we[i]];
+    int64_t v = c[0] % nw;
+    const double *x = res->xyz + 3 * v;
+    double h = 0;
+    for (int d = 0; d < 3; d++) h += pow(res->xyz[3 * (int64_t)c[3] + d] - res->xyz[3 * (int64_t)c[0] + d], 2);
+    fprintf(stderr, "  sj %.3g layer %lld column %lld at (%.3f %.3f %.3f): thickness/T %.3f, h %.3g\n",
+            wq[i], (long long)(we[i] / nt), (long long)v, x[0], x[1], x[2],
+            th ? ((const double *)th->data)[v] / r->thickness : -1, sqrt(h));
+  }
+}
+
 static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac, int layers,
                     double growth, int verbose) {
   vm_prism_opts o = vm_prism_opts_default();
@@ -44,6 +102,8 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     o.progress = progress;
   }
   vm_prism *p = NULL;
+  struct timespec c0, c1;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
   int st = vm_prism_create(ctx, w, &o, &p);
   if (st) {
     fprintf(stderr, "%s: %s\n", name, vm_ctx_error(ctx));
@@ -53,6 +113,8 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
   if (st < 0) fprintf(stderr, "%s: run: %s\n", name, vm_ctx_error(ctx));
   vm_prism_report r;
   vm_prism_get_report(p, &r);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  double cpu = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
   vm_mesh *res = NULL;
   int64_t emb = -1, cg_pairs = -1, cg_wall = -1, cg_bad = -1;
   if (vm_prism_result(p, &res) == VM_OK) {
@@ -63,9 +125,9 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
     vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
   }
-  printf("| %-14s | %4.0f%% | %7lld | %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f "
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f "
          "| %lld / %lld+%lld | %.3f | %d%s |\n",
-         name, 100 * frac, (long long)r.prisms, r.time_total, 100 * r.full_fraction, r.thick_min,
+         name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction, r.thick_min,
          r.thick_mean, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
          (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
          st ? " (warn)" : "");
@@ -77,6 +139,7 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     fprintf(stderr, "; implicit iterations %d, cut rounds %d (%lld pairs first)\n",
             r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
   }
+  if (verbose && res) worst_prisms(res, &r);
   vm_mesh_destroy(&res);
   vm_prism_destroy(&p);
   return 0;
@@ -111,7 +174,7 @@ int main(int argc, char **argv) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_surface_register_formats(ctx);
-  printf("| case | T/L | prisms | time s | full | thick min / mean | inverted (own / CGAL) "
+  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick min / mean | inverted (own / CGAL) "
          "| min SJ | max normal dev deg | intersecting pairs (Embree / CGAL outer+wall) | max "
          "growth | layers |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");

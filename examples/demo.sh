@@ -1,27 +1,41 @@
 #!/usr/bin/env bash
 # examples/demo.sh: set up a fresh Debian machine (packages, build) and run
-# varmesh's main job on its bundled, generated example. Results go to out/.
+# varmesh's main job on its bundled, generated example: the aircraft model
+# through every stage of examples/Makefile (model -> surface -> prism layers
+# -> exports -> reports), then the volume stage on the paper's rotated cube.
+# Results go to out/. Run as root (apt-get) or on a machine that has the
+# packages of .ci/install-deps.
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
+t0=$(date +%s)
 bash .ci/install-deps
+echo "== build (release-like, in build/; the first build takes a few minutes)"
 [ -f build/build.ninja ] || meson setup build >/dev/null
 ninja -C build >/dev/null
-out="$root/out"
-mkdir -p "$out"
 bin="$root/build/apps"
-echo "== 1. generate the rotated-cube problem of the paper (n = 16, inner cube turned by pi/2)"
-"$bin/vm-gen" rotcube --n 16 --angle pi/2 "$out/rotcube.vtk"
-echo "== 2. convert it to the stages' exchange format and to ParaView's VTU"
-"$bin/vm-convert" "$out/rotcube.vtk" "$out/rotcube.vmsh"
-"$bin/vm-convert" "$out/rotcube.vmsh" "$out/rotcube.vtu"
-echo "== 3. judge it (M = inverted corner tets, phi/psi as in the paper's Table 1)"
-"$bin/vm-quality" --target-size 0.0625 "$out/rotcube.vmsh" | head -n 4
-echo "== 4. untangle and optimize it (volume stage)"
-"$bin/vm-volume" --target-size 0.0625 --progress-every 20 "$out/rotcube.vmsh" "$out/rotcube-untangled.vtu"
-echo "== 5. judge the result"
-"$bin/vm-quality" --target-size 0.0625 --require-valid "$out/rotcube-untangled.vtu" | head -n 5
+out="$root/out/pipeline"
+mkdir -p "$out"
+echo "== the pipeline on the generated aircraft: make -C examples (incremental)"
+make -C examples --no-print-directory VM_BIN="$bin" OUT="$out"
+echo "== the volume stage on the paper's rotated cube (n = 16, inner cube turned by pi/2)"
+"$bin/vm-gen" rotcube --n 16 --angle pi/2 "$root/out/rotcube.vtk"
+"$bin/vm-volume" --progress-every 50 --report "$root/out/rotcube-report" \
+  "$root/out/rotcube.vtk" "$root/out/rotcube-untangled.vtu"
 echo
-echo "results in $out:"
-echo "  rotcube.vtk / .vmsh / .vtu   the tangled input (open the .vtu in ParaView)"
-echo "  rotcube-untangled.vtu        the untangled, optimized mesh"
+echo "== results ($(( $(date +%s) - t0 )) s in all)"
+echo "in $out:"
+for f in aircraft.stl aircraft.surface.vmsh aircraft.prism.vmsh aircraft.msh aircraft.vtu; do
+  [ -e "$out/$f" ] && printf '  %-24s %s\n' "$f" "$(du -h "$out/$f" | cut -f1)"
+done
+for r in surface prism; do
+  d="$out/aircraft-report-$r"
+  if [ -s "$d/index.html" ]; then
+    echo "  aircraft-report-$r/index.html  (open in a browser: pictures and histograms)"
+    sed -n '1,6p' "$d/quality.txt" | sed 's/^/      /'
+  fi
+done
+echo "in $root/out:"
+echo "  rotcube.vtk                 the tangled rotated cube (vm-quality says how tangled)"
+echo "  rotcube-untangled.vtu       the untangled, optimized mesh (ParaView)"
+echo "  rotcube-report/index.html   convergence plot, histograms, slices before and after"

@@ -925,7 +925,8 @@ static int read_header(vtkrd *r) {
     r->lx.line = 1;
     return vm_lex_fail(&r->lx, "not a legacy VTK file (no '# vtk DataFile Version' header)");
   }
-  if (major < 1 || minor < 0 || major * 10 + minor > 51 || minor > 9) {
+  /* compare before combining: a huge major must not overflow major * 10 */
+  if (major < 1 || major > 5 || minor < 0 || minor > 9 || major * 10 + minor > 51) {
     r->lx.line = 1;
     return vm_lex_fail(&r->lx, "VTK file version %d.%d is not supported (1.0 to 5.1 are)", major,
                        minor);

@@ -366,6 +366,8 @@ static const char *find_str(const char *p, const char *end, const char *s) {
 /* Look up attribute `key` in a start tag's attribute text (already checked
  * to be well formed). Returns 1 and the raw value if present. */
 static int attr_raw(const char *a, size_t alen, const char *key, const char **v, size_t *vn) {
+  if (!alen) /* a tag without attributes may pass a = NULL: no arithmetic on it */
+    return 0;
   const char *p = a, *end = a + alen;
   size_t kn = strlen(key);
   while (p < end) {

@@ -449,19 +449,19 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
   if (st) return st;
   if (mark) {
     memset(mark, 0, (size_t)nw);
+    /* the columns that carry each face: a top face's three, a side face's
+     * two (the side edges it spans; both prisms on that wall edge use
+     * them); the wall carries none. Marking whole neighbouring prisms
+     * would cut about four times as many columns as needed. */
     for (int64_t k = 0; k < 2 * np; k++) {
       int64_t f = pairs[k];
-      int32_t owner[2] = {-1, -1};
       if (f < nt) {
-        owner[0] = (int32_t)f;
+        for (int i = 0; i < 3; i++) mark[p->tri[3 * f + i]] = 1;
       } else if (f < nt + 2 * ned) {
         int64_t e = (f - nt) / 2;
-        owner[0] = p->etri[2 * e];
-        owner[1] = p->etri[2 * e + 1];
+        mark[p->edge[2 * e]] = 1;
+        mark[p->edge[2 * e + 1]] = 1;
       }
-      for (int o = 0; o < 2; o++)
-        if (owner[o] >= 0)
-          for (int i = 0; i < 3; i++) mark[p->tri[3 * (int64_t)owner[o] + i]] = 1;
     }
   }
   vm_free(ctx, pairs);

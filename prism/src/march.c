@@ -24,6 +24,91 @@ static double level_quality(const vm_prism *p, const double *la, const double *l
   return qm;
 }
 
+/* Quality of the prisms of layers 0..nm of triangle t (those touching the
+ * moved levels 1..nm): the smallest. */
+static double low_levels_quality(const vm_prism *p, int64_t t, int nm) {
+  size_t lsz = (size_t)(3 * p->nw);
+  double q = INFINITY;
+  for (int k = 0; k <= nm; k++) {
+    double x[18];
+    for (int i = 0; i < 3; i++) {
+      memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+      memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
+             3 * sizeof *x);
+    }
+    double v = pr_prism_quality(x);
+    q = v < q ? v : q;
+  }
+  return q;
+}
+
+/* The first layer's side edges along the wall normal where the wall is
+ * smooth: level 1 of such a column is put at its distance from the wall on
+ * the normal, and levels 2..nm part of the way (weight 1 - (k-1)/nm), so a
+ * column that springback left tilted bends over a few layers instead of
+ * one. Where a prism of layers 0..nm would then be worse than both before
+ * and 0.3, its columns go back. The outer surface never moves, so its
+ * intersections are untouched, and going back restores the old prisms bit
+ * for bit. */
+#define ORTHO_QMIN 0.3
+static int orthogonal_first_level(vm_prism *p) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  int nm = p->nlev - 2 < 6 ? p->nlev - 2 : 6;
+  size_t lsz = (size_t)(3 * nw);
+  double *lv = p->lev + lsz;
+  double *old = vm_alloc_array(ctx, (size_t)nm * lsz, sizeof *old);
+  double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
+  uint8_t *back = vm_alloc_array(ctx, (size_t)nw, sizeof *back);
+  uint8_t *moved = vm_calloc(ctx, (size_t)nw, sizeof *moved);
+  if (!old || !q0 || !back || !moved) {
+    vm_free(ctx, old);
+    vm_free(ctx, q0);
+    vm_free(ctx, back);
+    vm_free(ctx, moved);
+    return VM_ERR_NOMEM;
+  }
+  memcpy(old, lv, (size_t)nm * lsz * sizeof *old);
+  for (int64_t t = 0; t < nt; t++) q0[t] = low_levels_quality(p, t, nm);
+  for (int64_t v = 0; v < nw; v++) {
+    if (!p->smooth[v]) continue;
+    moved[v] = 1;
+    for (int k = 1; k <= nm; k++) {
+      double *x = lv + (size_t)(k - 1) * lsz + 3 * v, w = 1 - (double)(k - 1) / nm;
+      double h = pr_dist(x, p->wall + 3 * v);
+      for (int c = 0; c < 3; c++)
+        x[c] += w * (p->wall[3 * v + c] + h * p->vnrm[3 * v + c] - x[c]);
+    }
+  }
+  for (int round = 0; round < 100; round++) {
+    memset(back, 0, (size_t)nw);
+    int64_t nback = 0;
+    for (int64_t t = 0; t < nt; t++) {
+      double lim = q0[t] < ORTHO_QMIN ? q0[t] : ORTHO_QMIN;
+      if (low_levels_quality(p, t, nm) >= lim) continue;
+      for (int i = 0; i < 3; i++) {
+        int32_t v = p->tri[3 * t + i];
+        if (moved[v]) {
+          back[v] = 1;
+          nback++;
+        }
+      }
+    }
+    if (!nback) break;
+    for (int64_t v = 0; v < nw; v++)
+      if (back[v]) {
+        for (int k = 0; k < nm; k++)
+          memcpy(lv + (size_t)k * lsz + 3 * v, old + (size_t)k * lsz + 3 * v, 3 * sizeof *old);
+        moved[v] = 0;
+      }
+  }
+  vm_free(ctx, old);
+  vm_free(ctx, q0);
+  vm_free(ctx, back);
+  vm_free(ctx, moved);
+  return VM_OK;
+}
+
 int vm_prism_march(vm_prism *p) {
   if (!p) return VM_ERR_ARG;
   if (p->done != 4) return vm_error(p->ctx, VM_ERR_ARG, "prism: marching needs the restored layer");
@@ -70,6 +155,7 @@ int vm_prism_march(vm_prism *p) {
   vm_field *tf;
   if ((st = vm_mesh_add_field(m2, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT, VM_FIELD_F64, 18, &tf)))
     goto done;
+  double *tg = tf->data;
   if ((st = vm_problem_create(ctx, m2, &pb))) goto done;
   vm_measure_params prm = vm_measure_params_default();
   prm.theta = p->o.theta;
@@ -96,32 +182,55 @@ int vm_prism_march(vm_prism *p) {
     }
     /* inner targets: orthogonal to the base surface (vertex normals,
      * bent towards the face normal only where needed); outer targets: the
-     * shape at the split */
+     * shape at the split where it is a fair prism, else (a twisted column
+     * split along straight side edges can give a flat or inverted
+     * sub-prism) the inner target's shape, which is always valid */
     pr_surface_dirs(p, base, fn, vn, dr, 0);
-    double *tg = tf->data;
     pr_build_targets(p, base, fn, vn, hk, tg);
     for (int64_t t = 0; t < nt; t++) {
       const int32_t *c = m2->conn + 6 * (nt + t);
-      for (int i = 0; i < 6; i++)
-        memcpy(tg + 18 * (nt + t) + 3 * i, m2->xyz + 3 * (int64_t)c[i], 3 * sizeof *tg);
+      double x[18];
+      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m2->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+      memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > 0.05 ? x : tg + 18 * t, sizeof x);
     }
-    if ((st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD))) goto done;
-    int it = 0;
-    st = pr_solve(p, pb, m2, VM_MINIMIZER_EXPLICIT, p->o.march_iter, VM_PRISM_PHASE_MARCH, &it);
-    if (st < 0) goto done;
-    if (st == VM_WARN_TIME) warn = st;
+    /* a split that cannot be made valid ends the marching early (the
+     * paper's option): levels 0..k are valid, and so is the remainder
+     * from level k to the outer surface (checked with the previous split) */
+    const char *why = NULL;
     vm_node_stats ns;
-    if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) goto done;
-    if (ns.inverted) {
-      st = vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after split %d",
-                    (long long)ns.inverted, k + 1);
-      goto done;
+    int it = 0;
+    if ((st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD)) < 0) {
+      why = "degenerate target";
+    } else if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) {
+      why = "node statistics";
+    } else if (ns.inverted) {
+      why = "the straight split is not valid";
+    } else {
+      st = pr_solve(p, pb, m2, VM_MINIMIZER_EXPLICIT, p->o.march_iter, VM_PRISM_PHASE_MARCH, &it);
+      if (st == VM_WARN_TIME) warn = st;
+      if (st < 0) {
+        why = "solver";
+      } else if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) {
+        why = "node statistics";
+      } else if (ns.inverted) {
+        why = "inverted nodes after the solve";
+      }
+    }
+    if (why) {
+      if (st == VM_ERR_NOMEM || st == VM_ERR_INTERRUPTED) goto done;
+      vm_log(ctx, VM_LOG_WARN, "prism: marching stopped at split %d of %d (%s); %d layers",
+             k + 1, n - 1, why, k + 1);
+      made = k + 1;
+      warn = VM_WARN_MAXITER;
+      st = VM_OK;
+      break;
     }
     memcpy(p->lev + (size_t)(k + 1) * lsz, m2->xyz + lsz, lsz * sizeof *p->lev);
     pr_progress(p, VM_PRISM_PHASE_MARCH, k + 1, p->sched[k], 0);
   }
   memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
   p->nlev = made + 1;
+  if (p->nlev > 2 && (st = orthogonal_first_level(p)) < 0) goto done;
   /* the paper's option: drop a skewed outermost remainder */
   if (p->o.drop_quality > 0 && p->nlev > 2 &&
       level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz,
@@ -188,18 +297,25 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
       c += 3;
       m->eoff[e + 1] = c;
     }
-  vm_field *fl, *fp, *fth;
-  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fl)) ||
-      (st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fp)) ||
-      (st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &fth)))
+  /* vm_mesh_add_field may move the mesh's field table, so keep the data
+   * pointers (separate allocations), never the vm_field pointers */
+  vm_field *f;
+  int32_t *lay = NULL, *ph = NULL;
+  double *th = NULL;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
     goto fail;
-  int32_t *lay = fl->data, *ph = fp->data;
+  lay = f->data;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
+    goto fail;
+  ph = f->data;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
+    goto fail;
+  th = f->data;
   for (int64_t k = 0; k < ne; k++) {
     lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
     ph[k] = k < nl * nt ? VM_PRISM_TAG_VOLUME : k < nl * nt + nt ? VM_PRISM_TAG_WALL
                                                                   : VM_PRISM_TAG_OUTER;
   }
-  double *th = fth->data;
   for (int64_t v = 0; v < nw; v++) {
     double d = pr_dist(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
     for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;

@@ -21,7 +21,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.growth = 1.2;
   o.theta = 0.8;
   o.cut_factor = 0.85;
-  o.springback_iter = 20;
+  o.springback_iter = 50;
   o.resolve_iter = 6;
   o.max_cut_rounds = 80;
   o.smooth_iter = 30;
@@ -36,6 +36,7 @@ vm_prism_opts vm_prism_opts_default(void) {
 double pr_elapsed(const vm_prism *p) { return omp_get_wtime() - p->t0; }
 
 double pr_time_left(const vm_prism *p) {
+  if (vm_ctx_interrupted(p->ctx)) return 0;
   return p->o.time_limit > 0 ? p->o.time_limit - pr_elapsed(p) : INFINITY;
 }
 
@@ -194,6 +195,30 @@ static int build_adjacency(vm_prism *p) {
                     "prism: the wall has %lld non-manifold edges (more than two triangles)",
                     (long long)nonman);
   }
+  /* a closed, consistently oriented wall: every edge has two triangles
+   * that run through it in opposite directions */
+  int64_t open = 0, flipped = 0;
+  for (int64_t e = 0; e < ned; e++) {
+    if (p->etri[2 * e + 1] < 0) {
+      open++;
+      continue;
+    }
+    int dirs = 0;
+    for (int s = 0; s < 2; s++) {
+      const int32_t *c = p->tri + 3 * (int64_t)p->etri[2 * e + s];
+      for (int i = 0; i < 3; i++)
+        if (c[i] == p->edge[2 * e] && c[(i + 1) % 3] == p->edge[2 * e + 1]) dirs++;
+    }
+    if (dirs != 1) flipped++;
+  }
+  if (open || flipped) {
+    vm_free(ctx, fill);
+    if (open)
+      return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not closed (%lld open edges)",
+                      (long long)open);
+    return vm_error(ctx, VM_ERR_ARG,
+                    "prism: the wall is not consistently oriented (%lld edges)", (long long)flipped);
+  }
   for (int64_t e = 0; e < ned; e++) {
     p->vv_off[p->edge[2 * e] + 1]++;
     p->vv_off[p->edge[2 * e + 1] + 1]++;
@@ -305,6 +330,20 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
       vm_prism_destroy(&p);
       return vm_error(ctx, VM_ERR_ARG, "prism: wall triangle %lld is degenerate", (long long)t);
     }
+  }
+  /* outward: the enclosed volume is positive */
+  double vol = 0;
+  for (int64_t t = 0; t < nt; t++) {
+    const double *a = p->wall + 3 * (int64_t)p->tri[3 * t], *b = p->wall + 3 * (int64_t)p->tri[3 * t + 1],
+                 *c = p->wall + 3 * (int64_t)p->tri[3 * t + 2];
+    double x[3];
+    pr_cross(b, c, x);
+    vol += pr_dot(a, x);
+  }
+  if (!(vol > 0)) {
+    vm_prism_destroy(&p);
+    return vm_error(ctx, VM_ERR_ARG, "prism: the wall is oriented inwards (enclosed volume %g)",
+                    vol / 6);
   }
   int64_t blind = pr_surface_dirs(p, p->wall, p->fnrm, p->vnrm, p->dir, 3);
   if (blind) {
@@ -467,5 +506,6 @@ int vm_prism_run(vm_prism *p) {
     if (st < 0) return st;
     if (st > 0 && !warn) warn = st;
   }
+  if (vm_ctx_interrupted(p->ctx)) return VM_ERR_INTERRUPTED;
   return warn;
 }

@@ -115,7 +115,8 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
 int64_t pr_count_invalid(const vm_mesh *m, double *qmin);
 
 /* Intersections of the single layer's faces (top, sides, wall): per pair
- * the prisms involved. Marks every vertex of an involved prism in
+ * the columns involved. Marks the wall vertex of every column that carries
+ * an intersecting top or side face in
  * `mark` (nw, may be NULL). Returns the number of intersecting face pairs
  * in *npairs. */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);

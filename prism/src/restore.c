@@ -115,6 +115,7 @@ int vm_prism_restore(vm_prism *p) {
   double *d = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *d);
   double *t = vm_alloc_array(ctx, (size_t)nw, sizeof *t);
   double *told = vm_alloc_array(ctx, (size_t)nw, sizeof *told);
+  double *tcut = vm_alloc_array(ctx, (size_t)nw, sizeof *tcut);
   double *tp = vm_alloc_array(ctx, (size_t)nw, sizeof *tp);
   double *alpha = vm_alloc_array(ctx, (size_t)nw, sizeof *alpha);
   double *q = vm_alloc_array(ctx, (size_t)p->nt, sizeof *q);
@@ -122,7 +123,7 @@ int vm_prism_restore(vm_prism *p) {
   uint8_t *zone = vm_alloc_array(ctx, (size_t)nw, sizeof *zone);
   uint8_t *tmp = vm_alloc_array(ctx, (size_t)nw, sizeof *tmp);
   int st = VM_OK;
-  if (!d || !t || !told || !tp || !alpha || !q || !qold || !zone || !tmp) {
+  if (!d || !t || !told || !tcut || !tp || !alpha || !q || !qold || !zone || !tmp) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -130,6 +131,7 @@ int vm_prism_restore(vm_prism *p) {
   for (int64_t v = 0; v < nw; v++) {
     for (int k = 0; k < 3; k++) d[3 * v + k] = x[3 * (v + nw) + k] - x[3 * v + k];
     t[v] = pr_normalize(d + 3 * v);
+    tcut[v] = t[v] < T ? t[v] : T;
     p->cap[v] = T;
     alpha[v] = 1;
   }
@@ -156,7 +158,11 @@ int vm_prism_restore(vm_prism *p) {
       double s = p->cut[v] ? 0.5 * (t[v] + tp[v]) : t[v];
       double nt = s + alpha[v] * (goal - s);
       if (nt > goal) nt = goal;
-      if (nt < 0.5 * t[v]) nt = 0.5 * t[v];
+      /* never below the length cutting left: that layer is valid and free
+       * of intersections already, and at sharp convex tips the projected
+       * neighbours lie behind the vertex, so repeated smoothing would
+       * shrink the column towards zero */
+      if (nt < tcut[v]) nt = tcut[v];
       t[v] = nt;
     }
     /* no worse prisms and no new intersections: the columns involved go
@@ -204,6 +210,7 @@ done:
   vm_free(ctx, d);
   vm_free(ctx, t);
   vm_free(ctx, told);
+  vm_free(ctx, tcut);
   vm_free(ctx, tp);
   vm_free(ctx, alpha);
   vm_free(ctx, q);

@@ -35,8 +35,12 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
   mo.rel_decrease_count = 2;
   mo.stats_every = 0;
   monitor_data md = {p, ph, 0};
-  mo.monitor = monitor;
-  mo.user = &md;
+  /* in the cutting phase the progress steps are rounds (pairs left), not
+   * the iterations of the local re-solves */
+  if (ph != VM_PRISM_PHASE_CUT) {
+    mo.monitor = monitor;
+    mo.user = &md;
+  }
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
   if (iters && st >= 0) *iters = res.iterations;

@@ -138,28 +138,43 @@ static void forward_monitor(void *user, const vm_iter_info *it) {
   ms->o->monitor(ms->o->user, &p);
 }
 
-/* Elements whose normal opposes the reference normal at their centroid. */
-static int count_flipped(vm_mesh *m, vm_surface_ops ops, int64_t *flipped) {
-  *flipped = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    int t = m->etype[e];
-    if (t != VM_TRI && t != VM_QUAD) continue;
-    int k = vm_elem_nverts(t);
-    const int32_t *c = m->conn + m->eoff[e];
-    double n[3] = {0, 0, 0}, ctr[3] = {0, 0, 0}, q[3], nr[9];
-    for (int a = 0; a < k; a++) {
-      double cr[3];
-      vm_s_cross(m->xyz + 3 * (int64_t)c[a], m->xyz + 3 * (int64_t)c[(a + 1) % k], cr);
-      for (int r = 0; r < 3; r++) {
-        n[r] += cr[r];
-        ctr[r] += m->xyz[3 * (int64_t)c[a] + r] / k;
-      }
-    }
-    int nn = ops.project(ops.user, 0, ctr, q, nr);
-    if (nn < 0) return nn;
-    if (vm_s_dot(n, nr) <= 0) ++*flipped;
+/* Newell normal (twice the vector area) of 2D element e at x. */
+static void element_normals_one(const vm_mesh *m, const double *x, int64_t e, double n[3]) {
+  int k = vm_elem_nverts(m->etype[e]);
+  const int32_t *c = m->conn + m->eoff[e];
+  n[0] = n[1] = n[2] = 0;
+  for (int a = 0; a < k; a++) {
+    double cr[3];
+    vm_s_cross(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
+    for (int r = 0; r < 3; r++) n[r] += cr[r];
   }
-  return VM_OK;
+}
+
+static void element_normals(const vm_mesh *m, const double *x, double *n) {
+  for (int64_t e = 0; e < m->ne; e++) element_normals_one(m, x, e, n + 3 * e);
+}
+
+/* First element with a corner triangle of zero area to working precision
+ * (doubled area below 1e-12 of its squared longest edge, as the repair
+ * judges it), or -1. The barrier measure is infinite on such an element. */
+static int64_t first_degenerate(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++) {
+    int k = vm_elem_nverts(m->etype[e]);
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int a = 0; a < (k == 3 ? 1 : k); a++) {
+      const double *p = m->xyz + 3 * (int64_t)c[a];
+      const double *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
+      const double *r = m->xyz + 3 * (int64_t)c[(a + k - 1) % k];
+      double u[3], v[3], w[3], n[3];
+      vm_s_sub(q, p, u);
+      vm_s_sub(r, p, v);
+      vm_s_sub(r, q, w);
+      vm_s_cross(u, v, n);
+      double l2 = fmax(vm_s_dot(u, u), fmax(vm_s_dot(v, v), vm_s_dot(w, w)));
+      if (!(vm_s_norm(n) > 1e-12 * l2)) return e;
+    }
+  }
+  return -1;
 }
 
 int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts *opts,
@@ -181,6 +196,13 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
       !isfinite(o.c) || !isfinite(o.filter.threshold) || isnan(o.filter.cap) ||
       o.filter.smooth < 0)
     return vm_error(ctx, VM_ERR_ARG, "adapt: invalid options");
+  int64_t bad = first_degenerate(m);
+  if (bad >= 0) {
+    const double *p = m->xyz + 3 * (int64_t)m->conn[m->eoff[bad]];
+    return vm_error(ctx, VM_ERR_ARG,
+                    "adapt: zero-area element %lld at (%g, %g, %g); repair the surface first",
+                    (long long)bad, p[0], p[1], p[2]);
+  }
 
   const int64_t nv = m->nv;
   const size_t n1 = nv > 0 ? (size_t)nv : 1;
@@ -191,19 +213,22 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   vm_minimizer *mz = NULL;
   int32_t *vs = vm_alloc_array(ctx, n1, sizeof *vs);
   double *x0 = vm_alloc_array(ctx, 3 * n1, sizeof *x0);
+  double *en0 = vm_alloc_array(ctx, 3 * (m->ne > 0 ? (size_t)m->ne : 1), sizeof *en0);
   uint8_t *flag0 = vm_alloc_array(ctx, n1, sizeof *flag0);
   int32_t *surf0 = vm_alloc_array(ctx, n1, sizeof *surf0);
   double *Href = vm_alloc_array(ctx, n1, sizeof *Href);
   double *g = vm_alloc_array(ctx, n1, sizeof *g);
   double *Hx = vm_alloc_array(ctx, n1, sizeof *Hx);
-  int st = VM_OK, flags_set = 0;
-  if (!flag0 || !surf0 || !Href || !g || !Hx || !vs || !x0) {
+  int st = VM_OK, flags_set = 0, saved = 0;
+  if (!flag0 || !surf0 || !Href || !g || !Hx || !vs || !x0 || !en0) {
     st = VM_ERR_NOMEM;
     goto done;
   }
   memcpy(flag0, m->vflag, (size_t)nv * sizeof *flag0);
   memcpy(surf0, m->vsurf, (size_t)nv * sizeof *surf0);
   memcpy(x0, m->xyz, 3 * (size_t)nv * sizeof *x0);
+  saved = 1;
+  element_normals(m, m->xyz, en0);
 
   /* features and the surfaces the vertices stay on */
   if ((st = vm_surface_detect_features(m, o.feature_angle, o.corner_angle, &f))) goto done;
@@ -292,15 +317,16 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
     if (st == VM_WARN_MAXITER) st = VM_OK;
     if (st) break;
   }
-  if (st < 0 && st != VM_ERR_INTERRUPTED) {
-    memcpy(m->xyz, x0, 3 * (size_t)nv * sizeof *x0);
-    goto done;
-  }
+  if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
   {
     int keep = st;
-    int64_t flipped = 0;
-    if ((st = count_flipped(m, ops, &flipped))) goto done;
-    r.flipped = flipped;
+    /* flips: elements whose orientation reversed (by construction of the
+     * barrier measure there are none; this is an independent check) */
+    for (int64_t e = 0; e < m->ne; e++) {
+      double n1[3];
+      element_normals_one(m, m->xyz, e, n1);
+      if (vm_s_dot(n1, en0 + 3 * e) <= 0) r.flipped++;
+    }
     r.min_angle_after = vm_surface_min_angle(m);
     /* distance of the vertices to the reference */
     double dmax = 0;
@@ -319,6 +345,9 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
     if (!st) st = keep;
   }
 done:
+  /* a failed call leaves the mesh as it was (an interrupted one keeps the
+   * last accepted iterate) */
+  if (st < 0 && st != VM_ERR_INTERRUPTED && saved) memcpy(m->xyz, x0, 3 * (size_t)nv * sizeof *x0);
   if (flags_set) {
     memcpy(m->vflag, flag0, (size_t)nv * sizeof *flag0);
     memcpy(m->vsurf, surf0, (size_t)nv * sizeof *surf0);
@@ -329,6 +358,7 @@ done:
   vm_surface_features_free(ctx, &f);
   vm_free(ctx, vs);
   vm_free(ctx, x0);
+  vm_free(ctx, en0);
   vm_free(ctx, flag0);
   vm_free(ctx, surf0);
   vm_free(ctx, Href);

@@ -4,7 +4,11 @@
 # build-fuzz/work/<reader>/ (the seed corpus in test/fuzz/corpus/ is only
 # read); crashes, hangs and OOMs to build-fuzz/artifacts/<reader>/. Prints
 # one summary line per reader; exit 1 if any reader left an artifact.
-# Environment: FUZZ_DIR (default build-fuzz: where the binaries are).
+# Environment: FUZZ_DIR (default build-fuzz: where the binaries are);
+# FUZZ_CPU=1: SECONDS is a budget of CPU seconds, not wall seconds (on a
+# shared machine a wall-clock budget buys little work): the fuzzer is
+# interrupted once its user + system time reaches it (wall cap: FUZZ_WALL
+# seconds, default 10 x SECONDS).
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -26,10 +30,28 @@ for r in $readers; do
   t0=$(date +%s)
   # CPU seconds of the fuzzer (user + system): on a loaded machine the wall
   # time overstates the work done
-  cpu=$( { TIMEFORMAT='%U %S'; time "$exe" "$work" "$here/corpus/$r" "$here/regress/$r" \
-    "${dict[@]}" -max_total_time="$secs" -rss_limit_mb=2048 -malloc_limit_mb=512 \
-    -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$art/" >"$log" 2>&1
-    echo "rc $?" >"$log.rc"; } 2>&1 | awk '{printf "%.0f", $1 + $2}')
+  wall=$secs
+  [ "${FUZZ_CPU:-0}" = 1 ] && wall=${FUZZ_WALL:-$((10 * secs))}
+  cpu=$( { TIMEFORMAT='%U %S'; time {
+    "$exe" "$work" "$here/corpus/$r" "$here/regress/$r" \
+      "${dict[@]}" -max_total_time="$wall" -rss_limit_mb=2048 -malloc_limit_mb=512 \
+      -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$art/" >"$log" 2>&1 &
+    pid=$!
+    if [ "${FUZZ_CPU:-0}" = 1 ]; then
+      # watchdog: SIGTERM (libFuzzer prints its final stats) at the CPU budget
+      tck=$(getconf CLK_TCK)
+      while kill -0 "$pid" 2>/dev/null; do
+        used=$(awk -v t="$tck" '{sub(/^.*\) /, ""); print int(($12 + $13) / t)}' \
+          "/proc/$pid/stat" 2>/dev/null)
+        [ "${used:-0}" -ge "$secs" ] && { stopped=1; kill -TERM "$pid"; break; }
+        sleep 2
+      done
+    fi
+    wait "$pid"
+    st=$?
+    # 72: libFuzzer's exit code when interrupted, here by the watchdog
+    [ "$st" = 72 ] && [ "${stopped:-0}" = 1 ] && st=0
+    echo "rc $st" >"$log.rc"; }; } 2>&1 | awk '{printf "%.0f", $1 + $2}')
   rc=$(awk '{print $2}' "$log.rc")
   t1=$(date +%s)
   execs=$(awk '/stat::number_of_executed_units/ {print $2}' "$log" | tail -n 1)

@@ -14,7 +14,9 @@ fi
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
-check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+check() {
+  if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; tail -n 15 "$dir/log" 2>/dev/null; fail=1; fi
+}
 have_prism=0
 [ -x "$bin/vm-prism" ] && have_prism=1
 

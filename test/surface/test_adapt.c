@@ -164,6 +164,7 @@ static void test_open_cylinder(vm_ctx *ctx) {
 static void test_bad(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_adapt_result r;
+  int st;
   vm_adapt_opts o = vm_adapt_opts_default();
   /* volume mesh */
   vm_mesh_create(ctx, &m);
@@ -205,6 +206,20 @@ static void test_bad(vm_ctx *ctx) {
   free(x0);
   vm_mesh_destroy(&a);
   vm_mesh_destroy(&b);
+  /* a zero-area triangle: refused up front, naming it, mesh unchanged */
+  shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
+  int32_t *c = m->conn + 3 * 7;
+  for (int r3 = 0; r3 < 3; r3++) /* vertex c[2] onto the midpoint of c[0]-c[1] */
+    m->xyz[3 * c[2] + r3] = 0.5 * (m->xyz[3 * c[0] + r3] + m->xyz[3 * c[1] + r3]);
+  x0 = malloc(sizeof *x0 * 3 * (size_t)m->nv);
+  memcpy(x0, m->xyz, sizeof *x0 * 3 * (size_t)m->nv);
+  st = vm_surface_adapt(m, NULL, &o, &r);
+  CHECK(st == VM_ERR_ARG && strstr(vm_ctx_error(ctx), "zero-area element") &&
+            !strchr(vm_ctx_error(ctx), '\n'),
+        "zero-area triangle refused: %d %s", st, vm_ctx_error(ctx));
+  CHECK(!memcmp(x0, m->xyz, sizeof *x0 * 3 * (size_t)m->nv), "refused mesh unchanged");
+  free(x0);
+  vm_mesh_destroy(&m);
   /* bad options */
   shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
   o.rounds = 0;
@@ -218,6 +233,38 @@ static void test_bad(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* Every allocation of an adaptation fails once: a clean error, no leak,
+ * the mesh as it was. */
+static void test_alloc_failures(vm_ctx *ctx) {
+  vm_mesh *m = NULL, *m0 = NULL;
+  shp_lens(ctx, 1.0, 0.5, 0.3, &m0);
+  vm_adapt_opts o = vm_adapt_opts_default();
+  o.max_iter = 4;
+  o.rounds = 2;
+  int failures = 0, bad = 0;
+  for (long n = 1; n < 5000; n++) {
+    long live = vm_ctx_alloc_live(ctx);
+    vm_mesh_clone(m0, &m);
+    vm_ctx_set_alloc_fail(ctx, n);
+    int st = vm_surface_adapt(m, NULL, &o, NULL);
+    vm_ctx_set_alloc_fail(ctx, 0);
+    int same = !memcmp(m->xyz, m0->xyz, sizeof *m->xyz * 3 * (size_t)m->nv);
+    vm_mesh_destroy(&m);
+    if (st == 0) break;
+    failures++;
+    if (st != VM_ERR_NOMEM || vm_ctx_alloc_live(ctx) != live || !same) {
+      if (!bad++)
+        fprintf(stderr, "allocation %ld: status %d, live %ld -> %ld, same %d\n", n, st, live,
+                vm_ctx_alloc_live(ctx), same);
+    }
+  }
+  vm_ctx_clear_error(ctx);
+  printf("allocation failures: %d points, each a clean VM_ERR_NOMEM: %s\n", failures,
+         bad ? "NO" : "yes");
+  CHECK(failures > 20 && bad == 0, "%d failure points, %d bad", failures, bad);
+  vm_mesh_destroy(&m0);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
@@ -225,6 +272,7 @@ int main(void) {
   test_lens(ctx);
   test_open_cylinder(ctx);
   test_bad(ctx);
+  test_alloc_failures(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));
   vm_ctx_destroy(&ctx);
   return vmtest_end("adapt");

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # test/surface/test_surface_cli.sh: vm-surface end to end: the default run
 # and each step alone on generated shapes; bad input (open, non-manifold,
-# empty, truncated) exits 1 with a message saying what and where and writes
-# nothing; repairable input (flipped faces, a zero-area face) is repaired;
-# usage errors exit 2.
+# empty, truncated) exits 1 with one line saying what and where and writes
+# nothing; repairable input (flipped faces, a zero-area face) is repaired,
+# and refused when the repair is off; usage errors exit 2.
 set -u
 gen=$1 surf=$2 conv=$3
 dir=$(mktemp -d)
@@ -38,12 +38,17 @@ check '[ $? -eq 0 ] && grep -q "\"reoriented\": 3" "$dir/f.json"' "inconsistent 
 "$surf" repair -q --json "$dir/needle.obj" "$dir/n.vmsh" >"$dir/n.json"
 check '[ $? -eq 0 ] && grep -q "\"removed_degenerate\": 1" "$dir/n.json"' "zero-area face removed"
 
-bad() { # file, expected message, description
-  "$surf" -q "$1" "$dir/bad_out.vmsh" 2>"$dir/bad.txt"
-  rc=$? want=$2
-  check '[ $rc -eq 1 ]' "$3 exits 1 (got $rc)"
-  check 'grep -q "error: .*$want" "$dir/bad.txt"' "$3: message '$(grep error "$dir/bad.txt" | head -c 200)'"
-  check '[ ! -e "$dir/bad_out.vmsh" ]' "$3 writes no output"
+bad() { # file, expected message, description, [vm-surface arguments before the files]
+  local f=$1 want=$2 what=$3
+  shift 3
+  "$surf" "$@" -q "$f" "$dir/bad_out.vmsh" 2>"$dir/bad.txt"
+  rc=$?
+  check '[ $rc -eq 1 ]' "$what exits 1 (got $rc)"
+  check 'grep -q "error: .*$want" "$dir/bad.txt"' "$what: message '$(grep error "$dir/bad.txt" | head -c 200)'"
+  check '[ "$(grep -c "error:" "$dir/bad.txt")" -eq 1 ] && ! grep -qv "error:\|warning:" "$dir/bad.txt"' \
+    "$what: one error line on stderr (warnings aside)"
+  check '[ ! -e "$dir/bad_out.vmsh" ] && [ -z "$(ls "$dir" | grep -v "\.\(stl\|obj\|vmsh\|vtk\|off\|json\|txt\)$")" ]' \
+    "$what writes no output (and leaves no temporary file)"
 }
 "$gen" open "$dir/open.stl"
 bad "$dir/open.stl" "open surface: 4 border edges around 1 hole(s); e.g. the border edge (" "open surface"
@@ -55,6 +60,12 @@ bad "$dir/fin.stl" "non-manifold surface: 1 edges are shared by more than two fa
 bad "$dir/empty.stl" "empty.stl: empty" "empty file"
 head -c 300 "$dir/lens.stl" >"$dir/trunc.stl"
 bad "$dir/trunc.stl" "trunc.stl: line [0-9]*: .*end of file" "truncated file"
+# without the repair, the same defects are refused by the adaptation
+bad "$dir/flipped.obj" "consistently oriented surface; the first is element" \
+  "inconsistent orientation with --repair no" adapt --repair no
+bad "$dir/needle.obj" "zero-area element [0-9]* at (" "zero-area triangle with --repair no" adapt --repair no
+bad "$dir/open.stl" "open surface: e.g. the border edge (" "open surface with --repair no" adapt --repair no
+bad "$dir/trunc.stl" "end of file" "truncated file, adapt step" adapt --repair no
 "$gen" cube "$dir/cube.vtk"
 "$surf" -q --binary "$dir/cube.vtk" "$dir/cube.stl"
 check '[ $? -eq 0 ]' "a cube (all vertices on features) goes through"

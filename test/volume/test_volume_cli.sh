@@ -19,9 +19,25 @@ rc=$?
 check '[ $rc -eq 0 ]' "vm-volume exits 0 on the pi/2 cube (got $rc)"
 check 'grep -q "\"valid\": true" "$dir/sum.json"' "JSON summary says valid"
 check 'grep -q "^untangle  it" "$dir/err.txt"' "progress lines on stderr"
+check 'grep -q "\"verified\": true" "$dir/sum.json"' "the exact check (as vm-quality --verify) ran"
+check 'grep -q "verify: every quadrature simplex (corner rule) positively oriented (exact)" \
+  "$dir/err.txt"' "and said so on stderr"
 "$qual" --require-valid "$dir/out.vtk" >/dev/null
 check '[ $? -eq 0 ]' "the output is valid by vm-quality"
 check '[ ! -e "$dir/out.vtk.tmp"* ] 2>/dev/null; true' "no temporary files left"
+
+# --slip-boundary: the boundary slides on the cube's faces and edges; the
+# corners and the inner cube stay; the file's fields pass through
+"$gen" rotcube --n 8 --angle pi/2 --free-boundary "$dir/slip.vtk"
+"$vol" --slip-boundary --json "$dir/slip.vtk" "$dir/slip-out.vtk" >"$dir/slip.json" 2>"$dir/slip.err"
+rc=$?
+check '[ $rc -eq 0 ]' "vm-volume --slip-boundary exits 0 (got $rc)"
+check 'grep -q "slip boundary: 386 boundary vertices: 294 slide on the surface, 84 along 12 sharp edge lines, 8 corners" "$dir/slip.err"' \
+  "slip classes: 6x7x7 face, 12x7 edge vertices, 8 corners"
+check 'grep -q "\"slip_max_distance\": 0" "$dir/slip.json" || grep -q "\"slip_max_distance\": [0-9.]*e-1[0-9]" "$dir/slip.json"' \
+  "boundary vertices stay on the boundary surface"
+"$vol" --slip-boundary --free-boundary "$dir/slip.vtk" "$dir/x.vtk" 2>/dev/null
+check '[ $? -eq 2 ]' "--slip-boundary with --free-boundary is a usage error"
 
 # impossible: a fixed inverted hex (every vertex fixed by the 'fixed' field)
 cat >"$dir/bad.vtk" <<'VTK'
@@ -80,4 +96,19 @@ wait $pid
 rc=$?
 check '[ $rc -eq 130 ] || [ $rc -eq 143 ]' "two signals: exit at once with 128+signal (got $rc)"
 check '[ "$(cat "$dir/long_out2.vmsh")" = "previous content" ]' "two signals: the output is untouched"
+"$vol" -q --threads 1 "$dir/long.vmsh" "$dir/long_out3.vmsh" &
+pid=$!
+sleep 3
+kill -TERM $pid
+wait $pid
+rc=$?
+check '[ $rc -eq 4 ] && [ -s "$dir/long_out3.vmsh" ]' "SIGTERM: exit 4, best state written (got $rc)"
+# the time limit: the same distinct exit, the best state written atomically
+"$vol" --json --threads 1 --time-limit 2 "$dir/long.vmsh" "$dir/long_out4.vmsh" \
+  >"$dir/tl.json" 2>"$dir/tl.err"
+rc=$?
+check '[ $rc -eq 4 ] && [ -s "$dir/long_out4.vmsh" ]' "--time-limit: exit 4, best state written (got $rc)"
+check 'grep -q "\"timed_out\": true" "$dir/tl.json" && grep -q "time limit reached" "$dir/tl.err"' \
+  "--time-limit: said in the JSON and on stderr"
+check '[ -z "$(ls "$dir" | grep -i tmp)" ]' "no temporary files left after the interruptions"
 exit $fail

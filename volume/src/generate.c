@@ -14,6 +14,7 @@ vm_rotcube_opts vm_rotcube_opts_default(void) {
   o.axis[2] = 1;
   o.inner = 0.5 / sqrt(2.0);
   o.cells = VM_GEN_HEX;
+  o.free_boundary = 0;
   return o;
 }
 
@@ -42,7 +43,7 @@ static int place_vertex(gen_state *g, const double p[3], int boundary, int64_t *
   if (in) rotate(g->axis, g->o->alpha, p, x);
   int st = vm_mesh_add_vertex(g->m, x[0], x[1], x[2], index);
   if (st) return st;
-  if (in || boundary) g->m->vflag[*index] = VM_VERTEX_FIXED;
+  if (in || (boundary && !g->o->free_boundary)) g->m->vflag[*index] = VM_VERTEX_FIXED;
   if (g->ref) memcpy(g->ref + 3 * *index, p, 3 * sizeof *p);
   return VM_OK;
 }

@@ -410,6 +410,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
   if (st >= 0) st = rep.valid ? VM_OK : VM_WARN_INVERTED;
 done:
   rep.time_total = now() - s.t0;
+  rep.timed_out = out_of_time(&s);
   if (st == VM_ERR_INTERRUPTED && s.best_M < INT64_MAX && s.M > s.best_M)
     memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
   vm_free(ctx, s.dets);

@@ -62,7 +62,8 @@ typedef struct vm_prism_opts {
                            growth law is kept and the layer count may drop */
   double theta;         /* of the balanced measure (default 0.8) */
   double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
-  int springback_iter;  /* implicit iterations of the first springback (default 20) */
+  int springback_iter;  /* implicit iterations of the springback at full height
+                           (default 50; it stops earlier once F stagnates) */
   int resolve_iter;     /* implicit iterations after each cutting round, around
                            the cut columns only (default 6) */
   int max_cut_rounds;   /* default 80 */
@@ -107,12 +108,13 @@ typedef struct vm_prism_report {
 typedef struct vm_prism vm_prism;
 
 /* Create the layer builder for a wall: the triangles (VM_TRI; quads are
- * split into two) of `wall` with outward orientation, the layer grows on
- * the side the normals point to. Other element types are ignored. The wall
- * is copied. Vertices not used by a triangle are dropped (the output wall
- * keeps the used ones in their original order).
- * Errors: VM_ERR_ARG (no triangles, bad options, a degenerate triangle, a
- * vertex where no direction sees every incident face), VM_ERR_NOMEM. */
+ * split into two) of `wall`, a closed surface oriented outwards; the layer
+ * grows on the side the normals point to. Other element types are ignored.
+ * The wall is copied. Vertices not used by a triangle are dropped (the
+ * output wall keeps the used ones in their original order).
+ * Errors: VM_ERR_ARG (no triangles, bad options, a degenerate triangle, an
+ * open, non-manifold, inconsistently or inwards oriented wall, a vertex
+ * where no direction sees every incident face), VM_ERR_NOMEM. */
 int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
                     vm_prism **out);
 void vm_prism_destroy(vm_prism **p);

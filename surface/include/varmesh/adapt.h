@@ -62,7 +62,8 @@ typedef struct vm_adapt_result {
   int64_t nsmooth, nline_vertices, ncorner, nfixed;
   int32_t nline;
   double min_angle_before, min_angle_after; /* degrees, over all triangle corners */
-  int64_t flipped;   /* elements whose normal opposes the reference's */
+  int64_t flipped;   /* elements whose orientation reversed during the adaptation
+                        (normal at the end . normal at the start <= 0) */
   double max_distance; /* largest vertex distance to the reference surface */
   double elapsed;
 } vm_adapt_result;

@@ -22,6 +22,8 @@ typedef struct vm_rotcube_opts {
                         the mixed mesh shares every vertex between cells but a
                         quad face may meet two triangles, so it is for solver
                         tests, not for boundary extraction */
+  int free_boundary; /* leave the outer boundary vertices FREE (for slip
+                        boundary runs); default 0: FIXED */
 } vm_rotcube_opts;
 
 /* Defaults: n 8, alpha 0, axis z, inner 1/(2 sqrt 2), hexahedra. */

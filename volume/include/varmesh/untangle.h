@@ -44,7 +44,9 @@ typedef void (*vm_volume_progress_fn)(void *user, const vm_volume_progress *p);
 
 typedef struct vm_volume_opts {
   vm_untangle_method method; /* default VM_UNTANGLE_ADAPTIVE */
-  vm_minimizer_kind solver;  /* global untangling and optimization (default implicit) */
+  vm_minimizer_kind solver;  /* global untangling and optimization (default implicit;
+                                newton runs with block Jacobi, at most 200 CG
+                                iterations per step) */
   vm_rule rule;              /* quadrature rule (default corner) */
   vm_measure_kind measure;   /* optimization measure: balanced (default), shape,
                                 shape-alt or barrier-free quasi-iso */
@@ -74,6 +76,7 @@ typedef struct vm_volume_report {
   int iter_opt;             /* optimization (and quasi-iso) iterations */
   double time_untangle;     /* seconds until M = 0 (or the end) */
   double time_total;
+  int timed_out;            /* the run was cut short by opts.time_limit */
   double phi_min, psi_min, min_det; /* final, over all nodes */
   double t_reached;         /* quasi-iso: the largest t with a finite W_t (0 if off) */
   int valid;                /* M_final == 0 */

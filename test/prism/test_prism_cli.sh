@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# test/prism/test_prism_cli.sh: vm-prism end to end on the generated demo
+# aircraft (coarsest): every output format is written, the .msh is read
+# back by vm-quality and checked exactly (--verify: CGAL predicates), and by
+# gmsh -check when Gmsh is installed; the --json summary says valid; bad input and usage errors give
+# a one-line error, the documented exit code and no output file.
+set -u
+prism=$1 gen=$2 qual=$3
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+
+"$gen" aircraft --resolution 1 "$dir/a.stl" >/dev/null
+check '[ -s "$dir/a.stl" ]' "vm-gen aircraft writes the wall"
+"$prism" -t 0.05 -n 4 --json "$dir/a.stl" "$dir/a.msh" >"$dir/a.json" 2>"$dir/a.err"
+rc=$?
+check '[ $rc -eq 0 ]' "vm-prism on the aircraft exits 0 (got $rc)"
+check 'grep -q "\"valid\": true" "$dir/a.json"' "--json says valid"
+check 'grep -q "\"inverted_corner_tets\": 0," "$dir/a.json"' "--json: no inverted corner tet"
+check 'grep -q "\"intersecting_pairs\": 0," "$dir/a.json"' "--json: no intersecting pair"
+check 'grep -q "\"layers\": 4," "$dir/a.json"' "--json: 4 layers"
+check 'grep -q "^springback" "$dir/a.err"' "progress on stderr"
+check 'grep -q "^\$MeshFormat" "$dir/a.msh" && sed -n 2p "$dir/a.msh" | grep -q "^4.1 0 8"' ".msh is Gmsh 4.1"
+check 'grep -q "\"wall\"" "$dir/a.msh" && grep -q "\"outer\"" "$dir/a.msh"' ".msh names the wall and outer families"
+"$qual" --json "$dir/a.msh" >"$dir/q.json" 2>/dev/null
+check 'grep -q "\"prism\": {\"elements\": 11960" "$dir/q.json"' "vm-quality reads 11,960 prisms back"
+"$qual" --verify "$dir/a.msh" >"$dir/v.log" 2>&1
+check '[ $? -eq 0 ] && grep -q "outer faces intersect neither each other nor the wall" "$dir/v.log"' "vm-quality --verify (CGAL, exact): positive corner tets, no intersection"
+if command -v gmsh >/dev/null 2>&1; then
+  gmsh -check "$dir/a.msh" >"$dir/gmsh.log" 2>&1
+  check '[ $? -eq 0 ] && ! grep -qi "error" "$dir/gmsh.log"' "gmsh -check accepts the .msh"
+else
+  echo "skip: gmsh not installed"
+fi
+for f in vtu vmsh su2; do
+  "$prism" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.$f"
+  check '[ $? -eq 0 ] && [ -s "$dir/b.$f" ]' "writes .$f"
+done
+check 'grep -q "^NELEM= 5980" "$dir/b.su2" && grep -q "^NMARK= 2" "$dir/b.su2" && grep -q "^MARKER_TAG= wall" "$dir/b.su2"' ".su2 has the cells and the wall and outer markers"
+"$prism" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.cgns" 2>"$dir/cg.err"
+rc=$?
+if [ $rc -eq 0 ]; then
+  check '[ "$(head -c 4 "$dir/b.cgns" | od -An -c | tr -d " ")" = "211HDF" ]' ".cgns is an HDF5 file"
+else
+  check '[ $rc -eq 2 ] && grep -q "no CGNS support" "$dir/cg.err" && [ ! -e "$dir/b.cgns" ]' "without libcgns: usage error, no file"
+fi
+
+# bad input: one line on stderr, exit 1, no output file
+printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nendloop\n' >"$dir/bad.stl"
+"$prism" "$dir/bad.stl" "$dir/bad.msh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/bad.msh" ]' "truncated STL: exit 1, one line, no output"
+"$prism" "$dir/none.stl" "$dir/none.msh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/none.msh" ]' "missing input: exit 1, one line, no output"
+# an open wall (one triangle): refused before any work
+printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n' >"$dir/one.stl"
+"$prism" -q "$dir/one.stl" "$dir/one.msh" 2>"$dir/err"
+rc=$?
+check '[ $rc -ne 0 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/one.msh" ]' "open wall: non-zero exit ($rc), one line, no output"
+# usage errors: exit 2
+"$prism" -T -1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "negative thickness: exit 2"
+"$prism" -n 0 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "zero layers: exit 2"
+"$prism" "$dir/a.stl" "$dir/u.xyz" 2>/dev/null
+check '[ $? -eq 2 ] && [ ! -e "$dir/u.xyz" ]' "unknown output format: exit 2"
+"$prism" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "first height above the thickness: exit 2"
+exit $fail

@@ -1,0 +1,52 @@
+/* varmesh/slip.h: slip boundary conditions for the volume stage: the
+ * boundary vertices of a volume mesh slide on the mesh's own initial
+ * boundary surface; vertices on its sharp edges (dihedral angle above a
+ * threshold) slide along those edges, its corners stay fixed. */
+#ifndef VARMESH_SLIP_H
+#define VARMESH_SLIP_H
+
+#include <stdint.h>
+
+#include "varmesh/boundary.h"
+#include "varmesh/ctx.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_volume_slip vm_volume_slip;
+
+typedef struct vm_volume_slip_info {
+  int64_t nboundary;   /* boundary vertices */
+  int64_t nsurface;    /* of them sliding on the surface */
+  int64_t nline;       /* sliding along a feature line */
+  int64_t ncorner;     /* fixed as corners of the features */
+  int64_t nkept_fixed; /* already fixed (flag or 'fixed' field): left fixed */
+  int32_t lines;       /* feature lines */
+  int32_t patches;     /* surface patches bounded by the feature lines */
+} vm_volume_slip_info;
+
+/* Make every boundary vertex of the volume mesh m that is not FIXED a SLIP
+ * vertex on m's current boundary surface (the reference, copied here):
+ * m->vflag / m->vsurf are overwritten for those vertices (corners become
+ * FIXED; vsurf 0..patches-1: the patch, bounded by feature lines, a vertex
+ * slides on without crossing them; patches + k - 1: feature line k). Feature edges:
+ * dihedral angle >= feature_deg (in (0, 180]); a feature line turning by
+ * more than corner_deg at a vertex makes it a corner. The returned object
+ * supplies the projector (vm_volume_slip_ops) for vm_volume_run and must
+ * outlive it. info may be NULL. Returns VM_OK, VM_ERR_ARG (no volume
+ * elements, bad angles, non-manifold boundary), VM_ERR_NOMEM,
+ * VM_ERR_BACKEND. */
+int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double corner_deg,
+                          vm_volume_slip **out, vm_volume_slip_info *info);
+vm_surface_ops vm_volume_slip_ops(vm_volume_slip *s);
+/* Largest distance from a boundary vertex of m to the reference surface
+ * (how far the slip vertices left it; 0 up to rounding after a run). */
+int vm_volume_slip_distance(vm_volume_slip *s, const vm_mesh *m, double *maxdist);
+void vm_volume_slip_destroy(vm_volume_slip **p);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

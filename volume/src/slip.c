@@ -1,0 +1,331 @@
+/* volume/src/slip.c: slip boundary conditions of the volume stage: the
+ * boundary surface of the input mesh becomes the reference surface of the
+ * surface stage's closest-point projectors (CGAL AABB trees), its sharp
+ * edges feature lines (vertices slide along them), its corners fixed.
+ * A vertex off the features slides on its own patch (the faces it can
+ * reach without crossing a sharp edge), never across a sharp edge onto
+ * another face: while inverted elements are allowed (penalty untangling),
+ * a projection onto the whole surface would let a face vertex jump onto
+ * the neighbouring face and fold the elements at the edge flat.
+ * Surface ids: 0..npatch-1 the patches, npatch + k - 1 feature line k. */
+#include "varmesh/slip.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "varmesh/features.h"
+#include "varmesh/repair.h"
+#include "varmesh/topology.h"
+
+struct vm_volume_slip {
+  vm_ctx *ctx;
+  vm_surface_projector *proj;    /* the whole surface and its feature lines */
+  int32_t npatch;
+  vm_surface_projector **patch;  /* one per patch */
+  int64_t nb;     /* boundary vertices */
+  int32_t *bvert; /* their indices in the volume mesh */
+};
+
+void vm_volume_slip_destroy(vm_volume_slip **p) {
+  if (!p || !*p) return;
+  vm_volume_slip *s = *p;
+  vm_surface_projector_destroy(&s->proj);
+  for (int32_t k = 0; s->patch && k < s->npatch; k++) vm_surface_projector_destroy(&s->patch[k]);
+  vm_free(s->ctx, s->patch);
+  vm_free(s->ctx, s->bvert);
+  vm_free(s->ctx, s);
+  *p = NULL;
+}
+
+static int slip_project(void *user, int surf_id, const double p[3], double out[3],
+                        double normals[9]) {
+  vm_volume_slip *s = user;
+  vm_surface_ops ops;
+  if (surf_id < 0) return VM_ERR_ARG;
+  if (surf_id < s->npatch) {
+    ops = vm_surface_projector_ops(s->patch[surf_id]);
+    return ops.project(ops.user, 0, p, out, normals);
+  }
+  ops = vm_surface_projector_ops(s->proj);
+  return ops.project(ops.user, surf_id - s->npatch + 1, p, out, normals);
+}
+
+vm_surface_ops vm_volume_slip_ops(vm_volume_slip *s) {
+  vm_surface_ops ops = {slip_project, s};
+  return ops;
+}
+
+typedef struct {
+  int32_t a, b, face;
+} face_edge;
+
+static int cmp_face_edge(const void *x, const void *y) {
+  const face_edge *p = x, *q = y;
+  if (p->a != q->a) return p->a < q->a ? -1 : 1;
+  if (p->b != q->b) return p->b < q->b ? -1 : 1;
+  return p->face < q->face ? -1 : p->face > q->face;
+}
+
+static int32_t uf_find(int32_t *par, int32_t x) {
+  while (par[x] != x) x = par[x] = par[par[x]];
+  return x;
+}
+
+/* Patches of the surface b: faces connected across non-feature edges.
+ * fpatch[face] in 0..*npatch-1 (numbered by their first face). */
+static int find_patches(vm_ctx *ctx, const vm_mesh *b, const vm_surface_features *f,
+                        int32_t *fpatch, int32_t *npatch) {
+  int64_t nfe = b->eoff[b->ne];
+  face_edge *fe = vm_alloc_array(ctx, (size_t)nfe + 1, sizeof *fe);
+  face_edge *feat = vm_alloc_array(ctx, (size_t)f->nedge + 1, sizeof *feat);
+  int32_t *par = vm_alloc_array(ctx, (size_t)b->ne + 1, sizeof *par);
+  if (!fe || !feat || !par) {
+    vm_free(ctx, fe);
+    vm_free(ctx, feat);
+    vm_free(ctx, par);
+    return VM_ERR_NOMEM;
+  }
+  int64_t k = 0;
+  for (int64_t e = 0; e < b->ne; e++) {
+    par[e] = (int32_t)e;
+    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+    for (int64_t i = 0; i < n; i++) {
+      int32_t u = b->conn[o + i], w = b->conn[o + (i + 1) % n];
+      fe[k].a = u < w ? u : w;
+      fe[k].b = u < w ? w : u;
+      fe[k].face = (int32_t)e;
+      k++;
+    }
+  }
+  qsort(fe, (size_t)k, sizeof *fe, cmp_face_edge);
+  for (int64_t i = 0; i < f->nedge; i++) {
+    int32_t u = f->edge[2 * i], w = f->edge[2 * i + 1];
+    feat[i].a = u < w ? u : w;
+    feat[i].b = u < w ? w : u;
+    feat[i].face = 0;
+  }
+  qsort(feat, (size_t)f->nedge, sizeof *feat, cmp_face_edge);
+  for (int64_t i = 0; i + 1 < k; i++) {
+    if (fe[i].a != fe[i + 1].a || fe[i].b != fe[i + 1].b) continue;
+    face_edge key = {fe[i].a, fe[i].b, 0};
+    if (f->nedge && bsearch(&key, feat, (size_t)f->nedge, sizeof *feat, cmp_face_edge)) continue;
+    int32_t x = uf_find(par, fe[i].face), y = uf_find(par, fe[i + 1].face);
+    if (x != y) par[x > y ? x : y] = x < y ? x : y;
+  }
+  int32_t n = 0;
+  for (int64_t e = 0; e < b->ne; e++) fpatch[e] = -1;
+  for (int64_t e = 0; e < b->ne; e++) {
+    int32_t r = uf_find(par, (int32_t)e);
+    if (fpatch[r] < 0) fpatch[r] = n++;
+    fpatch[e] = fpatch[r];
+  }
+  *npatch = n;
+  vm_free(ctx, fe);
+  vm_free(ctx, feat);
+  vm_free(ctx, par);
+  return VM_OK;
+}
+
+/* The faces of patch p of b as a mesh of their own. */
+static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int32_t p,
+                      int32_t *g2l, vm_mesh **out) {
+  vm_mesh *pm = NULL;
+  int st = vm_mesh_create(ctx, &pm);
+  for (int64_t v = 0; v < b->nv; v++) g2l[v] = -1;
+  for (int64_t e = 0; st >= 0 && e < b->ne; e++) {
+    if (fpatch[e] != p) continue;
+    int32_t q[4];
+    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+    for (int64_t i = 0; st >= 0 && i < n; i++) {
+      int32_t v = b->conn[o + i];
+      if (g2l[v] < 0) {
+        int64_t idx = 0;
+        st = vm_mesh_add_vertex(pm, b->xyz[3 * v], b->xyz[3 * v + 1], b->xyz[3 * v + 2], &idx);
+        g2l[v] = (int32_t)idx;
+      }
+      q[i] = g2l[v];
+    }
+    if (st >= 0) st = vm_mesh_add_element(pm, b->etype[e], q);
+  }
+  if (st < 0) {
+    vm_mesh_destroy(&pm);
+    return st;
+  }
+  *out = pm;
+  return VM_OK;
+}
+
+/* The boundary faces of m as a surface mesh on the boundary vertices only
+ * (local numbering; g2l maps volume -> surface vertices, -1 elsewhere). */
+static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, vm_mesh **bout, int32_t **bvert,
+                            int64_t *nb) {
+  int64_t nface = 0, nonman = 0;
+  int32_t *fv = NULL, *g2l = NULL, *bv = NULL;
+  uint8_t *fnv = NULL;
+  vm_mesh *b = NULL;
+  int st = vm_mesh_boundary(m, &nface, &fv, &fnv, NULL, &nonman);
+  if (st < 0) return st;
+  if (nonman > 0) {
+    st = vm_error(ctx, VM_ERR_ARG, "slip boundary: %lld faces are shared by more than two "
+                  "elements (non-manifold mesh)", (long long)nonman);
+    goto fail;
+  }
+  if (nface == 0) {
+    st = vm_error(ctx, VM_ERR_ARG, "slip boundary: the mesh has no boundary faces");
+    goto fail;
+  }
+  g2l = vm_alloc_array(ctx, (size_t)m->nv, sizeof *g2l);
+  if (!g2l) {
+    st = VM_ERR_NOMEM;
+    goto fail;
+  }
+  for (int64_t v = 0; v < m->nv; v++) g2l[v] = -1;
+  int64_t n = 0;
+  for (int64_t f = 0; f < nface; f++)
+    for (int k = 0; k < fnv[f]; k++)
+      if (g2l[fv[4 * f + k]] < 0) g2l[fv[4 * f + k]] = (int32_t)n++;
+  bv = vm_alloc_array(ctx, (size_t)n, sizeof *bv);
+  if (!bv || (st = vm_mesh_create(ctx, &b)) < 0 || (st = vm_mesh_set_vertices(b, n)) < 0) {
+    st = st < 0 ? st : VM_ERR_NOMEM;
+    goto fail;
+  }
+  for (int64_t v = 0; v < m->nv; v++)
+    if (g2l[v] >= 0) {
+      bv[g2l[v]] = (int32_t)v;
+      memcpy(b->xyz + 3 * g2l[v], m->xyz + 3 * v, 3 * sizeof(double));
+    }
+  for (int64_t f = 0; f < nface; f++) {
+    int32_t q[4];
+    for (int k = 0; k < fnv[f]; k++) q[k] = g2l[fv[4 * f + k]];
+    if ((st = vm_mesh_add_element(b, fnv[f] == 4 ? VM_QUAD : VM_TRI, q)) < 0) goto fail;
+  }
+  vm_free(ctx, fv);
+  vm_free(ctx, fnv);
+  vm_free(ctx, g2l);
+  *bout = b;
+  *bvert = bv;
+  *nb = n;
+  return VM_OK;
+fail:
+  vm_free(ctx, fv);
+  vm_free(ctx, fnv);
+  vm_free(ctx, g2l);
+  vm_free(ctx, bv);
+  vm_mesh_destroy(&b);
+  return st;
+}
+
+int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double corner_deg,
+                          vm_volume_slip **out, vm_volume_slip_info *info) {
+  if (!ctx || !m || !out) return VM_ERR_ARG;
+  *out = NULL;
+  if (!(feature_deg > 0 && feature_deg <= 180) || !(corner_deg > 0 && corner_deg <= 180))
+    return vm_error(ctx, VM_ERR_ARG, "slip boundary: angles must lie in (0, 180] degrees");
+  int64_t counts[VM_NTYPES];
+  if (vm_mesh_count_types(m, counts) != 3)
+    return vm_error(ctx, VM_ERR_ARG, "slip boundary: the mesh has no volume elements");
+  vm_volume_slip *s = vm_calloc(ctx, 1, sizeof *s);
+  if (!s) return VM_ERR_NOMEM;
+  s->ctx = ctx;
+  vm_mesh *b = NULL;
+  vm_surface_features f;
+  memset(&f, 0, sizeof f);
+  int32_t *vsurf = NULL, *fpatch = NULL, *vpatch = NULL;
+  int st = boundary_surface(ctx, m, &b, &s->bvert, &s->nb);
+  if (st < 0) goto fail;
+  if ((st = vm_surface_detect_features(b, feature_deg, corner_deg, &f)) < 0) goto fail;
+  if ((st = vm_surface_projector_create(ctx, b, &f, &s->proj)) < 0) goto fail;
+  vsurf = vm_alloc_array(ctx, (size_t)s->nb, sizeof *vsurf);
+  fpatch = vm_alloc_array(ctx, (size_t)b->ne, sizeof *fpatch);
+  vpatch = vm_alloc_array(ctx, (size_t)b->nv, sizeof *vpatch);
+  if (!vsurf || !fpatch || !vpatch) {
+    st = VM_ERR_NOMEM;
+    goto fail;
+  }
+  if ((st = find_patches(ctx, b, &f, fpatch, &s->npatch)) < 0) goto fail;
+  if (!(s->patch = vm_calloc(ctx, (size_t)s->npatch, sizeof *s->patch))) {
+    st = VM_ERR_NOMEM;
+    goto fail;
+  }
+  for (int32_t p = 0; p < s->npatch; p++) {
+    vm_mesh *pm = NULL;
+    if ((st = patch_mesh(ctx, b, fpatch, p, vpatch, &pm)) < 0) goto fail;
+    st = vm_surface_projector_create(ctx, pm, NULL, &s->patch[p]);
+    vm_mesh_destroy(&pm);
+    if (st < 0) goto fail;
+  }
+  /* a vertex off the features lies in the patch of any of its faces */
+  for (int64_t v = 0; v < b->nv; v++) vpatch[v] = -1;
+  for (int64_t e = 0; e < b->ne; e++)
+    for (int64_t i = b->eoff[e]; i < b->eoff[e + 1]; i++) vpatch[b->conn[i]] = fpatch[e];
+  /* the reference is this very surface: feature vertices lie exactly on
+   * their lines; the tolerance only absorbs rounding */
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int64_t v = 0; v < b->nv; v++)
+    for (int c = 0; c < 3; c++) {
+      lo[c] = fmin(lo[c], b->xyz[3 * v + c]);
+      hi[c] = fmax(hi[c], b->xyz[3 * v + c]);
+    }
+  double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  if ((st = vm_surface_projector_assign(s->proj, b, &f, 1e-9 * diag, vsurf)) < 0) goto fail;
+  vm_volume_slip_info inf;
+  memset(&inf, 0, sizeof inf);
+  inf.nboundary = s->nb;
+  inf.lines = f.nline;
+  for (int64_t i = 0; i < s->nb; i++) {
+    int32_t v = s->bvert[i];
+    if (m->vflag[v] == VM_VERTEX_FIXED) {
+      inf.nkept_fixed++;
+    } else if (vsurf[i] < 0) {
+      m->vflag[v] = VM_VERTEX_FIXED;
+      m->vsurf[v] = -1;
+      inf.ncorner++;
+    } else {
+      m->vflag[v] = VM_VERTEX_SLIP;
+      m->vsurf[v] = vsurf[i] == 0 ? vpatch[i] : s->npatch + vsurf[i] - 1;
+      if (vsurf[i] == 0)
+        inf.nsurface++;
+      else
+        inf.nline++;
+    }
+  }
+  inf.patches = s->npatch;
+  if (info) *info = inf;
+  vm_free(ctx, vsurf);
+  vm_free(ctx, fpatch);
+  vm_free(ctx, vpatch);
+  vm_surface_features_free(ctx, &f);
+  vm_mesh_destroy(&b);
+  *out = s;
+  return VM_OK;
+fail:
+  vm_free(ctx, vsurf);
+  vm_free(ctx, fpatch);
+  vm_free(ctx, vpatch);
+  vm_surface_features_free(ctx, &f);
+  vm_mesh_destroy(&b);
+  vm_volume_slip_destroy(&s);
+  return st;
+}
+
+int vm_volume_slip_distance(vm_volume_slip *s, const vm_mesh *m, double *maxdist) {
+  if (!s || !m || !maxdist) return VM_ERR_ARG;
+  double *pts = vm_alloc_array(s->ctx, (size_t)s->nb, 3 * sizeof(double));
+  double *d = vm_alloc_array(s->ctx, (size_t)s->nb, sizeof(double));
+  int st = VM_ERR_NOMEM;
+  if (pts && d) {
+    for (int64_t i = 0; i < s->nb; i++)
+      memcpy(pts + 3 * i, m->xyz + 3 * (int64_t)s->bvert[i], 3 * sizeof(double));
+    st = vm_surface_projector_distance(s->proj, s->nb, pts, d);
+    if (st >= 0) {
+      double mx = 0;
+      for (int64_t i = 0; i < s->nb; i++) mx = fmax(mx, d[i]);
+      *maxdist = mx;
+    }
+  }
+  vm_free(s->ctx, pts);
+  vm_free(s->ctx, d);
+  return st;
+}
