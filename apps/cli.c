@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "varmesh/io.h"
 #include "varmesh/surface_io.h"
 
 static void log_stderr(void *user, int level, const char *msg) {
@@ -47,6 +48,35 @@ int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...) {
   va_end(ap);
   fprintf(stderr, "%s: error: %s (see %s --help)\n", cli->prog, buf, cli->prog);
   return VM_EXIT_USAGE;
+}
+
+int vm_cli_info_option(const vm_cli *cli, const char *a, const char *usage) {
+  if (!strcmp(a, "--help")) {
+    fputs(usage, stdout);
+    return 1;
+  }
+  if (!strcmp(a, "--version")) {
+    printf("%s (varmesh) %s\n", cli->prog, vm_version());
+    return 1;
+  }
+  return 0;
+}
+
+int vm_cli_operand(const vm_cli *cli, const char *a, const char **const *slots, int n) {
+  if (a[0] == '-' && a[1]) return vm_cli_usage_error(cli, "unknown option '%s'", a);
+  for (int k = 0; k < n; k++)
+    if (!*slots[k]) {
+      *slots[k] = a;
+      return VM_EXIT_OK;
+    }
+  return vm_cli_usage_error(cli, "too many arguments");
+}
+
+int vm_cli_format(const vm_cli *cli, const char *name, int *fmt) {
+  int f = name ? vm_format_from_name(name) : VM_FMT_AUTO;
+  if (f == VM_FMT_AUTO) return vm_cli_usage_error(cli, "unknown format '%s'", name ? name : "");
+  *fmt = f;
+  return VM_EXIT_OK;
 }
 
 int vm_cli_double(const vm_cli *cli, const char *opt, const char *s, double lo, double hi,

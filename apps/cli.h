@@ -41,6 +41,17 @@ int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...)
 #endif
     ;
 
+/* --help (the usage text on stdout) or --version: returns 1 if `a` is one
+ * of them (the program then exits 0), 0 otherwise. */
+int vm_cli_info_option(const vm_cli *cli, const char *a, const char *usage);
+/* An operand of the command line: `a` goes to the first empty one of
+ * *slots[0..n); an option the program did not recognize ("-x") or one
+ * operand too many is a usage error. Returns VM_EXIT_OK or VM_EXIT_USAGE. */
+int vm_cli_operand(const vm_cli *cli, const char *a, const char **const *slots, int n);
+/* The value of --format: the VM_FMT_* of `name` into *fmt, or a usage
+ * error (VM_EXIT_USAGE) for a missing or unknown name. */
+int vm_cli_format(const vm_cli *cli, const char *name, int *fmt);
+
 /* Strict parsing of an option value: the whole string must be a number in
  * range. Return 0 on success, nonzero (after a usage message) otherwise. */
 int vm_cli_double(const vm_cli *cli, const char *opt, const char *s, double lo, double hi,

@@ -28,11 +28,7 @@ int main(int argc, char **argv) {
   int rc = VM_EXIT_OK;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
-    if (!strcmp(a, "--help")) {
-      fputs(usage, stdout);
-      goto done;
-    } else if (!strcmp(a, "--version")) {
-      printf("vm-convert (varmesh) %s\n", vm_version());
+    if (vm_cli_info_option(&cli, a, usage)) {
       goto done;
     } else if (!strcmp(a, "--format") || !strcmp(a, "--in-format")) {
       if (i + 1 >= argc) {
@@ -56,15 +52,7 @@ int main(int argc, char **argv) {
       strict = 1;
     } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
       cli.quiet = 1;
-    } else if (a[0] == '-' && a[1]) {
-      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
-      goto done;
-    } else if (!in) {
-      in = a;
-    } else if (!out) {
-      out = a;
-    } else {
-      rc = vm_cli_usage_error(&cli, "too many arguments");
+    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&in, &out}, 2)) != VM_EXIT_OK) {
       goto done;
     }
   }

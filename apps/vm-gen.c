@@ -75,11 +75,7 @@ int main(int argc, char **argv) {
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
     long n;
-    if (!strcmp(a, "--help")) {
-      fputs(usage, stdout);
-      goto done;
-    } else if (!strcmp(a, "--version")) {
-      printf("vm-gen (varmesh) %s\n", vm_version());
+    if (vm_cli_info_option(&cli, a, usage)) {
       goto done;
     } else if (!strcmp(a, "--n")) {
       i++;
@@ -132,15 +128,7 @@ int main(int argc, char **argv) {
       }
     } else if (!strcmp(a, "--components")) {
       ao.tag_components = 1;
-    } else if (a[0] == '-' && a[1]) {
-      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
-      goto done;
-    } else if (!what) {
-      what = a;
-    } else if (!out) {
-      out = a;
-    } else {
-      rc = vm_cli_usage_error(&cli, "too many arguments");
+    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&what, &out}, 2)) != VM_EXIT_OK) {
       goto done;
     }
   }

@@ -131,11 +131,7 @@ int main(int argc, char **argv) {
     const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
     double x;
     long lv;
-    if (!strcmp(a, "--help")) {
-      fputs(usage, stdout);
-      goto done;
-    } else if (!strcmp(a, "--version")) {
-      printf("vm-prism (varmesh) %s\n", vm_version());
+    if (vm_cli_info_option(&cli, a, usage)) {
       goto done;
     } else if (!strcmp(a, "--json")) {
       json = 1;
@@ -190,15 +186,7 @@ int main(int argc, char **argv) {
       else if (!strcmp(a, "--smooth-iter")) o.smooth_iter = (int)lv;
       else if (!strcmp(a, "--march-iter")) o.march_iter = (int)lv;
       else vm_ctx_set_threads(cli.ctx, (int)lv);
-    } else if (a[0] == '-' && a[1]) {
-      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
-      goto done;
-    } else if (!in) {
-      in = a;
-    } else if (!out) {
-      out = a;
-    } else {
-      rc = vm_cli_usage_error(&cli, "too many arguments");
+    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&in, &out}, 2)) != VM_EXIT_OK) {
       goto done;
     }
   }

@@ -114,11 +114,7 @@ int main(int argc, char **argv) {
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-    if (!strcmp(a, "--help")) {
-      fputs(usage, stdout);
-      goto done;
-    } else if (!strcmp(a, "--version")) {
-      printf("vm-quality (varmesh) %s\n", vm_version());
+    if (vm_cli_info_option(&cli, a, usage)) {
       goto done;
     } else if (!strcmp(a, "--json")) {
       json = 1;
@@ -159,18 +155,8 @@ int main(int argc, char **argv) {
       *(!strcmp(a, "--report") ? &report : &report_field) = val;
     } else if (!strcmp(a, "--format")) {
       i++;
-      fin = val ? vm_format_from_name(val) : VM_FMT_AUTO;
-      if (fin == VM_FMT_AUTO) {
-        rc = vm_cli_usage_error(&cli, "unknown format '%s'", val ? val : "");
-        goto done;
-      }
-    } else if (a[0] == '-' && a[1]) {
-      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
-      goto done;
-    } else if (!path) {
-      path = a;
-    } else {
-      rc = vm_cli_usage_error(&cli, "too many arguments");
+      if ((rc = vm_cli_format(&cli, val, &fin)) != VM_EXIT_OK) goto done;
+    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&path}, 1)) != VM_EXIT_OK) {
       goto done;
     }
   }

@@ -85,23 +85,6 @@ static int pick(const char *v, const char *const *names, int n) {
 enum { STEP_ALL, STEP_REPAIR, STEP_REMESH, STEP_CURVATURE, STEP_ADAPT };
 enum { TRI_AUTO, TRI_YES, TRI_NO };
 
-static double mean_edge(const vm_mesh *m) {
-  double s = 0;
-  int64_t n = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    if (vm_elem_dim(m->etype[e]) != 2) continue;
-    int k = vm_elem_nverts(m->etype[e]);
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int a = 0; a < k; a++) {
-      const double *p = m->xyz + 3 * (int64_t)c[a], *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
-      s += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                (p[2] - q[2]) * (p[2] - q[2]));
-      n++;
-    }
-  }
-  return n ? s / (double)n : 0;
-}
-
 static double wall_seconds(void) {
   struct timespec ts;
   timespec_get(&ts, TIME_UTC);
@@ -170,11 +153,7 @@ int main(int argc, char **argv) {
     const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
     int k;
     double x;
-    if (!strcmp(a, "--help")) {
-      fputs(usage, stdout);
-      goto done;
-    } else if (!strcmp(a, "--version")) {
-      printf("vm-surface (varmesh) %s\n", vm_version());
+    if (vm_cli_info_option(&cli, a, usage)) {
       goto done;
     } else if (!strcmp(a, "--json")) {
       json = 1;
@@ -260,20 +239,8 @@ int main(int argc, char **argv) {
         every = lv;
     } else if (!strcmp(a, "--format")) {
       i++;
-      fout = val ? vm_format_from_name(val) : VM_FMT_AUTO;
-      if (fout == VM_FMT_AUTO) {
-        rc = vm_cli_usage_error(&cli, "unknown format '%s'", val ? val : "");
-        goto done;
-      }
-    } else if (a[0] == '-' && a[1]) {
-      rc = vm_cli_usage_error(&cli, "unknown option '%s'", a);
-      goto done;
-    } else if (!in) {
-      in = a;
-    } else if (!out) {
-      out = a;
-    } else {
-      rc = vm_cli_usage_error(&cli, "too many arguments");
+      if ((rc = vm_cli_format(&cli, val, &fout)) != VM_EXIT_OK) goto done;
+    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&in, &out}, 2)) != VM_EXIT_OK) {
       goto done;
     }
   }
@@ -333,7 +300,7 @@ int main(int argc, char **argv) {
               rr.self_intersections > 0 ? ", SELF-INTERSECTING" : "");
   }
 
-  double min_angle_in = vm_surface_min_angle(m), h_in = mean_edge(m);
+  double min_angle_in = vm_surface_min_angle(m), h_in = vm_surface_mean_edge(m);
   int did_remesh = 0;
   int64_t nv_before_remesh = m->nv;
   if (step == STEP_REMESH || (step == STEP_ALL && (remesh == TRI_YES ||
@@ -364,15 +331,7 @@ int main(int argc, char **argv) {
   memset(&ar, 0, sizeof ar);
   int adapted = 0;
   if (step == STEP_CURVATURE) {
-    double h = mean_edge(m), diag = 0;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t v = 0; v < m->nv; v++)
-      for (int r = 0; r < 3; r++) {
-        lo[r] = fmin(lo[r], m->xyz[3 * v + r]);
-        hi[r] = fmax(hi[r], m->xyz[3 * v + r]);
-      }
-    for (int r = 0; r < 3; r++) diag += (hi[r] - lo[r]) * (hi[r] - lo[r]);
-    diag = sqrt(diag);
+    double lo[3], hi[3], h = vm_surface_mean_edge(m), diag = vm_mesh_bounds(m, lo, hi);
     vm_curvature_filter f = ao.filter;
     if (f.threshold < 0) f.threshold = -f.threshold / diag;
     if (f.cap < 0) f.cap = h > 0 ? -f.cap / h : 0;

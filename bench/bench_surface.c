@@ -95,22 +95,6 @@ static double bbox_diagonal(const vm_mesh *m) {
   return sqrt(s);
 }
 
-/* Mean length of the element sides (each interior edge twice), as
- * vm-surface and vm_surface_adapt define h. */
-static double mean_edge(const vm_mesh *m) {
-  double s = 0;
-  int64_t n = 0;
-  for (int64_t e = 0; e < m->ne; e++)
-    for (int a = 0; a < 3; a++) {
-      const double *p = m->xyz + 3 * m->conn[3 * e + a];
-      const double *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
-      s += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                (p[2] - q[2]) * (p[2] - q[2]));
-      n++;
-    }
-  return n ? s / (double)n : 0;
-}
-
 static void tri_normal(const vm_mesh *m, int64_t e, double n[3], double ctr[3]) {
   const double *a = m->xyz + 3 * m->conn[3 * e], *b = m->xyz + 3 * m->conn[3 * e + 1],
                *c = m->xyz + 3 * m->conn[3 * e + 2];
@@ -298,7 +282,7 @@ int main(int argc, char **argv) {
     return check && !ok ? 1 : 0;
   }
 
-  double t_remesh = 0, h_target = mean_edge(input);
+  double t_remesh = 0, h_target = vm_surface_mean_edge(input);
   if (remesh) {
     double t1 = omp_get_wtime();
     vm_surface_features f;
@@ -316,7 +300,7 @@ int main(int argc, char **argv) {
   /* the metric's field: filtered H of the starting mesh, as vm_surface_adapt does */
   double *Hmetric = malloc(sizeof *Hmetric * (size_t)start->nv);
   vm_surface_mean_curvature(start, Hmetric, NULL, NULL, NULL);
-  double hs = mean_edge(start);
+  double hs = vm_surface_mean_edge(start);
   vm_curvature_filter filt = {-ao.filter.threshold / diag, -ao.filter.cap / hs, ao.filter.smooth};
   vm_curvature_filter_apply(start, &filt, Hmetric);
   vm_surface_projector_create(ctx, start, NULL, &pstart);

@@ -263,3 +263,14 @@ int vm_outfile_commit(vm_outfile **pf) {
   *pf = NULL;
   return VM_OK;
 }
+
+int vm_error_name_prefix(vm_ctx *ctx, int st, const char *name) {
+  const char *e = vm_ctx_error(ctx);
+  size_t nl = strlen(name);
+  if (strncmp(e, name, nl) || e[nl] != ':') {
+    char msg[900];
+    snprintf(msg, sizeof msg, "%s", e);
+    vm_error(ctx, st, "%s: %s", name, msg);
+  }
+  return st;
+}

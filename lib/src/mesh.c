@@ -419,3 +419,18 @@ int64_t vm_mesh_apply_fixed_field(vm_mesh *m) {
   }
   return n;
 }
+
+double vm_mesh_bounds(const vm_mesh *m, double lo[3], double hi[3]) {
+  for (int c = 0; c < 3; c++) {
+    lo[c] = INFINITY;
+    hi[c] = -INFINITY;
+  }
+  for (int64_t v = 0; v < m->nv; v++)
+    for (int c = 0; c < 3; c++) {
+      lo[c] = fmin(lo[c], m->xyz[3 * v + c]);
+      hi[c] = fmax(hi[c], m->xyz[3 * v + c]);
+    }
+  if (m->nv == 0) return 0;
+  return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+              (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}

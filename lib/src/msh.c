@@ -1171,14 +1171,7 @@ int vm_read_msh(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
   vm_free(ctx, r.i32);
   if (st < 0) {
     vm_mesh_destroy(&r.m);
-    const char *e = vm_ctx_error(ctx);
-    size_t nl = strlen(name);
-    if (strncmp(e, name, nl) || e[nl] != ':') {
-      char msg[900];
-      snprintf(msg, sizeof msg, "%s", e);
-      vm_error(ctx, st, "%s: %s", name, msg);
-    }
-    return st;
+    return vm_error_name_prefix(ctx, st, name);
   }
   *out = r.m;
   return VM_OK;

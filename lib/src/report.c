@@ -314,12 +314,8 @@ int vm_report_mesh(vm_report *r, const char *prefix, const char *label, const vm
     vm_free(ctx, cap);
   }
   if (st >= 0 && n3 > 0) {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t v = 0; v < m->nv; v++)
-      for (int i = 0; i < 3; i++) {
-        lo[i] = fmin(lo[i], m->xyz[3 * v + i]);
-        hi[i] = fmax(hi[i], m->xyz[3 * v + i]);
-      }
+    double lo[3], hi[3];
+    vm_mesh_bounds(m, lo, hi);
     int axis = 2;
     for (int i = 1; i >= 0; i--)
       if (hi[i] - lo[i] > hi[axis] - lo[axis]) axis = i;
@@ -1224,13 +1220,8 @@ int vm_report_slice(vm_report *r, const char *name, const char *caption, const v
   for (int64_t e = 0; e < m->ne; e++) n3 += vm_elem_dim(m->etype[e]) == 3;
   if (!n3) return vm_error(ctx, VM_ERR_ARG, "report: %s: no volume elements to slice", name);
   int a0 = axis == 0 ? 1 : 0, a1 = axis == 2 ? 1 : 2; /* in-plane axes */
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int64_t v = 0; v < m->nv; v++)
-    for (int i = 0; i < 3; i++) {
-      double x = m->xyz[3 * v + i];
-      if (x < lo[i]) lo[i] = x;
-      if (x > hi[i]) hi[i] = x;
-    }
+  double lo[3], hi[3];
+  vm_mesh_bounds(m, lo, hi);
   if (isnan(value)) value = 0.5 * (lo[axis] + hi[axis]);
 
   /* the cut polygon of every element the plane crosses: up to 12 points */

@@ -54,9 +54,7 @@ double vm_surface_min_angle(const vm_mesh *m) {
   return acos(cmax > 1 ? 1 : cmax) * 180.0 / M_PI;
 }
 
-/* Mean edge length and bounding box diagonal of the 2D elements. */
-static void mesh_scales(const vm_mesh *m, double *h, double *diag) {
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+double vm_surface_mean_edge(const vm_mesh *m) {
   double s = 0;
   int64_t n = 0;
   for (int64_t e = 0; e < m->ne; e++) {
@@ -69,13 +67,25 @@ static void mesh_scales(const vm_mesh *m, double *h, double *diag) {
       vm_s_sub(q, p, d);
       s += vm_s_norm(d);
       n++;
-      for (int r = 0; r < 3; r++) {
-        if (p[r] < lo[r]) lo[r] = p[r];
-        if (p[r] > hi[r]) hi[r] = p[r];
-      }
     }
   }
-  *h = n ? s / (double)n : 0;
+  return n ? s / (double)n : 0;
+}
+
+/* Mean edge length and bounding box diagonal of the 2D elements. */
+static void mesh_scales(const vm_mesh *m, double *h, double *diag) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  int64_t n = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (vm_elem_dim(m->etype[e]) != 2) continue;
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++, n++)
+      for (int r = 0; r < 3; r++) {
+        double x = m->xyz[3 * (int64_t)m->conn[k] + r];
+        if (x < lo[r]) lo[r] = x;
+        if (x > hi[r]) hi[r] = x;
+      }
+  }
+  *h = vm_surface_mean_edge(m);
   double d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
   *diag = n ? vm_s_norm(d) : 0;
 }

@@ -171,24 +171,7 @@ done:
 
 int vm_surf_read_off(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
                      vm_mesh **out) {
-  *out = NULL;
-  if (len == 0) return vm_error(ctx, VM_ERR_FORMAT, "%s: empty file", name);
-  vm_mesh *m;
-  int st = vm_mesh_create(ctx, &m);
-  if (st < 0) return st;
-  vm_surf_text t;
-  vm_surf_text_init(&t, ctx, name, buf, len, '#');
-  vm_surf_polys P;
-  vm_surf_polys_init(&P, ctx);
-  st = read_off(&t, m, &P);
-  vm_surf_polys_free(&P);
-  if (st >= 0) st = vm_surf_report_topology(ctx, name, m);
-  if (st < 0) {
-    vm_mesh_destroy(&m);
-    return st;
-  }
-  *out = m;
-  return VM_OK;
+  return vm_surf_read_text(ctx, name, buf, len, '#', read_off, out);
 }
 
 int vm_surf_write_off(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o) {

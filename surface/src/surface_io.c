@@ -309,6 +309,28 @@ static int cmp_edge_use(const void *a, const void *b) {
   return x->elem < y->elem ? -1 : x->elem > y->elem;
 }
 
+int vm_surf_read_text(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
+                      char comment, vm_surf_parse_fn parse, vm_mesh **out) {
+  *out = NULL;
+  if (len == 0) return vm_error(ctx, VM_ERR_FORMAT, "%s: empty file", name);
+  vm_mesh *m;
+  int st = vm_mesh_create(ctx, &m);
+  if (st < 0) return st;
+  vm_surf_text t;
+  vm_surf_text_init(&t, ctx, name, buf, len, comment);
+  vm_surf_polys P;
+  vm_surf_polys_init(&P, ctx);
+  st = parse(&t, m, &P);
+  vm_surf_polys_free(&P);
+  if (st >= 0) st = vm_surf_report_topology(ctx, name, m);
+  if (st < 0) {
+    vm_mesh_destroy(&m);
+    return st;
+  }
+  *out = m;
+  return VM_OK;
+}
+
 int vm_surf_report_topology(vm_ctx *ctx, const char *name, const vm_mesh *m) {
   int64_t nrep = 0, firstrep = -1, nuse = 0;
   for (int64_t e = 0; e < m->ne; e++) {

@@ -261,14 +261,7 @@ int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double co
     for (int64_t i = b->eoff[e]; i < b->eoff[e + 1]; i++) vpatch[b->conn[i]] = fpatch[e];
   /* the reference is this very surface: feature vertices lie exactly on
    * their lines; the tolerance only absorbs rounding */
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int64_t v = 0; v < b->nv; v++)
-    for (int c = 0; c < 3; c++) {
-      lo[c] = fmin(lo[c], b->xyz[3 * v + c]);
-      hi[c] = fmax(hi[c], b->xyz[3 * v + c]);
-    }
-  double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  double lo[3], hi[3], diag = vm_mesh_bounds(b, lo, hi);
   if ((st = vm_surface_projector_assign(s->proj, b, &f, 1e-9 * diag, vsurf)) < 0) goto fail;
   vm_volume_slip_info inf;
   memset(&inf, 0, sizeof inf);

@@ -140,6 +140,10 @@ int vm_mesh_count_types(const vm_mesh *m, int64_t counts[VM_NTYPES]);
  * nonzero value marks vertices FIXED. Returns the number marked. */
 int64_t vm_mesh_apply_fixed_field(vm_mesh *m);
 
+/* Axis-aligned bounding box of all vertices into lo, hi (lo = +inf and
+ * hi = -inf if there are none); returns its diagonal (0 if empty). */
+double vm_mesh_bounds(const vm_mesh *m, double lo[3], double hi[3]);
+
 #ifdef __cplusplus
 }
 #endif

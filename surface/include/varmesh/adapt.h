@@ -91,6 +91,9 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
 /* Smallest corner angle (degrees) of the triangles of m (quads: of their
  * corner triangles); 180 if there are none. */
 double vm_surface_min_angle(const vm_mesh *m);
+/* Mean length of the sides of the 2D elements (an interior edge counts
+ * twice): the h of vm_surface_adapt, vm-surface and bench_surface. */
+double vm_surface_mean_edge(const vm_mesh *m);
 
 #ifdef __cplusplus
 }
