@@ -14,6 +14,10 @@ int vm_elem_nverts(int t) { return t >= 0 && t < VM_NTYPES ? nverts_tab[t] : 0; 
 int vm_elem_dim(int t) { return t >= 0 && t < VM_NTYPES ? dim_tab[t] : 0; }
 const char *vm_elem_name(int t) { return t >= 0 && t < VM_NTYPES ? name_tab[t] : "unknown"; }
 int vm_elem_to_vtk(int t) { return t >= 0 && t < VM_NTYPES ? vtk_tab[t] : -1; }
+int vm_elem_vtk_node(int t, int j) {
+  static const int prism[6] = {0, 2, 1, 3, 5, 4};
+  return t == VM_PRISM && j >= 0 && j < 6 ? prism[j] : j;
+}
 int vm_elem_from_vtk(int v) {
   for (int t = 0; t < VM_NTYPES; t++)
     if (vtk_tab[t] == v) return t;

@@ -88,11 +88,12 @@ int vm_vtk_build_elements(vm_ctx *ctx, vm_mesh *m, const char *name, const char 
     if (mp[i] < 0)
       continue;
     int64_t e = mp[i];
-    m->etype[e] = (uint8_t)vm_elem_from_vtk(c->types[i]);
-    int64_t o = m->eoff[e];
-    for (int64_t j = c->off[i]; j < c->off[i + 1]; j++)
-      m->conn[o++] = (int32_t)c->conn[j];
-    m->eoff[e + 1] = o;
+    int et = vm_elem_from_vtk(c->types[i]);
+    m->etype[e] = (uint8_t)et;
+    int64_t o = m->eoff[e], k = c->off[i + 1] - c->off[i];
+    for (int64_t j = 0; j < k; j++)
+      m->conn[o + j] = (int32_t)c->conn[c->off[i] + vm_elem_vtk_node(et, (int)j)];
+    m->eoff[e + 1] = o + k;
   }
   if (skipped)
     vm_log(ctx, VM_LOG_WARN,
@@ -1149,7 +1150,7 @@ int vm_write_vtk(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
     put_i32(fp, (int32_t)k, binary);
     for (int64_t j = 0; j < k; j++) {
       put_sep(fp, binary, 0);
-      put_i32(fp, m->conn[m->eoff[e] + j], binary);
+      put_i32(fp, m->conn[m->eoff[e] + vm_elem_vtk_node(m->etype[e], (int)j)], binary);
     }
     put_sep(fp, binary, 1);
   }

@@ -1360,10 +1360,20 @@ static void write_fields(FILE *fp, const vm_mesh *m, int loc, int flags) {
 int vm_write_vtu(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o) {
   (void)o;
   int flags = vm_vtk_need_flags(m);
+  /* connectivity in VTK's vertex order (prisms differ) */
+  int64_t nconn = m->eoff[m->ne];
+  int32_t *conn = vm_alloc_array(ctx, (size_t)(nconn ? nconn : 1), sizeof *conn);
+  if (!conn)
+    return VM_ERR_NOMEM;
+  for (int64_t e = 0; e < m->ne; e++)
+    for (int64_t j = 0; j < m->eoff[e + 1] - m->eoff[e]; j++)
+      conn[m->eoff[e] + j] = m->conn[m->eoff[e] + vm_elem_vtk_node(m->etype[e], (int)j)];
   vm_outfile *of;
   int st = vm_outfile_open(ctx, path, &of);
-  if (st)
+  if (st) {
+    vm_free(ctx, conn);
     return st;
+  }
   FILE *fp = vm_outfile_fp(of);
   fprintf(fp,
           "<?xml version=\"1.0\"?>\n"
@@ -1377,7 +1387,8 @@ int vm_write_vtu(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
   fputs("      <Points>\n", fp);
   write_array(fp, "        ", "Float64", "Points", 3, 3 * m->nv, 8, m->xyz, get_f64);
   fputs("      </Points>\n      <Cells>\n", fp);
-  write_array(fp, "        ", "Int64", "connectivity", 0, m->eoff[m->ne], 8, m->conn, get_conn);
+  write_array(fp, "        ", "Int64", "connectivity", 0, nconn, 8, conn, get_conn);
+  vm_free(ctx, conn);
   write_array(fp, "        ", "Int64", "offsets", 0, m->ne, 8, m->eoff, get_offset);
   write_array(fp, "        ", "UInt8", "types", 0, m->ne, 1, m->etype, get_vtktype);
   fputs("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n", fp);

@@ -26,7 +26,8 @@ int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path) {
   for (int64_t c = 0; c < g.ncell; c++) {
     int32_t e = g.cell[c];
     fprintf(f, "%d", vm_elem_to_vtk(m->etype[e]));
-    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) fprintf(f, " %d", (int)m->conn[k]);
+    for (int64_t k = 0; k < m->eoff[e + 1] - m->eoff[e]; k++)
+      fprintf(f, " %d", (int)m->conn[m->eoff[e] + vm_elem_vtk_node(m->etype[e], (int)k)]);
     fprintf(f, " %lld\n", (long long)c);
   }
   fprintf(f, "NPOIN= %lld\n", (long long)m->nv);

@@ -575,11 +575,16 @@ static void test_reference_cells(vm_ctx *ctx) {
   }
   putf(&s, "CELLS 6 36\n");
   int base = 0;
+  /* VTK's vertex order, written out: the same as varmesh's except the
+   * wedge, whose base (0,1,2) has its normal pointing away from (3,4,5) */
+  static const int vtk_order[6][8] = {{0, 1, 2},          {0, 1, 2, 3},
+                                      {0, 1, 2, 3},       {0, 1, 2, 3, 4},
+                                      {0, 2, 1, 3, 5, 4}, {0, 1, 2, 3, 4, 5, 6, 7}};
   for (int c = 0; c < 6; c++) {
     int k = vm_elem_nverts(types[c]);
     putf(&s, "%d", k);
     for (int i = 0; i < k; i++)
-      putf(&s, " %d", base + i);
+      putf(&s, " %d", base + vtk_order[c][i]);
     putf(&s, "\n");
     base += k;
   }
@@ -624,6 +629,81 @@ static const char polydata_vtk[] = "# vtk DataFile Version 3.0\n"
                                    "100 101 102 103\n"
                                    "VECTORS v float\n"
                                    "0 0 0 1 1 1 2 2 2 3 3 3\n";
+
+/* The written files carry VTK's wedge order, read back from the text
+ * itself (not by our reader): the base (0,1,2) of a valid prism has its
+ * normal pointing away from the top (3,4,5), as vtkWedge and ParaView's
+ * cell volumes expect, and the pyramid, tet and hex keep varmesh's order. */
+static double vtk_wedge_side(const double (*x)[3], const long *c) {
+  double a[3], b[3], n[3], t[3] = {0, 0, 0};
+  for (int k = 0; k < 3; k++) {
+    a[k] = x[c[1]][k] - x[c[0]][k];
+    b[k] = x[c[2]][k] - x[c[0]][k];
+    for (int i = 3; i < 6; i++) t[k] += x[c[i]][k] / 3;
+    t[k] -= x[c[0]][k];
+  }
+  n[0] = a[1] * b[2] - a[2] * b[1];
+  n[1] = a[2] * b[0] - a[0] * b[2];
+  n[2] = a[0] * b[1] - a[1] * b[0];
+  return n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
+}
+
+static void test_written_wedge_order(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  if (vm_mesh_create(ctx, &m) || vm_mesh_set_vertices(m, 6) || vm_mesh_set_elements(m, 1, 6)) {
+    CHECK(0, "wedge mesh");
+    vm_mesh_destroy(&m);
+    return;
+  }
+  memcpy(m->xyz, ref_prism, sizeof ref_prism);
+  m->etype[0] = VM_PRISM;
+  m->eoff[1] = 6;
+  for (int i = 0; i < 6; i++) m->conn[i] = i;
+  CHECK(signed_measure(m, 0) > 0, "varmesh's prism is valid");
+  const char *names[2] = {"wedge.vtk", "wedge.vtu"};
+  for (int f = 0; f < 2; f++) {
+    char path[128];
+    path_of(path, sizeof path, names[f]);
+    CHECK(vm_mesh_write(ctx, m, path, VM_FMT_AUTO, NULL) >= 0, "%s: write", names[f]);
+    size_t len;
+    char *t = slurp(path, &len);
+    long c[6] = {-1, -1, -1, -1, -1, -1};
+    const char *at = t ? (f ? strstr(t, "Name=\"connectivity\"") : strstr(t, "CELLS 1 7")) : NULL;
+    if (at) at = f ? strchr(at, '>') : strchr(at, '\n');
+    int ok = 0;
+    if (at && !f) {
+      ok = sscanf(at + 1, "6 %ld %ld %ld %ld %ld %ld", c, c + 1, c + 2, c + 3, c + 4, c + 5) == 6;
+    } else if (at) { /* base64 of a UInt64 byte count and six Int64 */
+      static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+      unsigned char raw[64];
+      int nb = 0, bits = 0;
+      unsigned acc = 0;
+      for (const char *q = at + 1; *q && *q != '<' && nb < 64; q++) {
+        const char *d = strchr(b64, *q);
+        if (!d || !*q) continue;
+        acc = (acc << 6) | (unsigned)(d - b64);
+        if ((bits += 6) >= 8) raw[nb++] = (unsigned char)(acc >> (bits -= 8));
+      }
+      if (nb >= 56) {
+        for (int i = 0; i < 6; i++) {
+          uint64_t u = 0;
+          for (int k = 7; k >= 0; k--) u = (u << 8) | raw[8 + 8 * i + k];
+          c[i] = (long)u;
+        }
+        ok = 1;
+      }
+    }
+    CHECK(ok, "%s: connectivity in the text", names[f]);
+    if (ok) CHECK(vtk_wedge_side(ref_prism, c) < 0, "%s: base normal points away from the top", names[f]);
+    vm_mesh *r = NULL;
+    CHECK(vm_mesh_read(ctx, path, VM_FMT_AUTO, &r) >= 0 && r && signed_measure(r, 0) > 0 &&
+              !memcmp(r->conn, m->conn, 6 * sizeof *m->conn),
+          "%s: read back in varmesh's order", names[f]);
+    vm_mesh_destroy(&r);
+    free(t);
+  }
+  vm_mesh_destroy(&m);
+}
 
 static void test_polydata(vm_ctx *ctx) {
   clear_warns();
@@ -759,12 +839,13 @@ static void build_binary_vtk(bytes *s, int classic) {
   }
   if (classic) {
     putf(s, "\nCELLS 2 9\n");
-    const int32_t c[9] = {6, 0, 1, 2, 3, 4, 5, 1, 5};
+    /* VTK's wedge: base (0,2,1) of the points, its normal away from the top */
+    const int32_t c[9] = {6, 0, 2, 1, 3, 5, 4, 1, 5};
     for (int i = 0; i < 9; i++)
       put_int(s, (uint32_t)c[i], 4, 1);
   } else {
     putf(s, "\nCELLS 3 7\nOFFSETS vtktypeint64\n");
-    const int64_t o[3] = {0, 6, 7}, c[7] = {0, 1, 2, 3, 4, 5, 5};
+    const int64_t o[3] = {0, 6, 7}, c[7] = {0, 2, 1, 3, 5, 4, 5};
     for (int i = 0; i < 3; i++)
       put_int(s, (uint64_t)o[i], 8, 1);
     putf(s, "\nCONNECTIVITY vtktypeint64\n");
@@ -1409,6 +1490,7 @@ int main(void) {
   test_roundtrips(ctx);
   test_dim_and_lossy(ctx);
   test_reference_cells(ctx);
+  test_written_wedge_order(ctx);
   test_polydata(ctx);
   test_offsets_and_fields(ctx);
   test_binary_handmade(ctx);

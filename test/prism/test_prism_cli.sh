@@ -38,6 +38,27 @@ for f in vtu vmsh su2; do
   check '[ $? -eq 0 ] && [ -s "$dir/b.$f" ]' "writes .$f"
 done
 check 'grep -q "^NELEM= 5980" "$dir/b.su2" && grep -q "^NMARK= 2" "$dir/b.su2" && grep -q "^MARKER_TAG= wall" "$dir/b.su2"' ".su2 has the cells and the wall and outer markers"
+# SU2 numbers a prism like VTK's wedge: the base (0,1,2) has its normal
+# pointing away from the top face (3,4,5); count the prisms that do not
+awk '/^NELEM=/ {ne = $2; next}
+     /^NPOIN=/ {np = $2; ip = 0; next}
+     ne > 0 && $1 == 13 && !np {n++; for (k = 0; k < 6; k++) c[n, k] = $(k + 2); next}
+     np && ip < np {x[ip] = $1; y[ip] = $2; z[ip] = $3; ip++}
+     END {
+       bad = 0
+       for (i = 1; i <= n; i++) {
+         a0 = c[i, 0]; a1 = c[i, 1]; a2 = c[i, 2]
+         ux = x[a1] - x[a0]; uy = y[a1] - y[a0]; uz = z[a1] - z[a0]
+         vx = x[a2] - x[a0]; vy = y[a2] - y[a0]; vz = z[a2] - z[a0]
+         nx = uy * vz - uz * vy; ny = uz * vx - ux * vz; nz = ux * vy - uy * vx
+         tx = (x[c[i, 3]] + x[c[i, 4]] + x[c[i, 5]]) / 3 - x[a0]
+         ty = (y[c[i, 3]] + y[c[i, 4]] + y[c[i, 5]]) / 3 - y[a0]
+         tz = (z[c[i, 3]] + z[c[i, 4]] + z[c[i, 5]]) / 3 - z[a0]
+         if (nx * tx + ny * ty + nz * tz >= 0) bad++
+       }
+       print n, bad
+     }' "$dir/b.su2" >"$dir/su2.orient"
+check '[ "$(cat "$dir/su2.orient")" = "5980 0" ]' ".su2 prisms in VTK's wedge order (base normal away from the top): $(cat "$dir/su2.orient") (prisms, wrong)"
 "$prism" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.cgns" 2>"$dir/cg.err"
 rc=$?
 if [ $rc -eq 0 ]; then

@@ -41,6 +41,12 @@ const char *vm_elem_name(int type);
 /* VTK cell type id (5, 9, 10, 14, 13, 12) and back (-1 if not linear). */
 int vm_elem_to_vtk(int type);
 int vm_elem_from_vtk(int vtk_type);
+/* Local vertex j of an element in VTK's order (VTK, VTU, SU2) is local
+ * vertex vm_elem_vtk_node(type, j) in varmesh's: the identity except for
+ * prisms, whose base (0,1,2) VTK orders with its normal pointing away from
+ * the top (3,4,5) and varmesh, like Gmsh and CGNS, towards it. The map is
+ * its own inverse. */
+int vm_elem_vtk_node(int type, int j);
 
 /* Faces of a 3D element (for boundary extraction): returns the number of
  * faces; faces[f][0..3] are local vertex indices, nfv[f] 3 or 4, ordered so
