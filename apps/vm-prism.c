@@ -319,11 +319,12 @@ int main(int argc, char **argv) {
     fprintf(stderr,
             "vm-prism: %s: %lld prisms in %d layers (first %g, growth %g), %.1f%% of columns at "
             "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, min "
-            "scaled Jacobian %.3f, normal deviation max %.2f deg, intersecting pairs %lld, max "
+            "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
+            "above 5 deg), intersecting pairs %lld, max "
             "growth %.3f, %.2f s%s\n",
             out, (long long)r.prisms, r.layers, r.first_height, r.growth, 100 * r.full_fraction,
             r.thick_min, r.thick_mean, (long long)r.inverted, r.sj_min, r.normal_dev_max,
-            (long long)npairs, r.growth_max, r.time_total,
+            (long long)r.normal_dev_over5, (long long)r.smooth_vertices, (long long)npairs, r.growth_max, r.time_total,
             rc == VM_EXIT_CHECK ? "  -- NOT VALID" : rc == VM_EXIT_INTERRUPTED ? "  -- interrupted" : "");
   }
   if (json) {
@@ -357,6 +358,8 @@ int main(int argc, char **argv) {
     vm_json_double(stdout, r.normal_dev_max);
     printf(", \"normal_dev_mean_deg\": ");
     vm_json_double(stdout, r.normal_dev_mean);
+    printf(", \"smooth_vertices\": %lld, \"normal_dev_over_5deg\": %lld", (long long)r.smooth_vertices,
+           (long long)r.normal_dev_over5);
     printf(", \"growth_max\": ");
     vm_json_double(stdout, r.growth_max);
     printf(", \"springback_iterations\": %d, \"cut_rounds\": %d, \"cut_pairs_first\": %lld, "

@@ -125,11 +125,11 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
     vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
   }
-  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f "
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f (%lld > 5) "
          "| %lld / %lld+%lld | %.3f | %d%s |\n",
          name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction, r.thick_min,
          r.thick_mean, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
-         (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
+         (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
          st ? " (warn)" : "");
   fflush(stdout);
   if (verbose) {
@@ -175,7 +175,7 @@ int main(int argc, char **argv) {
   if (vm_ctx_create(&ctx)) return 1;
   vm_surface_register_formats(ctx);
   printf("| case | T/L | prisms | time s (wall / CPU) | full | thick min / mean | inverted (own / CGAL) "
-         "| min SJ | max normal dev deg | intersecting pairs (Embree / CGAL outer+wall) | max "
+         "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL outer+wall) | max "
          "growth | layers |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   if (!only || !strcmp(only, "plane")) {

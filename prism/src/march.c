@@ -42,21 +42,57 @@ static double low_levels_quality(const vm_prism *p, int64_t t, int nm) {
   return q;
 }
 
+/* Column v stood up at the wall: each of levels 1..nm keeps its height
+ * above the wall's tangent plane (its component along the wall normal) and
+ * loses its lateral offset, all of it at level 1 and a share (k-1)/nm of
+ * it kept at level k, so the column bends back to its old course over nm
+ * layers. Keeping the heights keeps every side edge rising (putting level 1
+ * at its old distance on the normal would overshoot level 2 on a column
+ * tilted by more than about 60 degrees). Levels are taken from `old`
+ * (levels 1..nmax). Returns 0 if the column cannot stand up (a level at or
+ * below the tangent plane). */
+static int stand_column(vm_prism *p, int64_t v, int nm, const double *old) {
+  size_t lsz = (size_t)(3 * p->nw);
+  const double *o = p->wall + 3 * v, *nv = p->vnrm + 3 * v;
+  for (int k = 1; k <= nm; k++) {
+    double e[3];
+    for (int c = 0; c < 3; c++) e[c] = old[(size_t)(k - 1) * lsz + 3 * v + c] - o[c];
+    if (!(pr_dot(e, nv) > 0)) return 0;
+  }
+  for (int k = 1; k <= nm; k++) {
+    const double *x0 = old + (size_t)(k - 1) * lsz + 3 * v;
+    double *x = p->lev + (size_t)k * lsz + 3 * v, e[3], keep = (double)(k - 1) / nm;
+    for (int c = 0; c < 3; c++) e[c] = x0[c] - o[c];
+    double a = pr_dot(e, nv);
+    for (int c = 0; c < 3; c++) x[c] = o[c] + a * nv[c] + keep * (e[c] - a * nv[c]);
+  }
+  return 1;
+}
+
+static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int k = 0; k < nmax; k++)
+    memcpy(p->lev + (size_t)(k + 1) * lsz + 3 * v, old + (size_t)k * lsz + 3 * v,
+           3 * sizeof *old);
+}
+
 /* The first layer's side edges along the wall normal where the wall is
- * smooth: level 1 of such a column is put at its distance from the wall on
- * the normal, and levels 2..nm part of the way (weight 1 - (k-1)/nm), so a
- * column that springback left tilted bends over a few layers instead of
- * one. Where a prism of layers 0..nm would then be worse than both before
- * and 0.3, its columns go back. The outer surface never moves, so its
- * intersections are untouched, and going back restores the old prisms bit
- * for bit. */
+ * smooth (incident face normals within 10 degrees of the vertex normal):
+ * every smooth column is stood up over nm = min(6, layers - 1) layers
+ * (stand_column); where a prism of layers 0..nm would then be worse than
+ * both 0.3 and half its quality before, its columns go back, until no such
+ * prism is left. Then each column that went back, in vertex order, tries
+ * again alone, bending back over 6, 3, 2 or 1 layers, with its neighbours
+ * as they are, and keeps the first that leaves every prism it touches
+ * better than 0.3 or a quarter of its quality before. The outer
+ * surface never moves, so its intersections are untouched, and going back
+ * restores the old prisms bit for bit. */
 #define ORTHO_QMIN 0.3
 static int orthogonal_first_level(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
   int nm = p->nlev - 2 < 6 ? p->nlev - 2 : 6;
   size_t lsz = (size_t)(3 * nw);
-  double *lv = p->lev + lsz;
   double *old = vm_alloc_array(ctx, (size_t)nm * lsz, sizeof *old);
   double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
   uint8_t *back = vm_alloc_array(ctx, (size_t)nw, sizeof *back);
@@ -68,23 +104,15 @@ static int orthogonal_first_level(vm_prism *p) {
     vm_free(ctx, moved);
     return VM_ERR_NOMEM;
   }
-  memcpy(old, lv, (size_t)nm * lsz * sizeof *old);
+  memcpy(old, p->lev + lsz, (size_t)nm * lsz * sizeof *old);
   for (int64_t t = 0; t < nt; t++) q0[t] = low_levels_quality(p, t, nm);
-  for (int64_t v = 0; v < nw; v++) {
-    if (!p->smooth[v]) continue;
-    moved[v] = 1;
-    for (int k = 1; k <= nm; k++) {
-      double *x = lv + (size_t)(k - 1) * lsz + 3 * v, w = 1 - (double)(k - 1) / nm;
-      double h = pr_dist(x, p->wall + 3 * v);
-      for (int c = 0; c < 3; c++)
-        x[c] += w * (p->wall[3 * v + c] + h * p->vnrm[3 * v + c] - x[c]);
-    }
-  }
+  for (int64_t v = 0; v < nw; v++)
+    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nm, old);
   for (int round = 0; round < 100; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
     for (int64_t t = 0; t < nt; t++) {
-      double lim = q0[t] < ORTHO_QMIN ? q0[t] : ORTHO_QMIN;
+      double lim = 0.5 * q0[t] < ORTHO_QMIN ? 0.5 * q0[t] : ORTHO_QMIN;
       if (low_levels_quality(p, t, nm) >= lim) continue;
       for (int i = 0; i < 3; i++) {
         int32_t v = p->tri[3 * t + i];
@@ -97,10 +125,26 @@ static int orthogonal_first_level(vm_prism *p) {
     if (!nback) break;
     for (int64_t v = 0; v < nw; v++)
       if (back[v]) {
-        for (int k = 0; k < nm; k++)
-          memcpy(lv + (size_t)k * lsz + 3 * v, old + (size_t)k * lsz + 3 * v, 3 * sizeof *old);
+        restore_column(p, v, nm, old);
         moved[v] = 0;
       }
+  }
+  static const int tries[4] = {6, 3, 2, 1};
+  for (int64_t v = 0; v < nw; v++) {
+    if (!p->smooth[v] || moved[v]) continue;
+    for (int k = 0; k < 4 && !moved[v]; k++) {
+      if (tries[k] > nm || !stand_column(p, v, tries[k], old)) continue;
+      int ok = 1;
+      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
+        int64_t t = p->vt[j];
+        double lim = 0.25 * q0[t] < ORTHO_QMIN ? 0.25 * q0[t] : ORTHO_QMIN;
+        ok = low_levels_quality(p, t, nm) >= lim;
+      }
+      if (ok)
+        moved[v] = 1;
+      else
+        restore_column(p, v, nm, old);
+    }
   }
   vm_free(ctx, old);
   vm_free(ctx, q0);
@@ -372,7 +416,7 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     R.inverted = inv;
     R.sj_min = sj;
     double dmax = 0, dsum = 0;
-    int64_t ns = 0;
+    int64_t ns = 0, over = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v]) continue;
       double e[3];
@@ -382,7 +426,9 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
       dmax = a > dmax ? a : dmax;
       dsum += a;
       ns++;
+      over += a > 5;
     }
+    R.normal_dev_over5 = over;
     R.normal_dev_max = dmax;
     R.normal_dev_mean = ns ? dsum / (double)ns : 0;
     R.smooth_vertices = ns;

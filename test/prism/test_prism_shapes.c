@@ -150,6 +150,8 @@ int main(void) {
     }
     fprintf(stderr, "torus: inner-equator tops at axis distance %.3f..%.3f\n", rmin, rmax_inner);
     CHECK(rmax_inner < 0.25, "torus: the hole stays open (%g)", rmax_inner);
+    CHECK(o.r.normal_dev_over5 == 0, "torus: %lld first-layer side edges more than 5 deg off",
+          (long long)o.r.normal_dev_over5);
     vm_mesh_destroy(&o.res);
     vm_mesh_destroy(&w);
   }
@@ -178,6 +180,9 @@ int main(void) {
     CHECK(gap < 0.15, "two spheres: no contact, gap %g", gap);
     CHECK(tmax < 0.4, "two spheres: column at the contact %g long", tmax);
     CHECK(o.r.full_fraction > 0.6, "two spheres: full fraction %g", o.r.full_fraction);
+    CHECK(o.r.normal_dev_over5 == 0 && o.r.normal_dev_max < 5,
+          "two spheres: first layer on the normal at the contact too (max %g deg, %lld above 5)",
+          o.r.normal_dev_max, (long long)o.r.normal_dev_over5);
     vm_mesh_destroy(&o.res);
     vm_mesh_destroy(&w);
   }

@@ -100,6 +100,7 @@ typedef struct vm_prism_report {
                                     vertex normal, at smooth vertices */
   double normal_dev_mean;
   int64_t smooth_vertices;       /* vertices where normal_dev is measured */
+  int64_t normal_dev_over5;      /* of those, deviating by more than 5 degrees */
   double growth_max;             /* max h_{k+1}/h_k over columns */
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
