@@ -356,6 +356,8 @@ int main(int argc, char **argv) {
     vm_json_double(stdout, r.sj_min);
     printf(", \"normal_dev_max_deg\": ");
     vm_json_double(stdout, r.normal_dev_max);
+    printf(", \"thickness_max\": ");
+    vm_json_double(stdout, r.thick_max);
     printf(", \"normal_dev_mean_deg\": ");
     vm_json_double(stdout, r.normal_dev_mean);
     printf(", \"smooth_vertices\": %lld, \"normal_dev_over_5deg\": %lld", (long long)r.smooth_vertices,

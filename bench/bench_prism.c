@@ -25,6 +25,13 @@ static void progress(void *user, const vm_prism_progress *pg) {
           pg->step, pg->value, (long long)pg->count);
 }
 
+/* Warnings (a marching stopped early, ...) on stderr, so a "(warn)" row
+ * says why. */
+static void log_warn(void *user, int level, const char *msg) {
+  (void)user;
+  if (level <= VM_LOG_WARN) fprintf(stderr, "  warning: %s\n", msg);
+}
+
 static double model_length(const vm_mesh *m) {
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int64_t v = 0; v < m->nv; v++)
@@ -125,10 +132,10 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
     vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
   }
-  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f | %lld / %lld | %.3f | %5.2f (%lld > 5) "
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f / %.3f | %lld / %lld | %.3f | %5.2f (%lld > 5) "
          "| %lld / %lld+%lld | %.3f | %d%s |\n",
          name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction, r.thick_min,
-         r.thick_mean, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
+         r.thick_mean, r.thick_max, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
          (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
          st ? " (warn)" : "");
   fflush(stdout);
@@ -173,8 +180,9 @@ int main(int argc, char **argv) {
   else snprintf(path, sizeof path, "../shared/data/plane.stl");
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
+  vm_ctx_set_log(ctx, log_warn, NULL);
   vm_surface_register_formats(ctx);
-  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick min / mean | inverted (own / CGAL) "
+  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick/T min / mean / max | inverted (own / CGAL) "
          "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL outer+wall) | max "
          "growth | layers |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");

@@ -387,16 +387,18 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     double T = p->o.thickness;
     const double *top = L + (size_t)(nlev - 1) * lsz;
     int64_t full = 0;
-    double tmin = INFINITY, tsum = 0;
+    double tmin = INFINITY, tmax = 0, tsum = 0;
     for (int64_t v = 0; v < nw; v++) {
       double d = pr_dist(p->wall + 3 * v, top + 3 * v) / T;
       if (d >= 1 - p->o.full_tol) full++;
       tmin = d < tmin ? d : tmin;
+      tmax = d > tmax ? d : tmax;
       tsum += d;
     }
     R.full_fraction = (double)full / (double)nw;
     R.thick_min = tmin;
     R.thick_mean = tsum / (double)nw;
+    R.thick_max = tmax;
     R.prisms = (nlev - 1) * nt;
     R.layers = nlev - 1;
     int64_t inv = 0;

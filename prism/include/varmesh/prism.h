@@ -94,6 +94,7 @@ typedef struct vm_prism_report {
   int64_t intersections;         /* pairs left at the end (0 unless limits hit) */
   double full_fraction;          /* columns at full thickness */
   double thick_min, thick_mean;  /* achieved / requested thickness over columns */
+  double thick_max;              /* > 1 where springback left a column longer than T */
   int64_t inverted;              /* corner tets with det <= 0 in the final mesh */
   double sj_min;                 /* minimum scaled Jacobian of the prisms */
   double normal_dev_max;         /* degrees: first-layer side edges vs the wall's
