@@ -6,6 +6,8 @@
 # Results go to out/. Run as root (apt-get) or on a machine that has the
 # packages of .ci/install-deps.
 set -eu
+# OpenMP threads sleep while they wait (see examples/Makefile)
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 t0=$(date +%s)
