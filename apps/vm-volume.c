@@ -21,8 +21,10 @@ static const char usage[] =
     "Untangle (Section 5 of the paper) and optimize a volume mesh; fixed vertices\n"
     "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
     "never move. OUT is written in the format of its extension, else IN's.\n"
-    "  --untangle penalty|oneway|barrier   untangling method: (35), its one-way variant,\n"
-    "                       contraction (39); default: (35) with a bounded eps decay\n"
+    "  --untangle penalty|oneway|barrier|adaptive|foldover   untangling method: (35),\n"
+    "                       its one-way variant, contraction (39), adaptive (default:\n"
+    "                       (35) with a bounded eps decay), foldover (eps from the\n"
+    "                       decrease of F, Garanzha et al. 2021)\n"
     "  --solver implicit|explicit|newton   global solver (default implicit; newton:\n"
     "                       full coupled Hessian, projected to PSD per node)\n"
     "  --measure balanced|shape|shape-alt  optimization measure (default balanced)\n"
@@ -105,7 +107,7 @@ int main(int argc, char **argv) {
   uint8_t *vflag0 = NULL;
   int32_t *vsurf0 = NULL;
   double feature_deg = 40, corner_deg = 60;
-  static const char *const methods[] = {"penalty", "oneway", "barrier"};
+  static const char *const methods[] = {"penalty", "oneway", "barrier", "adaptive", "foldover"};
   static const char *const solvers[] = {"explicit", "implicit", "newton"};
   static const char *const rules[] = {"corner", "geometric"};
   for (int i = 1; i < argc; i++) {
@@ -132,8 +134,9 @@ int main(int argc, char **argv) {
       wo.binary = 1;
     } else if (!strcmp(a, "--untangle")) {
       i++;
-      if ((k = pick(val, methods, 3)) < 0) {
-        rc = vm_cli_usage_error(&cli, "--untangle expects penalty, oneway or barrier");
+      if ((k = pick(val, methods, 5)) < 0) {
+        rc = vm_cli_usage_error(
+            &cli, "--untangle expects penalty, oneway, barrier, adaptive or foldover");
         goto done;
       }
       o.method = (vm_untangle_method)k;
