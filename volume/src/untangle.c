@@ -393,7 +393,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
     if (st < 0) goto done;
     if ((st = stats(&s, m->xyz)) < 0) goto done;
     if (s.M > 0 && s.M < o.local_threshold) {
-      vm_problem_set_measure(s.P, k, &pu);
+      vm_problem_set_measure(s.P, k, &prm);
       if ((st = local_phase(&s, &budget)) < 0) goto done;
       vm_problem_set_node_eps(s.P, NULL);
     }

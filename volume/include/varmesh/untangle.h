@@ -55,7 +55,8 @@ typedef struct vm_volume_opts {
   vm_measure_kind measure;   /* optimization measure: balanced (default), shape,
                                 shape-alt or barrier-free quasi-iso */
   double theta;              /* of phi_theta (default 0.8) */
-  double theta_untangle;     /* of phi_theta while untangling, <= 0: theta */
+  double theta_untangle;     /* of phi_theta in the global untangling phase
+                                (local rounds use theta), <= 0: theta */
   double delta0;             /* smallest epsilon (default 1e-11; det C is target-relative) */
   double sigma;              /* contraction of (39), in (0, 1) (default 0.5) */
   double kappa;              /* adaptive: slowest eps decay per iteration (0.7) */
