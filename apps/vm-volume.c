@@ -21,12 +21,16 @@ static const char usage[] =
     "Untangle (Section 5 of the paper) and optimize a volume mesh; fixed vertices\n"
     "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
     "never move. OUT is written in the format of its extension, else IN's.\n"
-    "  --untangle penalty|oneway|barrier   untangling method: (35), its one-way variant,\n"
-    "                       contraction (39); default: (35) with a bounded eps decay\n"
+    "  --untangle penalty|oneway|barrier|adaptive|foldover   untangling method: (35),\n"
+    "                       its one-way variant, contraction (39), adaptive (default:\n"
+    "                       (35) with a bounded eps decay), foldover (eps from the\n"
+    "                       decrease of F, Garanzha et al. 2021)\n"
     "  --solver implicit|explicit|newton   global solver (default implicit; newton:\n"
     "                       full coupled Hessian, projected to PSD per node)\n"
     "  --measure balanced|shape|shape-alt  optimization measure (default balanced)\n"
     "  --theta T            volumetric weight of the balanced measure (default 0.8)\n"
+    "  --theta-untangle T   theta of the penalty in global untangling (default: --theta)\n"
+    "  --eps-inner N        foldover: iterations per eps (default 10)\n"
     "  --rule corner|geometric   quadrature (default corner; geometric: 64 per hex)\n"
     "  --target-size H      ideal element edge length (default: total volume kept)\n"
     "  --max-iter N         untangling iterations (default 20000)\n"
@@ -105,7 +109,7 @@ int main(int argc, char **argv) {
   uint8_t *vflag0 = NULL;
   int32_t *vsurf0 = NULL;
   double feature_deg = 40, corner_deg = 60;
-  static const char *const methods[] = {"penalty", "oneway", "barrier"};
+  static const char *const methods[] = {"penalty", "oneway", "barrier", "adaptive", "foldover"};
   static const char *const solvers[] = {"explicit", "implicit", "newton"};
   static const char *const rules[] = {"corner", "geometric"};
   for (int i = 1; i < argc; i++) {
@@ -132,8 +136,9 @@ int main(int argc, char **argv) {
       wo.binary = 1;
     } else if (!strcmp(a, "--untangle")) {
       i++;
-      if ((k = pick(val, methods, 3)) < 0) {
-        rc = vm_cli_usage_error(&cli, "--untangle expects penalty, oneway or barrier");
+      if ((k = pick(val, methods, 5)) < 0) {
+        rc = vm_cli_usage_error(
+            &cli, "--untangle expects penalty, oneway, barrier, adaptive or foldover");
         goto done;
       }
       o.method = (vm_untangle_method)k;
@@ -160,26 +165,31 @@ int main(int argc, char **argv) {
         goto done;
       }
       o.measure = ops->kind;
-    } else if (!strcmp(a, "--theta") || !strcmp(a, "--target-size") ||
-               !strcmp(a, "--time-limit")) {
+    } else if (!strcmp(a, "--theta") || !strcmp(a, "--theta-untangle") ||
+               !strcmp(a, "--target-size") || !strcmp(a, "--time-limit")) {
       i++;
       double x;
-      double lo = !strcmp(a, "--theta") ? 0 : 1e-300, hi = !strcmp(a, "--theta") ? 0.999 : 1e300;
+      int th = !strcmp(a, "--theta") || !strcmp(a, "--theta-untangle");
+      double lo = th ? 0 : 1e-300, hi = th ? 0.999 : 1e300;
       if (vm_cli_double(&cli, a, val, lo, hi, &x)) {
         rc = VM_EXIT_USAGE;
         goto done;
       }
       if (!strcmp(a, "--theta"))
         o.theta = x;
+      else if (!strcmp(a, "--theta-untangle"))
+        o.theta_untangle = x;
       else if (!strcmp(a, "--target-size"))
         o.target_size = x;
       else
         o.time_limit = x;
     } else if (!strcmp(a, "--max-iter") || !strcmp(a, "--opt-iter") ||
                !strcmp(a, "--qi-steps") || !strcmp(a, "--local-threshold") ||
-               !strcmp(a, "--threads") || !strcmp(a, "--progress-every")) {
+               !strcmp(a, "--threads") || !strcmp(a, "--progress-every") ||
+               !strcmp(a, "--eps-inner")) {
       i++;
-      if (vm_cli_int(&cli, a, val, !strcmp(a, "--progress-every") ? 1 : 0, 100000000, &lv)) {
+      int lo1 = !strcmp(a, "--progress-every") || !strcmp(a, "--eps-inner");
+      if (vm_cli_int(&cli, a, val, lo1 ? 1 : 0, 100000000, &lv)) {
         rc = VM_EXIT_USAGE;
         goto done;
       }
@@ -193,6 +203,8 @@ int main(int argc, char **argv) {
         o.local_threshold = (int)lv;
       else if (!strcmp(a, "--threads"))
         vm_ctx_set_threads(cli.ctx, (int)lv);
+      else if (!strcmp(a, "--eps-inner"))
+        o.eps_inner = (int)lv;
       else
         every = lv;
     } else if (!strcmp(a, "--report")) {

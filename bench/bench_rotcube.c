@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "varmesh/generate.h"
+#include "varmesh/problem.h"
 #include "varmesh/quality.h"
 #include "varmesh/untangle.h"
 
@@ -26,8 +27,10 @@ static void usage(void) {
   fprintf(stderr,
           "usage: bench_rotcube [--n N] [--angles i,j,..] [--geometric] [--tets] [--mixed]\n"
           "                     [--time-limit S] [--max-iter N] [--opt-iter N] [--method "
-          "penalty|oneway|barrier]\n"
-          "                     [--explicit | --newton] [--threads N] [--verbose]\n"
+          "penalty|oneway|barrier|adaptive|foldover]\n"
+          "                     [--eps-inner N] [--local-threshold N] [--theta T]\n"
+          "                     [--theta-untangle T]\n"
+          "                     [--explicit | --newton] [--threads N] [--verbose] [--where]\n"
           "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all)\n");
 }
 
@@ -45,7 +48,7 @@ static void progress(void *user, const vm_volume_progress *p) {
 }
 
 int main(int argc, char **argv) {
-  int n = 32, use[5] = {1, 1, 1, 1, 1}, cells = VM_GEN_HEX, threads = 0;
+  int n = 32, use[5] = {1, 1, 1, 1, 1}, cells = VM_GEN_HEX, threads = 0, where = 0;
   vm_volume_opts o = vm_volume_opts_default();
   o.time_limit = 60;
   prog g = {0, getenv("VM_EVERY") ? atoi(getenv("VM_EVERY")) : 50};
@@ -78,14 +81,30 @@ int main(int argc, char **argv) {
     } else if (!strcmp(a, "--opt-iter")) {
       o.opt_iter = atoi(v);
       i++;
+    } else if (!strcmp(a, "--eps-inner")) {
+      o.eps_inner = atoi(v);
+      i++;
+    } else if (!strcmp(a, "--local-threshold")) {
+      o.local_threshold = atoi(v);
+      i++;
+    } else if (!strcmp(a, "--theta-untangle")) {
+      o.theta_untangle = atof(v);
+      i++;
+    } else if (!strcmp(a, "--theta")) {
+      o.theta = atof(v);
+      i++;
     } else if (!strcmp(a, "--threads")) {
       threads = atoi(v);
       i++;
     } else if (!strcmp(a, "--method")) {
-      o.method = !strcmp(v, "barrier") ? VM_UNTANGLE_BARRIER
-                 : !strcmp(v, "oneway") ? VM_UNTANGLE_PENALTY_ONEWAY
-                                        : VM_UNTANGLE_PENALTY;
+      o.method = !strcmp(v, "barrier")    ? VM_UNTANGLE_BARRIER
+                 : !strcmp(v, "oneway")   ? VM_UNTANGLE_PENALTY_ONEWAY
+                 : !strcmp(v, "adaptive") ? VM_UNTANGLE_ADAPTIVE
+                 : !strcmp(v, "foldover") ? VM_UNTANGLE_FOLDOVER
+                                          : VM_UNTANGLE_PENALTY;
       i++;
+    } else if (!strcmp(a, "--where")) {
+      where = 1;
     } else if (!strcmp(a, "--verbose")) {
       g.verbose = 1;
     } else {
@@ -141,6 +160,41 @@ int main(int argc, char **argv) {
            (long long)q.all.inverted_elems, r.time_total, cpu, paper[0][a], paper[1][a], paper[2][a],
            paper[3][a], paper[4][a], paper[5][a]);
     fflush(stdout);
+    if (where && cells != VM_GEN_MIXED) {
+      /* where the inverted nodes are: per cell, its layer outside the inner
+       * cube along x, y, z (0: within the inner cube's slab, 3: 3 or more) */
+      vm_problem *P = NULL;
+      int64_t nn = 0;
+      if (vm_problem_create(ctx, m, &P) == VM_OK && vm_problem_set_rule(P, o.rule) == VM_OK &&
+          vm_problem_set_target_reference(P, ref) == VM_OK)
+        nn = vm_problem_num_nodes(P);
+      double *d = malloc(sizeof *d * (size_t)(nn > 0 ? nn : 1));
+      if (!d || vm_problem_node_dets(P, m->xyz, d) < 0) nn = 0;
+      const int32_t *nel = nn ? vm_problem_node_elements(P) : NULL;
+      int cnt[64] = {0};
+      for (int64_t q = 0; q < nn; q++) {
+        if (d[q] > 0) continue;
+        int32_t e = nel[q];
+        int per = cells == VM_GEN_TETS ? 6 : 1;
+        int64_t h = e / per;
+        int i = (int)(h % n), j = (int)(h / n % n), k = (int)(h / n / n);
+        /* cell centre distance outside the inner cube, in cells, per axis */
+        double c[3] = {-0.5 + (i + 0.5) / n, -0.5 + (j + 0.5) / n, -0.5 + (k + 0.5) / n};
+        int cls = 0;
+        for (int a = 0; a < 3; a++) {
+          double out = fabs(c[a]) - ro.inner;
+          int l = out <= 0 ? 0 : (int)(out * n) + 1;
+          cls = cls * 4 + (l > 3 ? 3 : l);
+        }
+        cnt[cls]++;
+      }
+      printf("  inverted nodes by cell layer outside the inner cube (x y z):");
+      for (int c2 = 0; c2 < 64; c2++)
+        if (cnt[c2]) printf(" %d%d%d:%d", c2 / 16, c2 / 4 % 4, c2 % 4, cnt[c2]);
+      printf("\n");
+      free(d);
+      vm_problem_destroy(&P);
+    }
     vm_free(ctx, ref);
     vm_mesh_destroy(&m);
   }

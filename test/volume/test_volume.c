@@ -21,6 +21,8 @@ static double now(void) {
 
 /* Global solver of untangle_case. */
 static vm_minimizer_kind case_solver = VM_MINIMIZER_IMPLICIT;
+/* theta of the penalty while untangling (0: the optimization's) */
+static double case_theta_untangle = 0;
 
 /* Untangle a generated rotated cube; check validity with the independent
  * quality code and that fixed vertices did not move by a single bit. */
@@ -43,6 +45,7 @@ static void untangle_case(vm_ctx *ctx, const char *name, int n, double frac, int
    * machine are 10-20x slower than the figures in the comments */
   o.time_limit = 900;
   o.solver = case_solver;
+  o.theta_untangle = case_theta_untangle;
   vm_volume_report r;
   int st = vm_volume_run(ctx, m, NULL, &o, &r);
   CHECK(st == VM_OK, "%s: status %d (%s), M %lld -> %lld", name, st, vm_ctx_error(ctx),
@@ -150,6 +153,14 @@ int main(void) {
                 VM_RULE_CORNER, NULL);
   untangle_case(ctx, "hex n=12 3pi/8", 12, 0.375, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
                 VM_RULE_CORNER, NULL);
+  untangle_case(ctx, "hex n=8 pi/2 foldover", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_FOLDOVER,
+                VM_RULE_CORNER, NULL);
+  untangle_case(ctx, "tets n=8 pi/2 foldover", 8, 0.5, VM_GEN_TETS, VM_UNTANGLE_FOLDOVER,
+                VM_RULE_CORNER, NULL);
+  case_theta_untangle = 0.95;
+  untangle_case(ctx, "hex n=8 pi/2 theta_u 0.99", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
+                VM_RULE_CORNER, NULL);
+  case_theta_untangle = 0;
   case_solver = VM_MINIMIZER_NEWTON;
   untangle_case(ctx, "hex n=8 pi/2 newton", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
                 VM_RULE_CORNER, NULL);

@@ -23,6 +23,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.delta0 = 1e-11;
   o.sigma = 0.5;
   o.kappa = 0.7;
+  o.eps_inner = 10;
   o.max_iter = 20000;
   o.opt_iter = 100;
   o.local_threshold = 100;
@@ -40,6 +41,8 @@ const char *vm_untangle_method_name(vm_untangle_method m) {
     return "barrier";
   case VM_UNTANGLE_ADAPTIVE:
     return "adaptive";
+  case VM_UNTANGLE_FOLDOVER:
+    return "foldover";
   }
   return "?";
 }
@@ -68,6 +71,8 @@ typedef struct {
   int have_step;
   int done;         /* adaptive: det >= eps everywhere: untangled with margin */
   double pressure;  /* adaptive: multiplier of (35), halved on stalls */
+  int block_iter;   /* foldover: iterations at the current eps */
+  double F_block0;  /* foldover: F before the first of them */
   double t0;
 } ut_state;
 
@@ -134,6 +139,27 @@ static int update_eps(ut_state *s, int first) {
     s->eps = fmax(fmax(s->pressure * e35, o->delta0), o->kappa * s->eps);
     break;
   }
+  case VM_UNTANGLE_FOLDOVER: {
+    /* eps stays for eps_inner iterations (or until a step stalls); then
+     * chi_eps at the worst node is scaled by mu = min(F_end/F_start, 0.9)
+     * of that block, which fixes the new eps: chi_eps'(D) = mu chi_eps(D)
+     * <=> eps' = 2 sqrt(mu' (mu' - D)) with mu' = mu chi_eps(D) */
+    if (first) {
+      s->eps = neg > 0 ? neg : o->delta0;
+      s->block_iter = 0;
+      break;
+    }
+    int stalled = s->have_step && s->F_before - s->F_after <= 1e-6 * fabs(s->F_before);
+    if (s->block_iter < o->eps_inner && !stalled) break; /* re-applied: a phase may reset it */
+    double D = s->min_det, q = sqrt(s->eps * s->eps + D * D);
+    double chi = D >= 0 ? 0.5 * (D + q) : 0.5 * s->eps * s->eps / (q - D);
+    double ratio = s->block_iter > 0 && s->F_block0 > 0 ? s->F_after / s->F_block0 : 1;
+    double mu = fmin(ratio, 0.9) * chi;
+    s->eps = D < mu ? 2 * sqrt(mu * (mu - D)) : o->delta0;
+    if (s->eps < o->delta0) s->eps = o->delta0;
+    s->block_iter = 0;
+    break;
+  }
   default:
     s->eps = sqrt(o->delta0 * o->delta0 + 0.004 * neg * neg); /* (35) */
     if (o->method == VM_UNTANGLE_PENALTY_ONEWAY) {
@@ -173,6 +199,8 @@ static void monitor(void *user, const vm_iter_info *it) {
   s->F_before = it->F_before;
   s->F_after = it->F;
   s->have_step = 1;
+  if (s->block_iter == 0) s->F_block0 = it->F_before;
+  s->block_iter++;
   s->phase_iter = it->iter;
   s->total_iter++;
   if (!s->o->progress) return;
@@ -353,7 +381,9 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
   for (int round = 0; s.M > 0 && budget > 0 && !out_of_time(&s) && round < 50; round++) {
     vm_measure_kind k = o.method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
     prm.drop_chi2 = 1;
-    if ((st = vm_problem_set_measure(s.P, k, &prm)) < 0) goto done;
+    vm_measure_params pu = prm;
+    if (o.theta_untangle > 0) pu.theta = o.theta_untangle;
+    if ((st = vm_problem_set_measure(s.P, k, &pu)) < 0) goto done;
     if ((st = vm_problem_set_node_eps(s.P, NULL)) < 0) goto done;
     s.go_local = o.local_threshold > 0;
     int64_t M0 = s.M;

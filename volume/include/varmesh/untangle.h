@@ -21,9 +21,13 @@ typedef enum {
   VM_UNTANGLE_PENALTY = 0,        /* (14)-(16) with eps from (35) */
   VM_UNTANGLE_PENALTY_ONEWAY = 1, /* (35) with eps = delta0 on non-degenerate nodes */
   VM_UNTANGLE_BARRIER = 2,        /* (17) with admissible-set contraction (39) */
-  VM_UNTANGLE_ADAPTIVE = 3        /* (35) with eps falling by at most kappa per
+  VM_UNTANGLE_ADAPTIVE = 3,       /* (35) with eps falling by at most kappa per
                                      iteration, ending when det >= eps > 0 on
                                      every node (no near-degenerate result) */
+  VM_UNTANGLE_FOLDOVER = 4        /* (14)-(16) with eps set every eps_inner
+                                     iterations so that chi at the worst node
+                                     shrinks as F did (Garanzha et al. 2021,
+                                     "Foldover-free maps in 50 lines of code") */
 } vm_untangle_method;
 
 /* Progress, reported every iteration of every phase. */
@@ -51,9 +55,12 @@ typedef struct vm_volume_opts {
   vm_measure_kind measure;   /* optimization measure: balanced (default), shape,
                                 shape-alt or barrier-free quasi-iso */
   double theta;              /* of phi_theta (default 0.8) */
+  double theta_untangle;     /* of phi_theta in the global untangling phase
+                                (local rounds use theta), <= 0: theta */
   double delta0;             /* smallest epsilon (default 1e-11; det C is target-relative) */
   double sigma;              /* contraction of (39), in (0, 1) (default 0.5) */
   double kappa;              /* adaptive: slowest eps decay per iteration (0.7) */
+  int eps_inner;             /* foldover: iterations per eps (default 10) */
   int max_iter;              /* untangling iterations, global + local (default 20000) */
   int opt_iter;              /* optimization iterations once valid (default 100) */
   double time_limit;         /* seconds for the whole run, <= 0: none */
