@@ -152,6 +152,9 @@ int main(int argc, char **argv) {
     vm_quality q;
     vm_quality_opts qo = {VM_RULE_CORNER, 1.0 / n};
     vm_mesh_quality(m, &qo, &q);
+    /* a run that ended in an error filled no final figures: M from the
+     * independent check */
+    if (st < 0) r.M_final = q.all.inverted_nodes;
     if (r.M_final || q.all.inverted_nodes) all_ok = 0;
     printf("%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f %8.2f   | paper: %7.0f "
            "%7.0f %6.0f %6.0f %9.2e %9.2e\n",
