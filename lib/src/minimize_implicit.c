@@ -37,6 +37,7 @@ typedef struct {
                      refilled before each solve), saving a pattern */
   int gen;        /* pattern generation: own builds, or coordinate 0's when shared */
   vm_precond *pc;
+  vm_precond *fallback; /* Jacobi, for a step whose AMG setup failed */
   int full_iter;  /* iteration of the last full preconditioner setup (0: none) */
   int have_pattern;
 } coord_system;
@@ -60,6 +61,7 @@ static void implicit_end(vm_minimizer *m) {
     vm_csr_free(ctx, &cs->A);
     vm_free(ctx, cs->hmap);
     vm_precond_destroy(&cs->pc);
+    vm_precond_destroy(&cs->fallback);
   }
   vm_free(ctx, S->L);
   vm_free(ctx, S->ident);
@@ -274,9 +276,22 @@ static int implicit_direction(vm_minimizer *m, int iter, const double *g, const 
     } else {
       st = vm_precond_update(cs->pc, A);
     }
+    vm_precond *pc = cs->pc;
+    if (st == VM_ERR_NUMERIC && cs->pc && vm_precond_get_kind(cs->pc) == VM_PRECOND_AMG) {
+      /* a Galerkin coarse level of an indefinite Hessian (the penalty
+       * measure near folds, tiny eps) can lose its positive diagonal: this
+       * step is preconditioned by Jacobi (the fine diagonal is positive,
+       * fill_values) and the next one builds a new hierarchy */
+      vm_log(ctx, VM_LOG_INFO, "implicit: %s; this step uses Jacobi", vm_ctx_error(ctx));
+      if (!cs->fallback && (st = vm_precond_create(ctx, VM_PRECOND_JACOBI, NULL, &cs->fallback)))
+        return st;
+      if ((st = vm_precond_setup(cs->fallback, A))) return st;
+      cs->full_iter = 0;
+      pc = cs->fallback;
+    }
     if (st) return st;
     vm_pcg_result pr;
-    st = vm_pcg_solve(ctx, A, cs->pc, S->b, S->y, &po, &pr);
+    st = vm_pcg_solve(ctx, A, pc, S->b, S->y, &po, &pr);
     if (st) return st;
     *lin_iters += pr.iterations;
     for (int64_t i = 0; i < cs->nu; i++) d[3 * cs->uvert[i] + c] = S->y[i];
