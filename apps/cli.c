@@ -3,9 +3,11 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "varmesh/io.h"
 #include "varmesh/surface_io.h"
@@ -16,6 +18,19 @@ static void log_stderr(void *user, int level, const char *msg) {
   if (cli->quiet && level >= VM_LOG_INFO) return;
   if (level == VM_LOG_DEBUG && !cli->verbose) return;
   fprintf(stderr, "%s: %s%s\n", cli->prog, level == VM_LOG_WARN ? "warning: " : "", msg);
+}
+
+static volatile int cli_interrupted;
+
+static void on_signal(int sig) {
+  if (cli_interrupted) _exit(128 + sig);
+  cli_interrupted = 1;
+}
+
+void vm_cli_catch_interrupts(vm_cli *cli) {
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  vm_ctx_set_interrupt(cli->ctx, &cli_interrupted);
 }
 
 void vm_cli_init(vm_cli *cli, const char *prog) {

@@ -27,6 +27,11 @@ typedef struct vm_cli {
  * Exits with VM_EXIT_INPUT if the context cannot be made. */
 void vm_cli_init(vm_cli *cli, const char *prog);
 void vm_cli_finish(vm_cli *cli);
+/* SIGINT and SIGTERM ask the library to stop at the next safe point
+ * (vm_ctx_set_interrupt): the stage then writes its best state and exits
+ * VM_EXIT_INTERRUPTED; a second signal exits at once with 128 + signal,
+ * writing nothing. */
+void vm_cli_catch_interrupts(vm_cli *cli);
 
 /* "prog: error: <ctx message>" on stderr. */
 void vm_cli_error(const vm_cli *cli, const char *fmt, ...)

@@ -2,11 +2,9 @@
  * from vm-surface, or STL/OBJ/OFF/PLY directly) in, a thick, valid,
  * multi-layer prismatic mesh out (Section 6.2 of the paper). */
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
-#include <unistd.h>
 
 #include "cli.h"
 #include "cli_verify.h"
@@ -47,14 +45,6 @@ static const char usage[] =
     "  --help, --version\n"
     "exit: 0 valid layers; 1 bad input or I/O; 2 usage; 3 inverted prisms or\n"
     "intersections remain (the mesh is still written); 4 interrupted\n";
-
-static volatile int interrupted;
-
-static void on_signal(int sig) {
-  (void)sig;
-  if (interrupted) _exit(128 + sig);
-  interrupted = 1;
-}
 
 typedef struct {
   vm_cli *cli;
@@ -250,9 +240,7 @@ int main(int argc, char **argv) {
   if (!cli.quiet)
     fprintf(stderr, "vm-prism: %s: %lld wall triangles, model length %g, thickness %g, %d layers\n",
             in, (long long)m->ne, L, o.thickness, o.nlayers);
-  signal(SIGINT, on_signal);
-  signal(SIGTERM, on_signal);
-  vm_ctx_set_interrupt(cli.ctx, &interrupted);
+  vm_cli_catch_interrupts(&cli);
   int st = vm_prism_run(p);
   if (st < 0 && st != VM_ERR_INTERRUPTED) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));

@@ -2,13 +2,11 @@
  * remesh it uniformly when it needs it, compute its mean curvature and
  * adapt the mesh to it with the 2D functional (20); or any step alone. */
 #include <math.h>
-#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #include "cli.h"
 #include "varmesh/adapt.h"
@@ -56,13 +54,6 @@ static const char usage[] =
     "  --help, --version\n"
     "exit: 0 done; 1 bad input (what is wrong and where is printed) or I/O; 2 usage;\n"
     "3 the adapted mesh has flipped elements; 4 interrupted (last iterate written)\n";
-
-static volatile int interrupted;
-
-static void on_signal(int sig) {
-  if (interrupted) _exit(128 + sig);
-  interrupted = 1;
-}
 
 typedef struct {
   vm_cli *cli;
@@ -375,9 +366,7 @@ int main(int argc, char **argv) {
     progress_state ps = {&cli, (int)every};
     ao.monitor = progress;
     ao.user = &ps;
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
-    vm_ctx_set_interrupt(cli.ctx, &interrupted);
+    vm_cli_catch_interrupts(&cli);
     st = vm_surface_adapt(m, ref, &ao, &ar);
     if (st < 0 && st != VM_ERR_INTERRUPTED) {
       vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));

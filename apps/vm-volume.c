@@ -2,10 +2,8 @@
  * prism, pyramid or mixed mesh in place of its vertices, connectivity and
  * boundary kept. */
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "cli.h"
 #include "cli_report.h"
@@ -56,14 +54,6 @@ static const char usage[] =
     "1 bad input or I/O; 2 usage; 3 inverted elements remain or the exact check failed\n"
     "(the best mesh is still written); 4 interrupted or --time-limit reached (the best\n"
     "state so far written; a second interrupt exits at once without writing)\n";
-
-static volatile int interrupted;
-
-static void on_signal(int sig) {
-  (void)sig;
-  if (interrupted) _exit(128 + sig);
-  interrupted = 1;
-}
 
 typedef struct {
   vm_cli *cli;
@@ -296,9 +286,7 @@ int main(int argc, char **argv) {
   progress_state ps = {&cli, (int)every, NULL, hist};
   o.progress = progress;
   o.user = &ps;
-  signal(SIGINT, on_signal);
-  signal(SIGTERM, on_signal);
-  vm_ctx_set_interrupt(cli.ctx, &interrupted);
+  vm_cli_catch_interrupts(&cli);
   vm_volume_report rep;
   vm_surface_ops sops;
   if (slip) sops = vm_volume_slip_ops(slip);
