@@ -16,7 +16,8 @@ typedef struct {
   const int32_t *tri;
   const int32_t *group;
   int64_t ntri;
-  float *box; /* 6 per triangle, rounded outwards and padded */
+  const int32_t *map; /* primitive -> triangle (NULL: the identity) */
+  float *box;         /* 6 per primitive, rounded outwards and padded */
 } soup;
 
 static void tri_bounds(const struct RTCBoundsFunctionArguments *a) {
@@ -42,8 +43,9 @@ static int orient(const double *a, const double *b, const double *c, const doubl
   }
   pr_cross(v, w, x);
   double o = pr_dot(u, x);
-  double s = pr_norm(u) * pr_norm(v) * pr_norm(w);
-  if (fabs(o) <= 1e-12 * s) return 0;
+  /* |o| <= 1e-12 |u| |v| |w|, squared: no square roots on this hot path */
+  double s2 = pr_dot(u, u) * pr_dot(v, v) * pr_dot(w, w);
+  if (o * o <= 1e-24 * s2) return 0;
   return o > 0 ? 1 : -1;
 }
 
@@ -87,7 +89,7 @@ static void edge_intersect(const struct RTCIntersectFunctionNArguments *args) {
   if (!args->valid[0]) return;
   edge_ray *r = (edge_ray *)args->context;
   const soup *d = r->d;
-  int32_t t = (int32_t)args->primID;
+  int32_t t = d->map ? d->map[args->primID] : (int32_t)args->primID;
   const int32_t *T = d->tri + 3 * (int64_t)t;
   if (T[0] == r->a || T[1] == r->a || T[2] == r->a || T[0] == r->b || T[1] == r->b ||
       T[2] == r->b)
@@ -112,6 +114,12 @@ struct pr_soup {
   int32_t *group; /* NULL or 1 per triangle */
   half_edge *he;  /* half-edges sorted by (a, b, t) */
   int64_t *eb;    /* edge k: he[eb[k] .. eb[k+1]) */
+  int64_t nv;     /* 1 + the largest vertex index */
+  /* the last query of pr_soup_intersections_cached: its coordinates and
+   * its pairs (cached = 0: none yet) */
+  int cached, check; /* check: compare each incremental answer with a full query */
+  double *last_xyz;
+  int64_t nlast, *last_pairs;
 };
 
 static int cmp_he(const void *x, const void *y) {
@@ -138,21 +146,25 @@ static float up(double v) {
   return f;
 }
 
-int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int64_t *npairs,
-                          int64_t **pairs) {
-  *npairs = 0;
-  if (pairs) *pairs = NULL;
-  int64_t ntri = so->ntri;
-  if (ntri < 2) return VM_OK;
+/* (edge, triangle) hits: every edge of the soup in `edges` (NULL: all
+ * ned) cast against the triangles in `prims` (NULL: all ntri), as a list
+ * of 2 * nfound values (malloc'd). */
+static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const int32_t *prims,
+                        int64_t nprim, const int64_t *edges, int64_t nedge, int64_t **found_out,
+                        int64_t *nfound_out) {
+  *found_out = NULL;
+  *nfound_out = 0;
   const int32_t *tri = so->tri, *group = so->group;
   const half_edge *he = so->he;
   const int64_t *eb = so->eb;
-  int64_t ned = so->ned;
-  soup d = {xyz, tri, group, ntri, NULL};
-  d.box = vm_alloc_array(ctx, (size_t)ntri * 6, sizeof *d.box);
+  if (!prims) nprim = so->ntri;
+  if (!edges) nedge = so->ned;
+  if (nprim < 1 || nedge < 1) return VM_OK;
+  soup d = {xyz, tri, group, so->ntri, prims, NULL};
+  d.box = vm_alloc_array(ctx, (size_t)nprim * 6, sizeof *d.box);
   if (!d.box) return VM_ERR_NOMEM;
   double glo[3] = {INFINITY, INFINITY, INFINITY}, ghi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int64_t t = 0; t < 3 * ntri; t++)
+  for (int64_t t = 0; t < 3 * so->ntri; t++)
     for (int k = 0; k < 3; k++) {
       double v = xyz[3 * (int64_t)tri[t] + k];
       glo[k] = v < glo[k] ? v : glo[k];
@@ -160,7 +172,8 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
     }
   /* padding covers the rounding of the rays to float */
   double pad = 1e-6 * (ghi[0] - glo[0] + ghi[1] - glo[1] + ghi[2] - glo[2]);
-  for (int64_t t = 0; t < ntri; t++) {
+  for (int64_t q = 0; q < nprim; q++) {
+    int64_t t = prims ? prims[q] : q;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < 3; i++)
       for (int k = 0; k < 3; k++) {
@@ -169,11 +182,10 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
         hi[k] = v > hi[k] ? v : hi[k];
       }
     for (int k = 0; k < 3; k++) {
-      d.box[6 * t + k] = down(lo[k] - pad);
-      d.box[6 * t + 3 + k] = up(hi[k] + pad);
+      d.box[6 * q + k] = down(lo[k] - pad);
+      d.box[6 * q + 3 + k] = up(hi[k] + pad);
     }
   }
-
   int st = VM_OK;
   RTCDevice dev = rtcNewDevice(NULL);
   if (!dev) {
@@ -184,7 +196,7 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
   rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
   RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-  rtcSetGeometryUserPrimitiveCount(g, (unsigned int)ntri);
+  rtcSetGeometryUserPrimitiveCount(g, (unsigned int)nprim);
   rtcSetGeometryUserData(g, &d);
   rtcSetGeometryBoundsFunction(g, tri_bounds, NULL);
   rtcSetGeometryIntersectFunction(g, edge_intersect);
@@ -207,7 +219,8 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
       int64_t ln = 0, lcap = 0;
       int64_t *loc = NULL;
 #pragma omp for schedule(dynamic, 256)
-      for (int64_t e = 0; e < ned; e++) {
+      for (int64_t q = 0; q < nedge; q++) {
+        int64_t e = edges ? edges[q] : q;
         int32_t a = he[eb[e]].a, b = he[eb[e]].b;
         const double *pa = xyz + 3 * (int64_t)a, *pb = xyz + 3 * (int64_t)b;
         double dir[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
@@ -288,10 +301,32 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
     if (nomem) return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting hits");
     return vm_error(ctx, VM_ERR_BACKEND, "embree: ray query failed (error %d)", (int)err);
   }
-  /* (edge, triangle) hits -> pairs of triangles (every triangle on the
-   * edge against the one it crosses), sorted, repeats dropped */
+  (void)st;
+  *found_out = found;
+  *nfound_out = nfound;
+  return VM_OK;
+}
+
+/* (edge, triangle) hits -> pairs of triangles (every triangle on the
+ * edge against the one it crosses), plus `nkeep` pairs given, sorted,
+ * repeats dropped. */
+static int hits_to_pairs(vm_ctx *ctx, const pr_soup *so, const int64_t *found, int64_t nfound,
+                         const int64_t *keep, int64_t nkeep, int64_t *npairs, int64_t **pairs) {
+  *npairs = 0;
+  if (pairs) *pairs = NULL;
+  const int32_t *tri = so->tri, *group = so->group;
+  const half_edge *he = so->he;
+  const int64_t *eb = so->eb;
+  int st = VM_OK;
   int64_t n = 0, cap = 0;
   int64_t *pp = NULL;
+  if (nkeep) {
+    cap = nkeep + 64;
+    pp = vm_alloc_array(ctx, (size_t)cap * 2, sizeof *pp);
+    if (!pp) return VM_ERR_NOMEM;
+    memcpy(pp, keep, (size_t)nkeep * 2 * sizeof *pp);
+    n = nkeep;
+  }
   for (int64_t k = 0; k < nfound && st == VM_OK; k++) {
     int64_t e = found[2 * k], t = found[2 * k + 1];
     for (int64_t j = eb[e]; j < eb[e + 1]; j++) {
@@ -318,7 +353,6 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
       n++;
     }
   }
-  free(found);
   if (st) {
     vm_free(ctx, pp);
     return st;
@@ -337,6 +371,145 @@ int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int
   return VM_OK;
 }
 
+
+int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int64_t *npairs,
+                          int64_t **pairs) {
+  *npairs = 0;
+  if (pairs) *pairs = NULL;
+  if (so->ntri < 2) return VM_OK;
+  int64_t *found = NULL, nfound = 0;
+  int st = collect_hits(ctx, so, xyz, NULL, 0, NULL, 0, &found, &nfound);
+  if (st) return st;
+  st = hits_to_pairs(ctx, so, found, nfound, NULL, 0, npairs, pairs);
+  free(found);
+  return st;
+}
+
+/* Remember xyz and the answer for the next incremental query. */
+static int soup_remember(vm_ctx *ctx, pr_soup *so, const double *xyz, const int64_t *pp,
+                         int64_t n) {
+  so->cached = 0;
+  if (!so->last_xyz) {
+    so->last_xyz = vm_alloc_array(ctx, (size_t)(3 * (so->nv ? so->nv : 1)), sizeof *xyz);
+    if (!so->last_xyz) return VM_ERR_NOMEM;
+  }
+  vm_free(ctx, so->last_pairs);
+  so->last_pairs = NULL;
+  so->nlast = 0;
+  if (n) {
+    so->last_pairs = vm_alloc_array(ctx, (size_t)(2 * n), sizeof *pp);
+    if (!so->last_pairs) return VM_ERR_NOMEM;
+    memcpy(so->last_pairs, pp, (size_t)(2 * n) * sizeof *pp);
+  }
+  memcpy(so->last_xyz, xyz, (size_t)(3 * so->nv) * sizeof *xyz);
+  so->nlast = n;
+  so->cached = 1;
+  return VM_OK;
+}
+
+int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *so, const double *xyz, int64_t *npairs,
+                                 int64_t **pairs) {
+  *npairs = 0;
+  if (pairs) *pairs = NULL;
+  if (so->ntri < 2) return VM_OK;
+  int64_t ntri = so->ntri, nv = so->nv, *pp = NULL, n = 0;
+  int st = VM_OK;
+  uint8_t *moved = NULL, *chg = NULL;
+  int32_t *prims = NULL;
+  int64_t *edges = NULL, *keep = NULL, *hits = NULL;
+  int64_t nchg = 0;
+  if (so->cached) {
+    moved = vm_alloc_array(ctx, (size_t)nv, sizeof *moved);
+    chg = vm_alloc_array(ctx, (size_t)ntri, sizeof *chg);
+    if (!moved || !chg) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    for (int64_t v = 0; v < nv; v++)
+      moved[v] = memcmp(xyz + 3 * v, so->last_xyz + 3 * v, 3 * sizeof *xyz) != 0;
+    for (int64_t t = 0; t < ntri; t++) {
+      const int32_t *T = so->tri + 3 * t;
+      chg[t] = moved[T[0]] || moved[T[1]] || moved[T[2]];
+      nchg += chg[t];
+    }
+  }
+  if (!so->cached || 4 * nchg > ntri) {
+    /* nothing to start from, or most faces moved: the full query */
+    st = pr_soup_intersections(ctx, so, xyz, &n, &pp);
+  } else {
+    /* pairs between two unmoved faces are those of the last query; a pair
+     * with a moved face is found by an edge of the moved face crossing any
+     * face, or by any edge crossing the moved face */
+    int64_t nedge = 0, nkeep = 0, nh1 = 0, nh2 = 0, *h1 = NULL, *h2 = NULL;
+    prims = vm_alloc_array(ctx, (size_t)(nchg ? nchg : 1), sizeof *prims);
+    edges = vm_alloc_array(ctx, (size_t)(so->ned ? so->ned : 1), sizeof *edges);
+    keep = vm_alloc_array(ctx, (size_t)(2 * (so->nlast ? so->nlast : 1)), sizeof *keep);
+    if (!prims || !edges || !keep) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    nchg = 0;
+    for (int64_t t = 0; t < ntri; t++)
+      if (chg[t]) prims[nchg++] = (int32_t)t;
+    for (int64_t e = 0; e < so->ned; e++)
+      for (int64_t k = so->eb[e]; k < so->eb[e + 1]; k++)
+        if (chg[so->he[k].t]) {
+          edges[nedge++] = e;
+          break;
+        }
+    for (int64_t k = 0; k < so->nlast; k++) {
+      const int64_t *q = so->last_pairs + 2 * k;
+      if (!chg[q[0]] && !chg[q[1]]) {
+        keep[2 * nkeep] = q[0];
+        keep[2 * nkeep + 1] = q[1];
+        nkeep++;
+      }
+    }
+    if (nchg) {
+      st = collect_hits(ctx, so, xyz, NULL, 0, edges, nedge, &h1, &nh1);
+      if (!st) st = collect_hits(ctx, so, xyz, prims, nchg, NULL, 0, &h2, &nh2);
+    }
+    if (!st && nh1 + nh2) {
+      hits = malloc((size_t)(2 * (nh1 + nh2)) * sizeof *hits);
+      if (!hits) st = VM_ERR_NOMEM;
+      else {
+        if (nh1) memcpy(hits, h1, (size_t)(2 * nh1) * sizeof *hits);
+        if (nh2) memcpy(hits + 2 * nh1, h2, (size_t)(2 * nh2) * sizeof *hits);
+      }
+    }
+    free(h1);
+    free(h2);
+    if (!st) st = hits_to_pairs(ctx, so, hits, nh1 + nh2, keep, nkeep, &n, &pp);
+    if (!st && so->check) {
+      int64_t nf = 0, *pf = NULL;
+      st = pr_soup_intersections(ctx, so, xyz, &nf, &pf);
+      if (!st && (nf != n || (n && memcmp(pf, pp, (size_t)(2 * n) * sizeof *pp))))
+        st = vm_error(ctx, VM_ERR_NUMERIC,
+                      "intersections: the incremental query found %lld pairs, the full one %lld",
+                      (long long)n, (long long)nf);
+      vm_free(ctx, pf);
+    }
+  }
+  if (!st) st = soup_remember(ctx, so, xyz, pp, n);
+  if (!st) {
+    *npairs = n;
+    if (pairs && n) {
+      *pairs = pp;
+      pp = NULL;
+    }
+  }
+done:
+  if (st) so->cached = 0;
+  vm_free(ctx, pp);
+  vm_free(ctx, moved);
+  vm_free(ctx, chg);
+  vm_free(ctx, prims);
+  vm_free(ctx, edges);
+  vm_free(ctx, keep);
+  free(hits);
+  return st;
+}
+
 void pr_soup_destroy(vm_ctx *ctx, pr_soup **ps) {
   if (!ps || !*ps) return;
   pr_soup *s = *ps;
@@ -344,6 +517,8 @@ void pr_soup_destroy(vm_ctx *ctx, pr_soup **ps) {
   vm_free(ctx, s->group);
   vm_free(ctx, s->he);
   vm_free(ctx, s->eb);
+  vm_free(ctx, s->last_xyz);
+  vm_free(ctx, s->last_pairs);
   vm_free(ctx, s);
   *ps = NULL;
 }
@@ -377,6 +552,10 @@ int pr_soup_create(vm_ctx *ctx, int64_t ntri, const int32_t *tri, const int32_t 
     if (k == 0 || s->he[k].a != s->he[k - 1].a || s->he[k].b != s->he[k - 1].b)
       s->eb[s->ned++] = k;
   s->eb[s->ned] = 3 * ntri;
+  for (int64_t k = 0; k < 3 * ntri; k++)
+    if (tri[k] >= s->nv) s->nv = tri[k] + 1;
+  const char *chk = getenv("VM_PRISM_CHECK_INCREMENTAL");
+  s->check = chk && *chk && strcmp(chk, "0");
   *out = s;
   return VM_OK;
 }
@@ -445,7 +624,7 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
     if (st) return st;
   }
   int64_t np = 0, *pairs = NULL;
-  int st = pr_soup_intersections(ctx, p->soup, p->layer->xyz, &np, mark ? &pairs : NULL);
+  int st = pr_soup_intersections_cached(ctx, p->soup, p->layer->xyz, &np, mark ? &pairs : NULL);
   if (st) return st;
   if (mark) {
     memset(mark, 0, (size_t)nw);

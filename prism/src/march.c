@@ -78,20 +78,23 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
 
 /* The first layer's side edges along the wall normal where the wall is
  * smooth (incident face normals within 10 degrees of the vertex normal):
- * every smooth column is stood up over nm = min(6, layers - 1) layers
- * (stand_column); where a prism of layers 0..nm would then be worse than
+ * every smooth column is stood up over 6 layers (stand_column); where a
+ * prism of layers 0..nm (nm = min(24, layers - 1)) would then be worse than
  * both 0.3 and half its quality before, its columns go back, until no such
  * prism is left. Then each column that went back, in vertex order, tries
- * again alone, bending back over 6, 3, 2 or 1 layers, with its neighbours
- * as they are, and keeps the first that leaves every prism it touches
- * better than 0.3 or a quarter of its quality before. The outer
- * surface never moves, so its intersections are untouched, and going back
- * restores the old prisms bit for bit. */
+ * again alone, bending back over 6, 12, 9, 18, nm, 3, 2 or 1 layers, with
+ * its neighbours as they are, and keeps the first that leaves every prism
+ * it touches better than 0.3 or a quarter of its quality before; these
+ * passes repeat while a column stands up (a neighbour standing up can make
+ * room). A column tilted far over (next to a junction whose columns stay
+ * tilted) needs the long bends: over 6 layers its lateral offset is taken
+ * up too steeply. The outer surface never moves, so its intersections are
+ * untouched, and going back restores the old prisms bit for bit. */
 #define ORTHO_QMIN 0.3
 static int orthogonal_first_level(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
-  int nm = p->nlev - 2 < 6 ? p->nlev - 2 : 6;
+  int nm = p->nlev - 2 < 24 ? p->nlev - 2 : 24, nb = nm < 6 ? nm : 6;
   size_t lsz = (size_t)(3 * nw);
   double *old = vm_alloc_array(ctx, (size_t)nm * lsz, sizeof *old);
   double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
@@ -107,7 +110,7 @@ static int orthogonal_first_level(vm_prism *p) {
   memcpy(old, p->lev + lsz, (size_t)nm * lsz * sizeof *old);
   for (int64_t t = 0; t < nt; t++) q0[t] = low_levels_quality(p, t, nm);
   for (int64_t v = 0; v < nw; v++)
-    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nm, old);
+    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, old);
   for (int round = 0; round < 100; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
@@ -129,21 +132,24 @@ static int orthogonal_first_level(vm_prism *p) {
         moved[v] = 0;
       }
   }
-  static const int tries[4] = {6, 3, 2, 1};
-  for (int64_t v = 0; v < nw; v++) {
-    if (!p->smooth[v] || moved[v]) continue;
-    for (int k = 0; k < 4 && !moved[v]; k++) {
-      if (tries[k] > nm || !stand_column(p, v, tries[k], old)) continue;
-      int ok = 1;
-      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
-        int64_t t = p->vt[j];
-        double lim = 0.25 * q0[t] < ORTHO_QMIN ? 0.25 * q0[t] : ORTHO_QMIN;
-        ok = low_levels_quality(p, t, nm) >= lim;
+  const int tries[8] = {6, 12, 9, 18, nm, 3, 2, 1};
+  for (int pass = 0, again = 1; pass < 4 && again; pass++) {
+    again = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (!p->smooth[v] || moved[v]) continue;
+      for (int k = 0; k < 8 && !moved[v]; k++) {
+        if (tries[k] > nm || !stand_column(p, v, tries[k], old)) continue;
+        int ok = 1;
+        for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
+          int64_t t = p->vt[j];
+          double lim = 0.25 * q0[t] < ORTHO_QMIN ? 0.25 * q0[t] : ORTHO_QMIN;
+          ok = low_levels_quality(p, t, nm) >= lim;
+        }
+        if (ok)
+          moved[v] = again = 1;
+        else
+          restore_column(p, v, nm, old);
       }
-      if (ok)
-        moved[v] = 1;
-      else
-        restore_column(p, v, nm, old);
     }
   }
   vm_free(ctx, old);

@@ -131,6 +131,13 @@ void pr_soup_destroy(vm_ctx *ctx, pr_soup **s);
  * vm_prism_find_intersections). */
 int pr_soup_intersections(vm_ctx *ctx, const pr_soup *s, const double *xyz, int64_t *npairs,
                           int64_t **pairs);
+/* The same answer, computed from the soup's last query where few vertices
+ * moved since: pairs of two unmoved faces are kept, and only the edges of
+ * moved faces (against all faces) and all edges against the moved faces
+ * are cast. With VM_PRISM_CHECK_INCREMENTAL=1 in the environment each such
+ * answer is compared with the full query (an error if they differ). */
+int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *s, const double *xyz, int64_t *npairs,
+                                 int64_t **pairs);
 
 /* Write the top vertices of the layer from thickness t along unit
  * directions d: top_v = wall_v + t_v d_v. */

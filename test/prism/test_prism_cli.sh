@@ -23,6 +23,12 @@ check 'grep -q "\"layers\": 4," "$dir/a.json"' "--json: 4 layers"
 check 'grep -q "^springback" "$dir/a.err"' "progress on stderr"
 check 'grep -q "^\$MeshFormat" "$dir/a.msh" && sed -n 2p "$dir/a.msh" | grep -q "^4.1 0 8"' ".msh is Gmsh 4.1"
 check 'grep -q "\"wall\"" "$dir/a.msh" && grep -q "\"outer\"" "$dir/a.msh"' ".msh names the wall and outer families"
+# the default 20 layers: every smooth column's first side edge within 5
+# degrees of the wall normal, also those beside the wing and tail junctions
+# whose neighbours stay tilted (they bend back over up to 19 layers)
+"$prism" -q -t 0.05 --json "$dir/a.stl" "$dir/a20.vmsh" >"$dir/a20.json" 2>"$dir/a20.err"
+check '[ $? -eq 0 ] && grep -q "\"layers\": 20," "$dir/a20.json"' "20 layers on the aircraft"
+check 'grep -q "\"normal_dev_over_5deg\": 0," "$dir/a20.json"' "20 layers: no smooth column's first layer beyond 5 degrees ($(grep -o '"normal_dev_over_5deg": [0-9]*' "$dir/a20.json"))"
 "$qual" --json "$dir/a.msh" >"$dir/q.json" 2>/dev/null
 check 'grep -q "\"prism\": {\"elements\": 11960" "$dir/q.json"' "vm-quality reads 11,960 prisms back"
 "$qual" --verify "$dir/a.msh" >"$dir/v.log" 2>&1
