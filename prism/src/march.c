@@ -222,40 +222,59 @@ int vm_prism_march(vm_prism *p) {
       break;
     }
     double *base = p->lev + (size_t)k * lsz;
-    double f = p->sched[k] / rem;
+    /* the split at the schedule's fraction; where that straight split is
+     * not valid (a twisted column: the sub-prisms' quadrature nodes fall
+     * where the remainder's map folds between its own nodes), slightly
+     * thinner or thicker splits are tried; the schedule's later layers
+     * absorb the difference */
+    static const double fmul[5] = {1, 0.8, 1.25, 0.64, 1.5};
+    double f0 = p->sched[k] / rem;
     rem -= p->sched[k];
-    memcpy(m2->xyz, base, lsz * sizeof *m2->xyz);
-    for (int64_t v = 0; v < nw; v++) {
-      double *mv = m2->xyz + lsz + 3 * v;
-      for (int c = 0; c < 3; c++) mv[c] = base[3 * v + c] + f * (outer[3 * v + c] - base[3 * v + c]);
-      hk[v] = f * pr_dist(outer + 3 * v, base + 3 * v);
-    }
-    /* inner targets: orthogonal to the base surface (vertex normals,
-     * bent towards the face normal only where needed); outer targets: the
-     * shape at the split where it is a fair prism, else (a twisted column
-     * split along straight side edges can give a flat or inverted
-     * sub-prism) the inner target's shape, which is always valid */
-    pr_surface_dirs(p, base, fn, vn, dr, 0);
-    pr_build_targets(p, base, fn, vn, hk, tg);
-    for (int64_t t = 0; t < nt; t++) {
-      const int32_t *c = m2->conn + 6 * (nt + t);
-      double x[18];
-      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m2->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-      memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > 0.05 ? x : tg + 18 * t, sizeof x);
-    }
-    /* a split that cannot be made valid ends the marching early (the
-     * paper's option): levels 0..k are valid, and so is the remainder
-     * from level k to the outer surface (checked with the previous split) */
     const char *why = NULL;
     vm_node_stats ns;
     int it = 0;
-    if ((st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD)) < 0) {
-      why = "degenerate target";
-    } else if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) {
-      why = "node statistics";
-    } else if (ns.inverted) {
-      why = "the straight split is not valid";
-    } else {
+    for (int j = 0; j < 5; j++) {
+      double f = f0 * fmul[j];
+      if (j > 0 && f > 0.9) continue;
+      memcpy(m2->xyz, base, lsz * sizeof *m2->xyz);
+      for (int64_t v = 0; v < nw; v++) {
+        double *mv = m2->xyz + lsz + 3 * v;
+        for (int c = 0; c < 3; c++)
+          mv[c] = base[3 * v + c] + f * (outer[3 * v + c] - base[3 * v + c]);
+        /* a column cut to (almost) nothing still gets a proper target */
+        hk[v] = f * pr_dist(outer + 3 * v, base + 3 * v);
+        if (!(hk[v] >= 1e-4 * p->elen[v])) hk[v] = 1e-4 * p->elen[v];
+      }
+      /* inner targets: orthogonal to the base surface (vertex normals,
+       * bent towards the face normal only where needed); outer targets:
+       * the shape at the split where it is a fair prism, else (a twisted
+       * column split along straight side edges can give a flat or
+       * inverted sub-prism) the inner target's shape, which is always
+       * valid */
+      pr_surface_dirs(p, base, fn, vn, dr, 0);
+      pr_build_targets(p, base, fn, vn, hk, tg);
+      for (int64_t t = 0; t < nt; t++) {
+        const int32_t *c = m2->conn + 6 * (nt + t);
+        double x[18];
+        for (int q = 0; q < 6; q++) memcpy(x + 3 * q, m2->xyz + 3 * (int64_t)c[q], 3 * sizeof *x);
+        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > 0.05 ? x : tg + 18 * t, sizeof x);
+      }
+      /* a split that cannot be made valid ends the marching early (the
+       * paper's option): levels 0..k are valid, and so is the remainder
+       * from level k to the outer surface (checked with the previous
+       * split) */
+      why = NULL;
+      if ((st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD)) < 0) {
+        why = "degenerate target";
+      } else if ((st = vm_problem_node_stats(pb, m2->xyz, &ns)) < 0) {
+        why = "node statistics";
+      } else if (ns.inverted) {
+        why = "the straight split is not valid";
+        continue;
+      }
+      break;
+    }
+    if (!why) {
       st = pr_solve(p, pb, m2, VM_MINIMIZER_EXPLICIT, p->o.march_iter, VM_PRISM_PHASE_MARCH, &it);
       if (st == VM_WARN_TIME) warn = st;
       if (st < 0) {

@@ -246,4 +246,26 @@ static inline int64_t sh_count_intersections(const double *xyz, int64_t ntri, co
   return n;
 }
 
+/* Independent validity check of a prism mesh: the number of corner tets
+ * (six per prism) that are not positive. */
+static inline int64_t sh_corner_inverted(const vm_mesh *m) {
+  static const int ct[6][4] = {{0, 1, 2, 3}, {1, 2, 0, 4}, {2, 0, 1, 5},
+                               {3, 5, 4, 0}, {4, 3, 5, 1}, {5, 4, 3, 2}};
+  int64_t bad = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_PRISM) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int k = 0; k < 6; k++) {
+      const double *o = m->xyz + 3 * c[ct[k][0]];
+      double a[3], b[3], d[3], x[3];
+      sh_sub(m->xyz + 3 * c[ct[k][1]], o, a);
+      sh_sub(m->xyz + 3 * c[ct[k][2]], o, b);
+      sh_sub(m->xyz + 3 * c[ct[k][3]], o, d);
+      sh_cross(a, b, x);
+      if (!(sh_dot(x, d) > 0)) bad++;
+    }
+  }
+  return bad;
+}
+
 #endif

@@ -12,25 +12,6 @@
 #include "varmesh/prism.h"
 #include "vmtest.h"
 
-static int64_t corner_inverted(const vm_mesh *m) {
-  static const int ct[6][4] = {{0, 1, 2, 3}, {1, 2, 0, 4}, {2, 0, 1, 5},
-                               {3, 5, 4, 0}, {4, 3, 5, 1}, {5, 4, 3, 2}};
-  int64_t bad = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    if (m->etype[e] != VM_PRISM) continue;
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int k = 0; k < 6; k++) {
-      const double *o = m->xyz + 3 * c[ct[k][0]];
-      double a[3], b[3], d[3], x[3];
-      sh_sub(m->xyz + 3 * c[ct[k][1]], o, a);
-      sh_sub(m->xyz + 3 * c[ct[k][2]], o, b);
-      sh_sub(m->xyz + 3 * c[ct[k][3]], o, d);
-      sh_cross(a, b, x);
-      if (!(sh_dot(x, d) > 0)) bad++;
-    }
-  }
-  return bad;
-}
 
 /* Outer faces against each other and against the wall (the triangles of
  * the result: wall tag 1, outer tag 2), all pairs. */
@@ -90,7 +71,7 @@ static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, 
   CHECK(r->intersections == 0, "%s: %lld intersections left", name, (long long)r->intersections);
   if (out->res) {
     CHECK(vm_mesh_check(out->res) == 0, "%s: result: %s", name, vm_ctx_error(ctx));
-    CHECK(corner_inverted(out->res) == 0, "%s: result has inverted corner tets", name);
+    CHECK(sh_corner_inverted(out->res) == 0, "%s: result has inverted corner tets", name);
     CHECK(!memcmp(out->res->xyz, w0, sizeof(double) * 3 * (size_t)w->nv), "%s: wall moved", name);
     int64_t ni = boundary_intersections(out->res);
     CHECK(ni == 0, "%s: %lld intersecting boundary face pairs (independent check)", name,

@@ -10,26 +10,6 @@
 #include "varmesh/prism.h"
 #include "vmtest.h"
 
-/* Independent validity check: every corner tet of every prism positive. */
-static int64_t corner_inverted(const vm_mesh *m) {
-  static const int ct[6][4] = {{0, 1, 2, 3}, {1, 2, 0, 4}, {2, 0, 1, 5},
-                               {3, 5, 4, 0}, {4, 3, 5, 1}, {5, 4, 3, 2}};
-  int64_t bad = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    if (m->etype[e] != VM_PRISM) continue;
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int k = 0; k < 6; k++) {
-      const double *o = m->xyz + 3 * c[ct[k][0]];
-      double a[3], b[3], d[3], x[3];
-      sh_sub(m->xyz + 3 * c[ct[k][1]], o, a);
-      sh_sub(m->xyz + 3 * c[ct[k][2]], o, b);
-      sh_sub(m->xyz + 3 * c[ct[k][3]], o, d);
-      sh_cross(a, b, x);
-      if (!(sh_dot(x, d) > 0)) bad++;
-    }
-  }
-  return bad;
-}
 
 static int64_t layer_faces_intersections(const vm_mesh *L, int64_t nw) {
   /* tops and the wall of a single layer (vertices nw.. are the top) */
@@ -73,14 +53,14 @@ int main(void) {
   st = vm_prism_thin(p);
   CHECK(st == 0, "thin: %d %s", st, vm_ctx_error(ctx));
   const vm_mesh *L = vm_prism_layer(p);
-  CHECK(corner_inverted(L) == 0, "thin layer inverted");
+  CHECK(sh_corner_inverted(L) == 0, "thin layer inverted");
   int64_t nw = L->nv / 2;
   CHECK(nw == w->nv, "wall vertices %lld", (long long)nw);
 
   st = vm_prism_springback(p);
   CHECK(st == 0, "springback: %d %s", st, vm_ctx_error(ctx));
   L = vm_prism_layer(p);
-  CHECK(corner_inverted(L) == 0, "springback inverted");
+  CHECK(sh_corner_inverted(L) == 0, "springback inverted");
   double dev = 0, ang = 0;
   for (int64_t v = 0; v < nw; v++) {
     const double *a = L->xyz + 3 * v, *b = L->xyz + 3 * (v + nw);
@@ -105,7 +85,7 @@ int main(void) {
 
   st = vm_prism_restore(p);
   CHECK(st == 0, "restore: %d %s", st, vm_ctx_error(ctx));
-  CHECK(corner_inverted(vm_prism_layer(p)) == 0, "restore inverted");
+  CHECK(sh_corner_inverted(vm_prism_layer(p)) == 0, "restore inverted");
 
   st = vm_prism_march(p);
   CHECK(st == 0, "march: %d %s", st, vm_ctx_error(ctx));
@@ -129,7 +109,7 @@ int main(void) {
   CHECK(st == 0 && res, "result: %d", st);
   if (res) {
     CHECK(vm_mesh_check(res) == 0, "result check: %s", vm_ctx_error(ctx));
-    CHECK(corner_inverted(res) == 0, "result inverted");
+    CHECK(sh_corner_inverted(res) == 0, "result inverted");
     CHECK(!memcmp(res->xyz, w0, sizeof(double) * 3 * (size_t)nw), "wall moved");
     /* concentric shells: level k at radius 1 + sum of the first k heights */
     double rad = 1, werr = 0, aerr = 0, h = r.first_height;
