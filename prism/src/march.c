@@ -51,7 +51,7 @@ static double low_levels_quality(const vm_prism *p, int64_t t, int nm) {
  * tilted by more than about 60 degrees). Levels are taken from `old`
  * (levels 1..nmax). Returns 0 if the column cannot stand up (a level at or
  * below the tangent plane). */
-static int stand_column(vm_prism *p, int64_t v, int nm, const double *old) {
+static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   const double *o = p->wall + 3 * v, *nv = p->vnrm + 3 * v;
   for (int k = 1; k <= nm; k++) {
@@ -59,9 +59,22 @@ static int stand_column(vm_prism *p, int64_t v, int nm, const double *old) {
     for (int c = 0; c < 3; c++) e[c] = old[(size_t)(k - 1) * lsz + 3 * v + c] - o[c];
     if (!(pr_dot(e, nv) > 0)) return 0;
   }
+  /* s1: the share of level 1's lateral offset kept, so that its side edge
+   * leans by at most atan(tilt) */
+  double s1 = 0;
+  if (tilt > 0) {
+    const double *x1 = old + 3 * v;
+    double e[3], l[3];
+    for (int c = 0; c < 3; c++) e[c] = x1[c] - o[c];
+    double a = pr_dot(e, nv);
+    for (int c = 0; c < 3; c++) l[c] = e[c] - a * nv[c];
+    double ln = sqrt(pr_dot(l, l));
+    s1 = ln > tilt * a ? tilt * a / ln : 1;
+  }
   for (int k = 1; k <= nm; k++) {
     const double *x0 = old + (size_t)(k - 1) * lsz + 3 * v;
-    double *x = p->lev + (size_t)k * lsz + 3 * v, e[3], keep = (double)(k - 1) / nm;
+    double *x = p->lev + (size_t)k * lsz + 3 * v, e[3];
+    double keep = s1 + (1 - s1) * (double)(k - 1) / nm;
     for (int c = 0; c < 3; c++) e[c] = x0[c] - o[c];
     double a = pr_dot(e, nv);
     for (int c = 0; c < 3; c++) x[c] = o[c] + a * nv[c] + keep * (e[c] - a * nv[c]);
@@ -91,6 +104,7 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
  * up too steeply. The outer surface never moves, so its intersections are
  * untouched, and going back restores the old prisms bit for bit. */
 #define ORTHO_QMIN 0.3
+#define LEAN 0.07870170682461844 /* tan(4.5 degrees) */
 static int orthogonal_first_level(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
@@ -110,7 +124,7 @@ static int orthogonal_first_level(vm_prism *p) {
   memcpy(old, p->lev + lsz, (size_t)nm * lsz * sizeof *old);
   for (int64_t t = 0; t < nt; t++) q0[t] = low_levels_quality(p, t, nm);
   for (int64_t v = 0; v < nw; v++)
-    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, old);
+    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, 0, old);
   for (int round = 0; round < 100; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
@@ -137,8 +151,10 @@ static int orthogonal_first_level(vm_prism *p) {
     again = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v] || moved[v]) continue;
-      for (int k = 0; k < 8 && !moved[v]; k++) {
-        if (tries[k] > nm || !stand_column(p, v, tries[k], old)) continue;
+      /* first straight up, then (a last resort) leaning by 4.5 degrees */
+      for (int k = 0; k < 16 && !moved[v]; k++) {
+        if (tries[k % 8] > nm || !stand_column(p, v, tries[k % 8], k < 8 ? 0 : LEAN, old))
+          continue;
         int ok = 1;
         for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
           int64_t t = p->vt[j];
