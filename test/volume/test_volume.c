@@ -23,6 +23,8 @@ static double now(void) {
 static vm_minimizer_kind case_solver = VM_MINIMIZER_IMPLICIT;
 /* theta of the penalty while untangling (0: the optimization's) */
 static double case_theta_untangle = 0;
+/* iterations per eps of the foldover rule (0: the default) */
+static int case_eps_inner = 0;
 
 /* Untangle a generated rotated cube; check validity with the independent
  * quality code and that fixed vertices did not move by a single bit. */
@@ -46,6 +48,7 @@ static void untangle_case(vm_ctx *ctx, const char *name, int n, double frac, int
   o.time_limit = 900;
   o.solver = case_solver;
   o.theta_untangle = case_theta_untangle;
+  if (case_eps_inner > 0) o.eps_inner = case_eps_inner;
   vm_volume_report r;
   int st = vm_volume_run(ctx, m, NULL, &o, &r);
   CHECK(st == VM_OK, "%s: status %d (%s), M %lld -> %lld", name, st, vm_ctx_error(ctx),
@@ -202,6 +205,14 @@ int main(void) {
   case_theta_untangle = 0.95;
   untangle_case(ctx, "hex n=8 pi/2 theta_u 0.95", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
                 VM_RULE_CORNER, NULL);
+  /* the last folds used to stay (2 left after 60 s): the foldover rule
+   * drove eps to 1e-11, far below |min det|, and the local rounds could no
+   * longer move them; a stalled local round now restarts eps */
+  case_theta_untangle = 0.999;
+  case_eps_inner = 3;
+  untangle_case(ctx, "tets n=16 7pi/8 foldover", 16, 0.875, VM_GEN_TETS, VM_UNTANGLE_FOLDOVER,
+                VM_RULE_CORNER, NULL);
+  case_eps_inner = 0;
   case_theta_untangle = 0;
   case_solver = VM_MINIMIZER_NEWTON;
   untangle_case(ctx, "hex n=8 pi/2 newton", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,

@@ -311,6 +311,10 @@ static int local_phase(ut_state *s, int *budget) {
     if (s->M >= M0) {
       stalls++;
       rings += 2;
+      /* eps starts again from the worst det: the rule may have driven it
+       * far below |min det|, where the penalty of the folds left is so
+       * steep that the explicit steps no longer move them */
+      s->eps = 0;
     } else {
       stalls = 0;
     }
