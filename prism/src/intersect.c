@@ -147,13 +147,12 @@ static float up(double v) {
 }
 
 /* (edge, triangle) hits: every edge of the soup in `edges` (NULL: all
- * ned) cast against the triangles in `prims` (NULL: all ntri), as a list
- * of 2 * nfound values (malloc'd). */
+ * ned) cast against the triangles in `prims` (NULL: all ntri), appended to
+ * the list *found_out of 2 * *nfound_out values (malloc'd; NULL, 0 to
+ * start one). On an error the list is freed and emptied. */
 static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const int32_t *prims,
                         int64_t nprim, const int64_t *edges, int64_t nedge, int64_t **found_out,
                         int64_t *nfound_out) {
-  *found_out = NULL;
-  *nfound_out = 0;
   const int32_t *tri = so->tri, *group = so->group;
   const half_edge *he = so->he;
   const int64_t *eb = so->eb;
@@ -186,10 +185,12 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
       d.box[6 * q + 3 + k] = up(hi[k] + pad);
     }
   }
-  int st = VM_OK;
   RTCDevice dev = rtcNewDevice(NULL);
   if (!dev) {
     vm_free(ctx, d.box);
+    free(*found_out);
+    *found_out = NULL;
+    *nfound_out = 0;
     return vm_error(ctx, VM_ERR_BACKEND, "embree: cannot create a device");
   }
   RTCScene scene = rtcNewScene(dev);
@@ -206,9 +207,10 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
   rtcReleaseGeometry(g);
   rtcCommitScene(scene);
   enum RTCError err = rtcGetDeviceError(dev);
-  /* found[k] lists (edge, triangle) hits of the edges of chunk k */
-  int64_t nfound = 0, capfound = 0;
-  int64_t *found = NULL;
+  /* (edge, triangle) hits, appended by the threads in any order (the
+   * pairs made of them are sorted) */
+  int64_t nfound = *nfound_out, capfound = nfound;
+  int64_t *found = *found_out;
   int nomem = 0;
   if (err == RTC_ERROR_NONE) {
 #pragma omp parallel
@@ -298,10 +300,11 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
   vm_free(ctx, d.box);
   if (err != RTC_ERROR_NONE || nomem) {
     free(found);
+    *found_out = NULL;
+    *nfound_out = 0;
     if (nomem) return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting hits");
     return vm_error(ctx, VM_ERR_BACKEND, "embree: ray query failed (error %d)", (int)err);
   }
-  (void)st;
   *found_out = found;
   *nfound_out = nfound;
   return VM_OK;
@@ -371,7 +374,6 @@ static int hits_to_pairs(vm_ctx *ctx, const pr_soup *so, const int64_t *found, i
   return VM_OK;
 }
 
-
 int pr_soup_intersections(vm_ctx *ctx, const pr_soup *so, const double *xyz, int64_t *npairs,
                           int64_t **pairs) {
   *npairs = 0;
@@ -416,7 +418,7 @@ int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *so, const double *xyz, in
   int st = VM_OK;
   uint8_t *moved = NULL, *chg = NULL;
   int32_t *prims = NULL;
-  int64_t *edges = NULL, *keep = NULL, *hits = NULL;
+  int64_t *edges = NULL, *keep = NULL, *hits = NULL, nhits = 0;
   int64_t nchg = 0;
   if (so->cached) {
     moved = vm_alloc_array(ctx, (size_t)nv, sizeof *moved);
@@ -440,7 +442,7 @@ int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *so, const double *xyz, in
     /* pairs between two unmoved faces are those of the last query; a pair
      * with a moved face is found by an edge of the moved face crossing any
      * face, or by any edge crossing the moved face */
-    int64_t nedge = 0, nkeep = 0, nh1 = 0, nh2 = 0, *h1 = NULL, *h2 = NULL;
+    int64_t nedge = 0, nkeep = 0;
     prims = vm_alloc_array(ctx, (size_t)(nchg ? nchg : 1), sizeof *prims);
     edges = vm_alloc_array(ctx, (size_t)(so->ned ? so->ned : 1), sizeof *edges);
     keep = vm_alloc_array(ctx, (size_t)(2 * (so->nlast ? so->nlast : 1)), sizeof *keep);
@@ -466,20 +468,10 @@ int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *so, const double *xyz, in
       }
     }
     if (nchg) {
-      st = collect_hits(ctx, so, xyz, NULL, 0, edges, nedge, &h1, &nh1);
-      if (!st) st = collect_hits(ctx, so, xyz, prims, nchg, NULL, 0, &h2, &nh2);
+      st = collect_hits(ctx, so, xyz, NULL, 0, edges, nedge, &hits, &nhits);
+      if (!st) st = collect_hits(ctx, so, xyz, prims, nchg, NULL, 0, &hits, &nhits);
     }
-    if (!st && nh1 + nh2) {
-      hits = malloc((size_t)(2 * (nh1 + nh2)) * sizeof *hits);
-      if (!hits) st = VM_ERR_NOMEM;
-      else {
-        if (nh1) memcpy(hits, h1, (size_t)(2 * nh1) * sizeof *hits);
-        if (nh2) memcpy(hits + 2 * nh1, h2, (size_t)(2 * nh2) * sizeof *hits);
-      }
-    }
-    free(h1);
-    free(h2);
-    if (!st) st = hits_to_pairs(ctx, so, hits, nh1 + nh2, keep, nkeep, &n, &pp);
+    if (!st) st = hits_to_pairs(ctx, so, hits, nhits, keep, nkeep, &n, &pp);
     if (!st && so->check) {
       int64_t nf = 0, *pf = NULL;
       st = pr_soup_intersections(ctx, so, xyz, &nf, &pf);

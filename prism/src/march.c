@@ -24,12 +24,12 @@ static double level_quality(const vm_prism *p, const double *la, const double *l
   return qm;
 }
 
-/* Quality of the prisms of layers 0..nm of triangle t (those touching the
- * moved levels 1..nm): the smallest. */
-static double low_levels_quality(const vm_prism *p, int64_t t, int nm) {
+/* Quality of the prisms of layers k0..k1 of triangle t: the smallest
+ * (INFINITY for none). */
+static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
   size_t lsz = (size_t)(3 * p->nw);
   double q = INFINITY;
-  for (int k = 0; k <= nm; k++) {
+  for (int k = k0; k <= k1; k++) {
     double x[18];
     for (int i = 0; i < 3; i++) {
       memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
@@ -89,6 +89,13 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
            3 * sizeof *old);
 }
 
+#define ORTHO_QMIN 0.3
+#define LEAN 0.07870170682461844 /* tan(4.5 degrees) */
+/* The quality a prism of quality q0 before may fall to: min(0.3, share q0). */
+static double quality_floor(double q0, double share) {
+  return share * q0 < ORTHO_QMIN ? share * q0 : ORTHO_QMIN;
+}
+
 /* The first layer's side edges along the wall normal where the wall is
  * smooth (incident face normals within 10 degrees of the vertex normal):
  * every smooth column is stood up over 6 layers (stand_column); where a
@@ -97,14 +104,15 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
  * prism is left. Then each column that went back, in vertex order, tries
  * again alone, bending back over 6, 12, 9, 18, nm, 3, 2 or 1 layers, with
  * its neighbours as they are, and keeps the first that leaves every prism
- * it touches better than 0.3 or a quarter of its quality before; these
- * passes repeat while a column stands up (a neighbour standing up can make
- * room). A column tilted far over (next to a junction whose columns stay
- * tilted) needs the long bends: over 6 layers its lateral offset is taken
- * up too steeply. The outer surface never moves, so its intersections are
- * untouched, and going back restores the old prisms bit for bit. */
-#define ORTHO_QMIN 0.3
-#define LEAN 0.07870170682461844 /* tan(4.5 degrees) */
+ * it touches better than 0.3 or a quarter of its quality before (then the
+ * same bends leaning by 4.5 degrees); these passes repeat while a column
+ * stands up (a neighbour standing up can make room). A column tilted far
+ * over (next to a junction whose columns stay tilted) needs the long
+ * bends: over 6 layers its lateral offset is taken up too steeply. While
+ * the columns stand up over 6 layers, layers 7..nm keep their quality
+ * (qup), so only layers 0..6 are measured again. The outer surface never
+ * moves, so its intersections are untouched, and going back restores the
+ * old prisms bit for bit. */
 static int orthogonal_first_level(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
@@ -112,25 +120,33 @@ static int orthogonal_first_level(vm_prism *p) {
   size_t lsz = (size_t)(3 * nw);
   double *old = vm_alloc_array(ctx, (size_t)nm * lsz, sizeof *old);
   double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
+  double *qup = vm_alloc_array(ctx, (size_t)nt, sizeof *qup);
   uint8_t *back = vm_alloc_array(ctx, (size_t)nw, sizeof *back);
   uint8_t *moved = vm_calloc(ctx, (size_t)nw, sizeof *moved);
-  if (!old || !q0 || !back || !moved) {
+  if (!old || !q0 || !qup || !back || !moved) {
     vm_free(ctx, old);
     vm_free(ctx, q0);
+    vm_free(ctx, qup);
     vm_free(ctx, back);
     vm_free(ctx, moved);
     return VM_ERR_NOMEM;
   }
   memcpy(old, p->lev + lsz, (size_t)nm * lsz * sizeof *old);
-  for (int64_t t = 0; t < nt; t++) q0[t] = low_levels_quality(p, t, nm);
+  /* q0: layers 0..nm before; qup: layers nb+1..nm, which standing up over
+   * nb layers leaves as they are */
+  for (int64_t t = 0; t < nt; t++) {
+    double lo = layers_quality(p, t, 0, nb);
+    qup[t] = layers_quality(p, t, nb + 1, nm);
+    q0[t] = lo < qup[t] ? lo : qup[t];
+  }
   for (int64_t v = 0; v < nw; v++)
     if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, 0, old);
   for (int round = 0; round < 100; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
     for (int64_t t = 0; t < nt; t++) {
-      double lim = 0.5 * q0[t] < ORTHO_QMIN ? 0.5 * q0[t] : ORTHO_QMIN;
-      if (low_levels_quality(p, t, nm) >= lim) continue;
+      double q = layers_quality(p, t, 0, nb);
+      if ((q < qup[t] ? q : qup[t]) >= quality_floor(q0[t], 0.5)) continue;
       for (int i = 0; i < 3; i++) {
         int32_t v = p->tri[3 * t + i];
         if (moved[v]) {
@@ -146,20 +162,24 @@ static int orthogonal_first_level(vm_prism *p) {
         moved[v] = 0;
       }
   }
-  const int tries[8] = {6, 12, 9, 18, nm, 3, 2, 1};
+  /* bends tried in this order, each length once (nm may repeat one) */
+  int tries[8] = {6, 12, 9, 18, nm, 3, 2, 1}, ntry = 0;
+  for (int k = 0; k < 8; k++) {
+    int seen = tries[k] > nm;
+    for (int j = 0; j < ntry && !seen; j++) seen = tries[j] == tries[k];
+    if (!seen) tries[ntry++] = tries[k];
+  }
   for (int pass = 0, again = 1; pass < 4 && again; pass++) {
     again = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v] || moved[v]) continue;
       /* first straight up, then (a last resort) leaning by 4.5 degrees */
-      for (int k = 0; k < 16 && !moved[v]; k++) {
-        if (tries[k % 8] > nm || !stand_column(p, v, tries[k % 8], k < 8 ? 0 : LEAN, old))
-          continue;
+      for (int k = 0; k < 2 * ntry && !moved[v]; k++) {
+        if (!stand_column(p, v, tries[k % ntry], k < ntry ? 0 : LEAN, old)) continue;
         int ok = 1;
         for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
           int64_t t = p->vt[j];
-          double lim = 0.25 * q0[t] < ORTHO_QMIN ? 0.25 * q0[t] : ORTHO_QMIN;
-          ok = low_levels_quality(p, t, nm) >= lim;
+          ok = layers_quality(p, t, 0, nm) >= quality_floor(q0[t], 0.25);
         }
         if (ok)
           moved[v] = again = 1;
@@ -168,6 +188,7 @@ static int orthogonal_first_level(vm_prism *p) {
       }
     }
   }
+  vm_free(ctx, qup);
   vm_free(ctx, old);
   vm_free(ctx, q0);
   vm_free(ctx, back);
@@ -249,6 +270,7 @@ int vm_prism_march(vm_prism *p) {
     const char *why = NULL;
     vm_node_stats ns;
     int it = 0;
+    pr_surface_dirs(p, base, fn, vn, dr, 0);
     for (int j = 0; j < 5; j++) {
       double f = f0 * fmul[j];
       if (j > 0 && f > 0.9) continue;
@@ -267,7 +289,6 @@ int vm_prism_march(vm_prism *p) {
        * column split along straight side edges can give a flat or
        * inverted sub-prism) the inner target's shape, which is always
        * valid */
-      pr_surface_dirs(p, base, fn, vn, dr, 0);
       pr_build_targets(p, base, fn, vn, hk, tg);
       for (int64_t t = 0; t < nt; t++) {
         const int32_t *c = m2->conn + 6 * (nt + t);
