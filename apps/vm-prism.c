@@ -29,7 +29,7 @@ static const char usage[] =
     "                         --first-height alone the ratio is solved for)\n"
     "  --springback-iter N    implicit iterations of the springback (default 50)\n"
     "  --resolve-iter N       implicit iterations after each cutting round (default 6)\n"
-    "  --cut-rounds N         cutting rounds at most (default 80)\n"
+    "  --cut-rounds N         cutting rounds at most (default 200)\n"
     "  --cut-factor F         target height reduction per cut (default 0.85)\n"
     "  --smooth-iter N        restoration / smoothing passes (default 30)\n"
     "  --march-iter N         explicit iterations per split (default 8)\n"

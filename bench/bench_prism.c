@@ -5,7 +5,9 @@
  * intersecting pairs (Embree and, independently, CGAL's exact check) and
  * the largest growth ratio.
  * usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N]
- *                    [--only plane|aircraft] [--frac F] [--verbose] */
+ *                    [--only plane|aircraft] [--frac F] [--verbose]
+ * VM_BENCH_DUMP=FILE writes "x y z thickness/T" per wall vertex of each case
+ * (the last case run wins). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -125,6 +127,15 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
   vm_mesh *res = NULL;
   int64_t emb = -1, cg_pairs = -1, cg_wall = -1, cg_bad = -1;
   if (vm_prism_result(p, &res) == VM_OK) {
+    const char *dump = getenv("VM_BENCH_DUMP");
+    const vm_field *thf = vm_mesh_find_field(res, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX);
+    FILE *df = dump && thf ? fopen(dump, "w") : NULL;
+    if (df) {
+      for (int64_t v = 0; v < r.wall_vertices; v++)
+        fprintf(df, "%.6f %.6f %.6f %.6f\n", res->xyz[3 * v], res->xyz[3 * v + 1], res->xyz[3 * v + 2],
+                ((const double *)thf->data)[v] / r.thickness);
+      fclose(df);
+    }
     uint8_t *wall = calloc((size_t)res->nv, 1);
     for (int64_t v = 0; v < r.wall_vertices; v++) wall[v] = 1;
     vm_prism_mesh_intersections(ctx, res, wall, &emb);

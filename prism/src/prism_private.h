@@ -41,7 +41,7 @@ struct vm_prism {
   vm_problem *prob;
   double *h;       /* nw target heights */
   double *cap;     /* nw upper bounds of the thickness left by cutting */
-  uint8_t *cut;    /* nw: the column was cut */
+  uint8_t *cut;    /* nw: rounds the column was cut in (saturates at 255) */
 
   /* marching result */
   int nlev;        /* levels (layers + 1); 0 before marching */

@@ -142,7 +142,15 @@ int vm_prism_restore(vm_prism *p) {
   mark_zone(p, 3, zone, tmp);
   for (int64_t v = 0; v < nw; v++)
     if (zone[v]) alpha[v] = 0.5;
-  int64_t np = 0;
+  /* pairs cutting left (it ran out of rounds): their columns stay where
+   * they are, and only new pairs send columns back */
+  int64_t np = 0, np0 = 0;
+  if ((st = pr_layer_intersections(p, tmp, &np0))) goto done;
+  for (int64_t v = 0; v < nw; v++)
+    if (tmp[v]) {
+      p->cap[v] = t[v];
+      alpha[v] = 0;
+    }
   for (int pass = 1; pass <= p->o.smooth_iter; pass++) {
     if (pr_time_left(p) <= 0) {
       st = VM_WARN_TIME;
@@ -171,7 +179,7 @@ int vm_prism_restore(vm_prism *p) {
     for (int round = 0;; round++) {
       apply_quality(p, t, told, d, qold, q, alpha, tmp);
       if ((st = pr_layer_intersections(p, tmp, &np))) goto done;
-      if (!np) break;
+      if (np <= np0) break;
       int64_t back = 0;
       for (int64_t v = 0; v < nw; v++)
         if (tmp[v] && t[v] != told[v]) {
@@ -194,7 +202,7 @@ int vm_prism_restore(vm_prism *p) {
       change = c > change ? c : change;
     }
     pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np);
-    if (np || change < 1e-6 * T) break;
+    if (np > np0 || change < 1e-6 * T) break;
   }
   p->rep.intersections = np;
   if (np && st == VM_OK) st = VM_WARN_MAXITER;

@@ -179,6 +179,32 @@ done:
   return st;
 }
 
+/* A column cut many times whose length stays above twice its target (a
+ * fold the local solve does not undo: two side faces of the same column
+ * crossing at a thin tip) is shortened directly along its side edge by the
+ * cut factor, where every prism on it stays valid. In order, so the result
+ * does not depend on threads. Returns the number shortened. */
+static int64_t shorten_stuck(vm_prism *p, const uint8_t *mark) {
+  int64_t n = 0, nw = p->nw;
+  double *x = p->layer->xyz;
+  for (int64_t v = 0; v < nw; v++) {
+    if (!mark[v] || p->cut[v] < 10) continue;
+    double *top = x + 3 * (v + nw), old[3] = {top[0], top[1], top[2]};
+    if (!(pr_dist(top, p->wall + 3 * v) > 2 * p->h[v])) continue;
+    for (int k = 0; k < 3; k++) top[k] = p->wall[3 * v + k] + p->o.cut_factor * (old[k] - p->wall[3 * v + k]);
+    int ok = 1;
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
+      const int32_t *c = p->layer->conn + 6 * (int64_t)p->vt[j];
+      double y[18];
+      for (int i = 0; i < 6; i++) memcpy(y + 3 * i, x + 3 * (int64_t)c[i], 3 * sizeof *y);
+      ok = pr_prism_quality(y) > 0;
+    }
+    if (ok) n++;
+    else memcpy(top, old, sizeof old);
+  }
+  return n;
+}
+
 /* Phase 3. */
 int vm_prism_cut(vm_prism *p) {
   if (!p) return VM_ERR_ARG;
@@ -206,8 +232,10 @@ int vm_prism_cut(vm_prism *p) {
     }
     for (int64_t v = 0; v < p->nw; v++)
       if (mark[v]) {
-        p->h[v] *= p->o.cut_factor;
-        p->cut[v] = 1;
+        /* floored: a target far flatter than its base is numerically
+         * degenerate, and shortening stuck columns takes over there */
+        p->h[v] = fmax(p->h[v] * p->o.cut_factor, 1e-3 * p->elen[v]);
+        if (p->cut[v] < 255) p->cut[v]++;
       }
     if ((st = set_targets(p, p->h))) break;
     int it = 0;
@@ -215,6 +243,7 @@ int vm_prism_cut(vm_prism *p) {
     p->rep.springback_iter += it;
     if (st < 0) break;
     if (st == VM_WARN_TIME) break;
+    shorten_stuck(p, mark);
   }
   vm_free(ctx, mark);
   p->rep.cut_rounds = round;

@@ -168,6 +168,48 @@ int main(void) {
     vm_mesh_destroy(&w);
   }
 
+  { /* the same two spheres with cutting stopped after one round: pairs
+     * are left, yet restoring still brings the columns away from the
+     * contact to full thickness (it used to stop at its first pass) and
+     * adds no pair of its own */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    const double ca[3] = {-1.3, 0, 0}, cb[3] = {1.3, 0, 0};
+    sh_icosphere(w, ca, 1.0, 3);
+    sh_icosphere(w, cb, 1.0, 3);
+    vm_prism_opts po = vm_prism_opts_default();
+    po.thickness = 0.5;
+    po.nlayers = 3;
+    po.max_cut_rounds = 1;
+    po.springback_iter = 1; /* short of T: restoring has work to do */
+    vm_prism *p = NULL;
+    int st = vm_prism_create(ctx, w, &po, &p);
+    CHECK(st == 0, "two spheres, 1 cut round: create: %s", vm_ctx_error(ctx));
+    int64_t after_cut = -1;
+    vm_prism_report r;
+    for (int ph = 0; p && ph < VM_PRISM_NPHASES; ph++) {
+      static int (*const fn[])(vm_prism *) = {vm_prism_thin, vm_prism_springback, vm_prism_cut,
+                                               vm_prism_restore, vm_prism_march};
+      st = fn[ph](p);
+      CHECK(st >= 0, "two spheres, 1 cut round: phase %d: %s", ph, vm_ctx_error(ctx));
+      vm_prism_get_report(p, &r);
+      if (ph == VM_PRISM_PHASE_CUT) after_cut = r.intersections;
+      if (ph == VM_PRISM_PHASE_RESTORE) {
+        fprintf(stderr, "two spheres, 1 cut round: %lld pairs after cutting, %lld after restoring\n",
+                (long long)after_cut, (long long)r.intersections);
+        CHECK(after_cut > 0, "two spheres, 1 cut round: no pair left to test with");
+        CHECK(r.intersections <= after_cut, "two spheres, 1 cut round: restoring added pairs");
+      }
+    }
+    vm_prism_get_report(p, &r);
+    fprintf(stderr, "two spheres, 1 cut round: full %.3f, mean %.3f\n", r.full_fraction,
+            r.thick_mean);
+    CHECK(r.full_fraction > 0.6, "two spheres, 1 cut round: full fraction %g", r.full_fraction);
+    CHECK(r.inverted == 0, "two spheres, 1 cut round: %lld inverted", (long long)r.inverted);
+    vm_prism_destroy(&p);
+    vm_mesh_destroy(&w);
+  }
+
   { /* a plate 0.1 thick, T = 0.3 */
     vm_mesh *w = NULL;
     vm_mesh_create(ctx, &w);

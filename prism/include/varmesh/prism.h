@@ -66,7 +66,7 @@ typedef struct vm_prism_opts {
                            (default 50; it stops earlier once F stagnates) */
   int resolve_iter;     /* implicit iterations after each cutting round, around
                            the cut columns only (default 6) */
-  int max_cut_rounds;   /* default 80 */
+  int max_cut_rounds;   /* default 200; rounds with few pairs are cheap */
   int smooth_iter;      /* restoration / smoothing passes (default 30) */
   int march_iter;       /* explicit iterations per split (default 8) */
   double ortho_weight;  /* weight (12) of the inner sublayer in marching (default 10) */
