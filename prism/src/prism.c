@@ -23,7 +23,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.cut_factor = 0.85;
   o.springback_iter = 50;
   o.resolve_iter = 6;
-  o.max_cut_rounds = 200;
+  o.max_cut_rounds = 400;
   o.smooth_iter = 30;
   o.march_iter = 8;
   o.ortho_weight = 10;

@@ -12,16 +12,30 @@ typedef struct {
   vm_prism *p;
   vm_prism_phase ph;
   int base;
+  int budget;     /* > 0: stop after this many iterations once the steps sum to a quarter of it */
+  double steps;   /* sum of the accepted step lengths (at most 1 each) */
 } monitor_data;
 
 static void monitor(void *user, const vm_iter_info *it) {
   monitor_data *d = user;
-  pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted);
+  d->steps += it->tau < 1 ? it->tau : 1;
+  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted);
 }
 
-int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
-             vm_prism_phase ph, int *iters) {
+static int budget_spent(void *user, int iter, const double *x) {
+  (void)x;
+  const monitor_data *d = user;
+  return iter > d->budget && d->steps >= 0.25 * d->budget;
+}
+
+/* pr_solve with an iteration budget counted in steps: past `budget`
+ * iterations it goes on (up to 3 budget) while the accepted step lengths
+ * sum to less than budget / 4, i.e. while the line search keeps cutting
+ * the step (budget <= 0: plain max_iter). */
+static int solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
+                        int max_iter, int budget, vm_prism_phase ph, int *iters) {
   if (iters) *iters = 0;
+  if (budget > 0) max_iter = 3 * budget;
   if (max_iter <= 0) return VM_OK;
   double left = pr_time_left(p);
   if (left <= 0) return VM_WARN_TIME;
@@ -34,19 +48,25 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
   mo.rel_decrease_tol = 1e-5;
   mo.rel_decrease_count = 2;
   mo.stats_every = 0;
-  monitor_data md = {p, ph, 0};
   /* in the cutting phase the progress steps are rounds (pairs left), not
    * the iterations of the local re-solves */
-  if (ph != VM_PRISM_PHASE_CUT) {
+  monitor_data md = {p, ph, 0, budget, 0};
+  if (ph != VM_PRISM_PHASE_CUT || budget > 0) {
     mo.monitor = monitor;
     mo.user = &md;
   }
+  if (budget > 0) mo.before_iteration = budget_spent;
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
   if (iters && st >= 0) *iters = res.iterations;
   vm_minimizer_destroy(&mz);
   if (st == VM_WARN_MAXITER) st = VM_OK;
   return st;
+}
+
+int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+             vm_prism_phase ph, int *iters) {
+  return solve_budget(p, prob, m, kind, max_iter, 0, ph, iters);
 }
 
 /* Targets from heights hv along the blended directions, installed on the
@@ -116,9 +136,14 @@ int vm_prism_springback(vm_prism *p) {
     }
     if ((st = set_targets(p, hs))) goto done;
     int it = 0;
-    int maxit = last ? p->o.springback_iter : 5;
-    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, maxit, VM_PRISM_PHASE_SPRINGBACK,
-                  &it);
+    /* the last stage's budget is springback_iter iterations at a step of
+     * 1/4 or more: where a few poor prisms (the demo aircraft's wing tips)
+     * hold the single line search to 1/16 on every iteration it goes on,
+     * up to 3 times as many iterations */
+    st = last ? solve_budget(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, 0, p->o.springback_iter,
+                             VM_PRISM_PHASE_SPRINGBACK, &it)
+              : pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, 5, VM_PRISM_PHASE_SPRINGBACK,
+                         &it);
     total += it;
     if (st == VM_WARN_TIME) warn = st;
     if (st < 0 || st == VM_WARN_TIME) break;

@@ -63,10 +63,12 @@ typedef struct vm_prism_opts {
   double theta;         /* of the balanced measure (default 0.8) */
   double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
   int springback_iter;  /* implicit iterations of the springback at full height
-                           (default 50; it stops earlier once F stagnates) */
+                           (default 50; it stops earlier once F stagnates, and
+                           goes on, up to 3 times as many, while the accepted
+                           steps sum to less than a quarter of it) */
   int resolve_iter;     /* implicit iterations after each cutting round, around
                            the cut columns only (default 6) */
-  int max_cut_rounds;   /* default 200; rounds with few pairs are cheap */
+  int max_cut_rounds;   /* default 400; rounds with few pairs are cheap */
   int smooth_iter;      /* restoration / smoothing passes (default 30) */
   int march_iter;       /* explicit iterations per split (default 8) */
   double ortho_weight;  /* weight (12) of the inner sublayer in marching (default 10) */
