@@ -49,9 +49,11 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
  * layers. Keeping the heights keeps every side edge rising (putting level 1
  * at its old distance on the normal would overshoot level 2 on a column
  * tilted by more than about 60 degrees). Levels are taken from `old`
- * (levels 1..nmax). Returns 0 if the column cannot stand up (a level at or
- * below the tangent plane). */
-static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, const double *old) {
+ * (levels 1..nmax). hs < 1 lowers level 1 to hs times its height, level k
+ * to hs + (1 - hs)(k - 1)/nm times its own (1: heights kept). Returns 0 if
+ * the column cannot stand up (a level at or below the tangent plane). */
+static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
+                        const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   const double *o = p->wall + 3 * v, *nv = p->vnrm + 3 * v;
   for (int k = 1; k <= nm; k++) {
@@ -75,9 +77,10 @@ static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, const doubl
     const double *x0 = old + (size_t)(k - 1) * lsz + 3 * v;
     double *x = p->lev + (size_t)k * lsz + 3 * v, e[3];
     double keep = s1 + (1 - s1) * (double)(k - 1) / nm;
+    double lower = hs + (1 - hs) * (double)(k - 1) / nm;
     for (int c = 0; c < 3; c++) e[c] = x0[c] - o[c];
     double a = pr_dot(e, nv);
-    for (int c = 0; c < 3; c++) x[c] = o[c] + a * nv[c] + keep * (e[c] - a * nv[c]);
+    for (int c = 0; c < 3; c++) x[c] = o[c] + lower * a * nv[c] + keep * (e[c] - a * nv[c]);
   }
   return 1;
 }
@@ -105,7 +108,9 @@ static double quality_floor(double q0, double share) {
  * again alone, bending back over 6, 12, 9, 18, nm, 3, 2 or 1 layers, with
  * its neighbours as they are, and keeps the first that leaves every prism
  * it touches better than 0.3 or a quarter of its quality before (then the
- * same bends leaning by 4.5 degrees); these passes repeat while a column
+ * same bends leaning by 4.5 degrees, then straight ones with the first
+ * level lowered to its neighbours' mean height where it stood more than
+ * twice as high); these passes repeat while a column
  * stands up (a neighbour standing up can make room). A column tilted far
  * over (next to a junction whose columns stay tilted) needs the long
  * bends: over 6 layers its lateral offset is taken up too steeply. While
@@ -140,7 +145,7 @@ static int orthogonal_first_level(vm_prism *p) {
     q0[t] = lo < qup[t] ? lo : qup[t];
   }
   for (int64_t v = 0; v < nw; v++)
-    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, 0, old);
+    if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, 0, 1, old);
   for (int round = 0; round < 100; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
@@ -173,9 +178,32 @@ static int orthogonal_first_level(vm_prism *p) {
     again = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v] || moved[v]) continue;
-      /* first straight up, then (a last resort) leaning by 4.5 degrees */
-      for (int k = 0; k < 2 * ntry && !moved[v]; k++) {
-        if (!stand_column(p, v, tries[k % ntry], k < ntry ? 0 : LEAN, old)) continue;
+      /* first straight up, then (a last resort) leaning by 4.5 degrees,
+       * then straight up with the first level lowered to its neighbours'
+       * mean height above the tangent plane where it stands well above
+       * them (the marching's solve can leave one column's first level
+       * many times the scheduled height) */
+      double hs = 1;
+      {
+        const double *nv = p->vnrm + 3 * v;
+        double e[3], sum = 0;
+        for (int c = 0; c < 3; c++) e[c] = old[3 * v + c] - p->wall[3 * v + c];
+        double a = pr_dot(e, nv);
+        int64_t cnt = 0;
+        for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++) {
+          int64_t u = p->vv[k];
+          double f[3];
+          for (int c = 0; c < 3; c++) f[c] = p->lev[lsz + 3 * u + c] - p->wall[3 * u + c];
+          sum += pr_dot(f, p->vnrm + 3 * u);
+          cnt++;
+        }
+        if (cnt && a > 0 && sum > 0 && sum / (double)cnt < 0.5 * a) hs = sum / (double)cnt / a;
+      }
+      int nfam = hs < 1 ? 3 : 2;
+      for (int k = 0; k < nfam * ntry && !moved[v]; k++) {
+        int fam = k / ntry;
+        if (!stand_column(p, v, tries[k % ntry], fam == 1 ? LEAN : 0, fam == 2 ? hs : 1, old))
+          continue;
         int ok = 1;
         for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
           int64_t t = p->vt[j];
