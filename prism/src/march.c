@@ -85,6 +85,24 @@ static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
   return 1;
 }
 
+/* Where column v's first level (in `old`) stands more than twice as high
+ * above the tangent plane as its neighbours' (as they are now) on average,
+ * the share of its height that brings it down to that mean; else 1. */
+static double first_level_share(const vm_prism *p, int64_t v, const double *old) {
+  size_t lsz = (size_t)(3 * p->nw);
+  double e[3], sum = 0;
+  for (int c = 0; c < 3; c++) e[c] = old[3 * v + c] - p->wall[3 * v + c];
+  double a = pr_dot(e, p->vnrm + 3 * v);
+  for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++) {
+    int64_t u = p->vv[k];
+    double f[3];
+    for (int c = 0; c < 3; c++) f[c] = p->lev[lsz + 3 * u + c] - p->wall[3 * u + c];
+    sum += pr_dot(f, p->vnrm + 3 * u);
+  }
+  double mean = sum / (double)(p->vv_off[v + 1] - p->vv_off[v]);
+  return a > 0 && mean > 0 && mean < 0.5 * a ? mean / a : 1;
+}
+
 static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   for (int k = 0; k < nmax; k++)
@@ -183,22 +201,7 @@ static int orthogonal_first_level(vm_prism *p) {
        * mean height above the tangent plane where it stands well above
        * them (the marching's solve can leave one column's first level
        * many times the scheduled height) */
-      double hs = 1;
-      {
-        const double *nv = p->vnrm + 3 * v;
-        double e[3], sum = 0;
-        for (int c = 0; c < 3; c++) e[c] = old[3 * v + c] - p->wall[3 * v + c];
-        double a = pr_dot(e, nv);
-        int64_t cnt = 0;
-        for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++) {
-          int64_t u = p->vv[k];
-          double f[3];
-          for (int c = 0; c < 3; c++) f[c] = p->lev[lsz + 3 * u + c] - p->wall[3 * u + c];
-          sum += pr_dot(f, p->vnrm + 3 * u);
-          cnt++;
-        }
-        if (cnt && a > 0 && sum > 0 && sum / (double)cnt < 0.5 * a) hs = sum / (double)cnt / a;
-      }
+      double hs = first_level_share(p, v, old);
       int nfam = hs < 1 ? 3 : 2;
       for (int k = 0; k < nfam * ntry && !moved[v]; k++) {
         int fam = k / ntry;

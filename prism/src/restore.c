@@ -145,12 +145,14 @@ int vm_prism_restore(vm_prism *p) {
   /* pairs cutting left (it ran out of rounds): their columns stay where
    * they are, and only new pairs send columns back */
   int64_t np = 0, np0 = 0;
-  if ((st = pr_layer_intersections(p, tmp, &np0))) goto done;
-  for (int64_t v = 0; v < nw; v++)
-    if (tmp[v]) {
-      p->cap[v] = t[v];
-      alpha[v] = 0;
-    }
+  if (p->rep.intersections > 0) {
+    if ((st = pr_layer_intersections(p, tmp, &np0))) goto done;
+    for (int64_t v = 0; v < nw; v++)
+      if (tmp[v]) {
+        p->cap[v] = t[v];
+        alpha[v] = 0;
+      }
+  }
   for (int pass = 1; pass <= p->o.smooth_iter; pass++) {
     if (pr_time_left(p) <= 0) {
       st = VM_WARN_TIME;

@@ -19,6 +19,8 @@ typedef struct {
 static void monitor(void *user, const vm_iter_info *it) {
   monitor_data *d = user;
   d->steps += it->tau < 1 ? it->tau : 1;
+  /* in the cutting phase the progress steps are rounds (pairs left), not
+   * the iterations of the local re-solves */
   if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted);
 }
 
@@ -29,13 +31,12 @@ static int budget_spent(void *user, int iter, const double *x) {
 }
 
 /* pr_solve with an iteration budget counted in steps: past `budget`
- * iterations it goes on (up to 3 budget) while the accepted step lengths
+ * iterations it goes on (up to max_iter) while the accepted step lengths
  * sum to less than budget / 4, i.e. while the line search keeps cutting
- * the step (budget <= 0: plain max_iter). */
+ * the step (budget <= 0: no budget, max_iter iterations). */
 static int solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
                         int max_iter, int budget, vm_prism_phase ph, int *iters) {
   if (iters) *iters = 0;
-  if (budget > 0) max_iter = 3 * budget;
   if (max_iter <= 0) return VM_OK;
   double left = pr_time_left(p);
   if (left <= 0) return VM_WARN_TIME;
@@ -48,13 +49,9 @@ static int solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_
   mo.rel_decrease_tol = 1e-5;
   mo.rel_decrease_count = 2;
   mo.stats_every = 0;
-  /* in the cutting phase the progress steps are rounds (pairs left), not
-   * the iterations of the local re-solves */
   monitor_data md = {p, ph, 0, budget, 0};
-  if (ph != VM_PRISM_PHASE_CUT || budget > 0) {
-    mo.monitor = monitor;
-    mo.user = &md;
-  }
+  mo.monitor = monitor;
+  mo.user = &md;
   if (budget > 0) mo.before_iteration = budget_spent;
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
@@ -140,8 +137,8 @@ int vm_prism_springback(vm_prism *p) {
      * 1/4 or more: where a few poor prisms (the demo aircraft's wing tips)
      * hold the single line search to 1/16 on every iteration it goes on,
      * up to 3 times as many iterations */
-    st = last ? solve_budget(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, 0, p->o.springback_iter,
-                             VM_PRISM_PHASE_SPRINGBACK, &it)
+    st = last ? solve_budget(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, 3 * p->o.springback_iter,
+                             p->o.springback_iter, VM_PRISM_PHASE_SPRINGBACK, &it)
               : pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, 5, VM_PRISM_PHASE_SPRINGBACK,
                          &it);
     total += it;
@@ -208,9 +205,9 @@ done:
  * fold the local solve does not undo: two side faces of the same column
  * crossing at a thin tip) is shortened directly along its side edge by the
  * cut factor, where every prism on it stays valid. In order, so the result
- * does not depend on threads. Returns the number shortened. */
-static int64_t shorten_stuck(vm_prism *p, const uint8_t *mark) {
-  int64_t n = 0, nw = p->nw;
+ * does not depend on threads. */
+static void shorten_stuck(vm_prism *p, const uint8_t *mark) {
+  int64_t nw = p->nw;
   double *x = p->layer->xyz;
   for (int64_t v = 0; v < nw; v++) {
     if (!mark[v] || p->cut[v] < 10) continue;
@@ -224,10 +221,8 @@ static int64_t shorten_stuck(vm_prism *p, const uint8_t *mark) {
       for (int i = 0; i < 6; i++) memcpy(y + 3 * i, x + 3 * (int64_t)c[i], 3 * sizeof *y);
       ok = pr_prism_quality(y) > 0;
     }
-    if (ok) n++;
-    else memcpy(top, old, sizeof old);
+    if (!ok) memcpy(top, old, sizeof old);
   }
-  return n;
 }
 
 /* Phase 3. */
