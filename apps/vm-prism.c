@@ -27,7 +27,7 @@ static const char usage[] =
     "  --first-height H       height of the first layer (absolute)\n"
     "  --growth R             ratio of successive layer heights (default 1.2; with\n"
     "                         --first-height alone the ratio is solved for)\n"
-    "  --springback-iter N    implicit iterations of the springback (default 50; up\n"
+    "  --springback-iter N    implicit iterations of the springback (default 100; up\n"
     "                         to 3N while the line search keeps cutting the step)\n"
     "  --resolve-iter N       implicit iterations after each cutting round (default 6)\n"
     "  --cut-rounds N         cutting rounds at most (default 400)\n"

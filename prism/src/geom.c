@@ -171,6 +171,20 @@ int64_t pr_surface_dirs(const vm_prism *p, const double *xyz, double *fn, double
   return blind;
 }
 
+/* Is prism x's top triangle larger than its bottom one? */
+static int widens(const double *x) {
+  double e1[3], e2[3], f1[3], f2[3], nb[3], nt[3];
+  for (int k = 0; k < 3; k++) {
+    e1[k] = x[3 + k] - x[k];
+    e2[k] = x[6 + k] - x[k];
+    f1[k] = x[12 + k] - x[9 + k];
+    f2[k] = x[15 + k] - x[9 + k];
+  }
+  pr_cross(e1, e2, nb);
+  pr_cross(f1, f2, nt);
+  return pr_dot(nt, nt) >= pr_dot(nb, nb);
+}
+
 void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
                       const double *dir, const double *h, double *tgt) {
   static const double blend[] = {0, 0.25, 0.5, 0.75, 1};
@@ -190,7 +204,7 @@ void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
         for (int k = 0; k < 3; k++) x[9 + 3 * i + k] = x[3 * i + k] + h[c[i]] * u[k];
       }
       double q = pr_prism_quality(x);
-      if (q >= 0.5) taken = 1;
+      if (q >= 0.5 || (s == 0 && q > 0.05 && widens(x))) taken = 1;
       if (taken || q > bq) {
         bq = q;
         memcpy(bx, x, sizeof bx);

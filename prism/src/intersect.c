@@ -568,44 +568,51 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
   return st;
 }
 
-/* The faces of the single layer: [0, nt) tops, [nt, nt + 2 ned) sides (two
- * triangles per wall edge), then the wall (group 0). */
+/* The faces of the single layer: [0, nt) tops, [nt, nt + 4 ned) sides,
+ * then the wall (group 0). A side face is the bilinear quad over a wall
+ * edge; it is split into four triangles around its centre (the quad's
+ * value at (1/2, 1/2), vertex 2 nw + e), not into two along a diagonal:
+ * where a column fans far from its neighbours (a sharp trailing edge) a
+ * diagonal split makes the two side quads of a valid prism that meet at
+ * that column cross each other, and cutting would shorten a column that
+ * nothing blocks. */
 static int layer_soup(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt, ned = p->ned;
-  int64_t nf = nt + 2 * ned + nt;
+  int64_t nf = nt + 4 * ned + nt;
+  if (2 * nw + ned > INT32_MAX)
+    return vm_error(ctx, VM_ERR_ARG, "intersections: %lld layer vertices", (long long)(2 * nw + ned));
   int32_t *tri = vm_alloc_array(ctx, (size_t)(3 * nf), sizeof *tri);
   int32_t *grp = vm_alloc_array(ctx, (size_t)nf, sizeof *grp);
-  if (!tri || !grp) {
+  p->soup_xyz = vm_alloc_array(ctx, (size_t)(3 * (2 * nw + ned)), sizeof *p->soup_xyz);
+  if (!tri || !grp || !p->soup_xyz) {
     vm_free(ctx, tri);
     vm_free(ctx, grp);
     return VM_ERR_NOMEM;
   }
-  /* faces: [0, nt) tops, [nt, nt + 2 ned) sides, then the wall */
   for (int64_t t = 0; t < nt; t++) {
     for (int i = 0; i < 3; i++) {
       tri[3 * t + i] = (int32_t)(p->tri[3 * t + i] + nw);
-      tri[3 * (nt + 2 * ned + t) + i] = p->tri[3 * t + i];
+      tri[3 * (nt + 4 * ned + t) + i] = p->tri[3 * t + i];
     }
     grp[t] = -1;
-    grp[nt + 2 * ned + t] = 0;
+    grp[nt + 4 * ned + t] = 0;
   }
   for (int64_t e = 0; e < ned; e++) {
     int32_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
-    int32_t *s = tri + 3 * (nt + 2 * e);
-    s[0] = a;
-    s[1] = b;
-    s[2] = (int32_t)(b + nw);
-    s[3] = a;
-    s[4] = (int32_t)(b + nw);
-    s[5] = (int32_t)(a + nw);
-    grp[nt + 2 * e] = grp[nt + 2 * e + 1] = -1;
+    int32_t q[4] = {a, b, (int32_t)(b + nw), (int32_t)(a + nw)}, c = (int32_t)(2 * nw + e);
+    int32_t *s = tri + 3 * (nt + 4 * e);
+    for (int i = 0; i < 4; i++) {
+      s[3 * i] = q[i];
+      s[3 * i + 1] = q[(i + 1) % 4];
+      s[3 * i + 2] = c;
+      grp[nt + 4 * e + i] = -1;
+    }
   }
   int st = pr_soup_create(ctx, nf, tri, grp, &p->soup);
   vm_free(ctx, tri);
   vm_free(ctx, grp);
-  if (st) return st;
-  return VM_OK;
+  return st;
 }
 
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
@@ -615,21 +622,30 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
     int st = layer_soup(p);
     if (st) return st;
   }
+  double *y = p->soup_xyz;
+  const double *x = p->layer->xyz;
+  memcpy(y, x, (size_t)(6 * nw) * sizeof *y);
+  for (int64_t e = 0; e < ned; e++) {
+    int64_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
+    for (int k = 0; k < 3; k++)
+      y[3 * (2 * nw + e) + k] =
+          0.25 * (x[3 * a + k] + x[3 * b + k] + x[3 * (a + nw) + k] + x[3 * (b + nw) + k]);
+  }
   int64_t np = 0, *pairs = NULL;
-  int st = pr_soup_intersections_cached(ctx, p->soup, p->layer->xyz, &np, mark ? &pairs : NULL);
+  int st = pr_soup_intersections_cached(ctx, p->soup, y, &np, mark ? &pairs : NULL);
   if (st) return st;
   if (mark) {
     memset(mark, 0, (size_t)nw);
     /* the columns that carry each face: a top face's three, a side face's
-     * two (the side edges it spans; both prisms on that wall edge use
-     * them); the wall carries none. Marking whole neighbouring prisms
+     * two (the side edges its quad spans; both prisms on that wall edge
+     * use them); the wall carries none. Marking whole neighbouring prisms
      * would cut about four times as many columns as needed. */
     for (int64_t k = 0; k < 2 * np; k++) {
       int64_t f = pairs[k];
       if (f < nt) {
         for (int i = 0; i < 3; i++) mark[p->tri[3 * f + i]] = 1;
-      } else if (f < nt + 2 * ned) {
-        int64_t e = (f - nt) / 2;
+      } else if (f < nt + 4 * ned) {
+        int64_t e = (f - nt) / 4;
         mark[p->edge[2 * e]] = 1;
         mark[p->edge[2 * e + 1]] = 1;
       }

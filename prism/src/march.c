@@ -42,8 +42,10 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
   return q;
 }
 
-/* Column v stood up at the wall: each of levels 1..nm keeps its height
- * above the wall's tangent plane (its component along the wall normal) and
+/* Column v stood up at the wall (along its normal; a column at a sharp
+ * edge or corner along its blended direction, p->dir): each of levels
+ * 1..nm keeps its height above the wall's tangent plane (its component
+ * along that direction) and
  * loses its lateral offset, all of it at level 1 and a share (k-1)/nm of
  * it kept at level k, so the column bends back to its old course over nm
  * layers. Keeping the heights keeps every side edge rising (putting level 1
@@ -55,7 +57,7 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
 static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
                         const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
-  const double *o = p->wall + 3 * v, *nv = p->vnrm + 3 * v;
+  const double *o = p->wall + 3 * v, *nv = (p->smooth[v] ? p->vnrm : p->dir) + 3 * v;
   for (int k = 1; k <= nm; k++) {
     double e[3];
     for (int c = 0; c < 3; c++) e[c] = old[(size_t)(k - 1) * lsz + 3 * v + c] - o[c];
@@ -111,10 +113,47 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
 }
 
 #define ORTHO_QMIN 0.3
+#define RING_MAX 64 /* columns that may stand up together */
 #define LEAN 0.07870170682461844 /* tan(4.5 degrees) */
 /* The quality a prism of quality q0 before may fall to: min(0.3, share q0). */
 static double quality_floor(double q0, double share) {
   return share * q0 < ORTHO_QMIN ? share * q0 : ORTHO_QMIN;
+}
+
+/* Column v and those of its neighbours that have not stood up (moved),
+ * all stood up over `bend` layers, each with its first level lowered as
+ * first_level_share says; kept if every prism on any of them is then
+ * better than 0.3 or a quarter of its quality before (q0), else all go
+ * back. Returns 1 if kept (the columns that moved are marked). */
+static int stand_with_ring(vm_prism *p, int64_t v, int bend, int nm, const double *q0,
+                           uint8_t *moved, const double *old) {
+  int64_t j0 = p->vv_off[v], deg = p->vv_off[v + 1] - j0;
+  if (deg + 1 > RING_MAX) return 0;
+  int64_t set[RING_MAX];
+  uint8_t in[RING_MAX];
+  int64_t n = 0;
+  set[n++] = v;
+  for (int64_t j = 0; j < deg; j++)
+    if (!moved[p->vv[j0 + j]]) set[n++] = p->vv[j0 + j];
+  double hs[RING_MAX];
+  for (int64_t i = 0; i < n; i++) hs[i] = first_level_share(p, set[i], old);
+  for (int64_t i = 0; i < n; i++) in[i] = (uint8_t)stand_column(p, set[i], bend, 0, hs[i], old);
+  int ok = in[0];
+  for (int64_t i = 0; i < n && ok; i++) {
+    if (!in[i]) continue;
+    for (int64_t k = p->vt_off[set[i]]; k < p->vt_off[set[i] + 1] && ok; k++) {
+      int64_t t = p->vt[k];
+      ok = layers_quality(p, t, 0, nm) >= quality_floor(q0[t], 0.25);
+    }
+  }
+  for (int64_t i = 0; i < n; i++) {
+    if (!in[i]) continue;
+    if (ok)
+      moved[set[i]] = 1;
+    else
+      restore_column(p, set[i], nm, old);
+  }
+  return ok;
 }
 
 /* The first layer's side edges along the wall normal where the wall is
@@ -128,7 +167,8 @@ static double quality_floor(double q0, double share) {
  * it touches better than 0.3 or a quarter of its quality before (then the
  * same bends leaning by 4.5 degrees, then straight ones with the first
  * level lowered to its neighbours' mean height where it stood more than
- * twice as high); these passes repeat while a column
+ * twice as high, and last each straight bend together with the
+ * neighbours that have not stood up); these passes repeat while a column
  * stands up (a neighbour standing up can make room). A column tilted far
  * over (next to a junction whose columns stay tilted) needs the long
  * bends: over 6 layers its lateral offset is taken up too steeply. While
@@ -217,6 +257,12 @@ static int orthogonal_first_level(vm_prism *p) {
         else
           restore_column(p, v, nm, old);
       }
+      /* last, each straight bend again with the neighbours that have not
+       * stood up (smooth ones along their normals, the others along their
+       * column directions): a column tilted among tilted ones next to a
+       * sharp edge, where none can stand up alone */
+      for (int k = 0; k < ntry && !moved[v]; k++)
+        if (stand_with_ring(p, v, tries[k], nm, q0, moved, old)) again = 1;
     }
   }
   vm_free(ctx, qup);

@@ -21,7 +21,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.growth = 1.2;
   o.theta = 0.8;
   o.cut_factor = 0.85;
-  o.springback_iter = 50;
+  o.springback_iter = 100;
   o.resolve_iter = 6;
   o.max_cut_rounds = 400;
   o.smooth_iter = 30;
@@ -380,7 +380,7 @@ void vm_prism_destroy(vm_prism **pp) {
   vm_mesh_destroy(&p->layer);
   void *arrays[] = {p->wall, p->tri, p->fnrm, p->vnrm, p->dir, p->elen, p->smooth,
                     p->vt_off, p->vt, p->vv_off, p->vv, p->edge, p->etri, p->h,
-                    p->cap, p->cut, p->lev, p->sched};
+                    p->cap, p->cut, p->lev, p->sched, p->soup_xyz};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;

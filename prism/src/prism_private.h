@@ -37,6 +37,7 @@ struct vm_prism {
   int32_t *etri;   /* 2*ned triangles on each side (-1: open edge) */
 
   struct pr_soup *soup; /* the layer's faces for intersection queries */
+  double *soup_xyz;     /* 3*(2nw + ned): wall, top, then the side quads' centres */
   vm_mesh *layer;  /* single layer: 2nw vertices, nt prisms, target field */
   vm_problem *prob;
   double *h;       /* nw target heights */
@@ -94,7 +95,11 @@ int64_t pr_surface_dirs(const vm_prism *p, const double *xyz, double *fn, double
 /* Targets of the prisms on surface `base` (3*nw): each corner a of
  * triangle t goes to base_a + h_a * u_a with u_a = dir_a blended towards
  * the face normal as little as needed for the target to be valid with a
- * margin. Writes 18 values per triangle into tgt. */
+ * margin (quality 0.5); where the unblended target widens away from the
+ * wall (a convex part: a fan around a tip or a trailing edge) it is taken
+ * as it is once its quality is above 0.05, since there it is the exact
+ * offset and a blended one would overlap its neighbours'. Writes 18 values
+ * per triangle into tgt. */
 void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
                       const double *dir, const double *h, double *tgt);
 

@@ -63,7 +63,7 @@ typedef struct vm_prism_opts {
   double theta;         /* of the balanced measure (default 0.8) */
   double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
   int springback_iter;  /* implicit iterations of the springback at full height
-                           (default 50; it stops earlier once F stagnates, and
+                           (default 100; it stops earlier once F stagnates, and
                            goes on, up to 3 times as many, while the accepted
                            steps sum to less than a quarter of it) */
   int resolve_iter;     /* implicit iterations after each cutting round, around
