@@ -568,6 +568,8 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
   return st;
 }
 
+#define QUAD_TRIS 4 /* triangles per side quad */
+
 /* The faces of the single layer: [0, nt) tops, [nt, nt + 4 ned) sides,
  * then the wall (group 0). A side face is the bilinear quad over a wall
  * edge; it is split into four triangles around its centre (the quad's
@@ -579,12 +581,13 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
 static int layer_soup(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt, ned = p->ned;
-  int64_t nf = nt + 4 * ned + nt;
+  int64_t nf = nt + QUAD_TRIS * ned + nt;
   if (2 * nw + ned > INT32_MAX)
     return vm_error(ctx, VM_ERR_ARG, "intersections: %lld layer vertices", (long long)(2 * nw + ned));
   int32_t *tri = vm_alloc_array(ctx, (size_t)(3 * nf), sizeof *tri);
   int32_t *grp = vm_alloc_array(ctx, (size_t)nf, sizeof *grp);
-  p->soup_xyz = vm_alloc_array(ctx, (size_t)(3 * (2 * nw + ned)), sizeof *p->soup_xyz);
+  if (!p->soup_xyz)
+    p->soup_xyz = vm_alloc_array(ctx, (size_t)(3 * (2 * nw + ned)), sizeof *p->soup_xyz);
   if (!tri || !grp || !p->soup_xyz) {
     vm_free(ctx, tri);
     vm_free(ctx, grp);
@@ -593,20 +596,20 @@ static int layer_soup(vm_prism *p) {
   for (int64_t t = 0; t < nt; t++) {
     for (int i = 0; i < 3; i++) {
       tri[3 * t + i] = (int32_t)(p->tri[3 * t + i] + nw);
-      tri[3 * (nt + 4 * ned + t) + i] = p->tri[3 * t + i];
+      tri[3 * (nt + QUAD_TRIS * ned + t) + i] = p->tri[3 * t + i];
     }
     grp[t] = -1;
-    grp[nt + 4 * ned + t] = 0;
+    grp[nt + QUAD_TRIS * ned + t] = 0;
   }
   for (int64_t e = 0; e < ned; e++) {
     int32_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
     int32_t q[4] = {a, b, (int32_t)(b + nw), (int32_t)(a + nw)}, c = (int32_t)(2 * nw + e);
-    int32_t *s = tri + 3 * (nt + 4 * e);
-    for (int i = 0; i < 4; i++) {
+    int32_t *s = tri + 3 * (nt + QUAD_TRIS * e);
+    for (int i = 0; i < QUAD_TRIS; i++) {
       s[3 * i] = q[i];
       s[3 * i + 1] = q[(i + 1) % 4];
       s[3 * i + 2] = c;
-      grp[nt + 4 * e + i] = -1;
+      grp[nt + QUAD_TRIS * e + i] = -1;
     }
   }
   int st = pr_soup_create(ctx, nf, tri, grp, &p->soup);
@@ -644,8 +647,8 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
       int64_t f = pairs[k];
       if (f < nt) {
         for (int i = 0; i < 3; i++) mark[p->tri[3 * f + i]] = 1;
-      } else if (f < nt + 4 * ned) {
-        int64_t e = (f - nt) / 4;
+      } else if (f < nt + QUAD_TRIS * ned) {
+        int64_t e = (f - nt) / QUAD_TRIS;
         mark[p->edge[2 * e]] = 1;
         mark[p->edge[2 * e + 1]] = 1;
       }

@@ -120,6 +120,16 @@ static double quality_floor(double q0, double share) {
   return share * q0 < ORTHO_QMIN ? share * q0 : ORTHO_QMIN;
 }
 
+/* Is every prism of layers 0..nm on column v better than 0.3 or a quarter
+ * of its quality before (q0)? The test a column that stood up must pass. */
+static int column_ok(const vm_prism *p, int64_t v, int nm, const double *q0) {
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t t = p->vt[j];
+    if (layers_quality(p, t, 0, nm) < quality_floor(q0[t], 0.25)) return 0;
+  }
+  return 1;
+}
+
 /* Column v and those of its neighbours that have not stood up (moved),
  * all stood up over `bend` layers, each with its first level lowered as
  * first_level_share says; kept if every prism on any of them is then
@@ -129,23 +139,19 @@ static int stand_with_ring(vm_prism *p, int64_t v, int bend, int nm, const doubl
                            uint8_t *moved, const double *old) {
   int64_t j0 = p->vv_off[v], deg = p->vv_off[v + 1] - j0;
   if (deg + 1 > RING_MAX) return 0;
-  int64_t set[RING_MAX];
+  int64_t set[RING_MAX], n = 0;
   uint8_t in[RING_MAX];
-  int64_t n = 0;
   set[n++] = v;
   for (int64_t j = 0; j < deg; j++)
     if (!moved[p->vv[j0 + j]]) set[n++] = p->vv[j0 + j];
+  /* every share is taken before any column moves: it compares a column's
+   * first level with its neighbours' as they are */
   double hs[RING_MAX];
   for (int64_t i = 0; i < n; i++) hs[i] = first_level_share(p, set[i], old);
   for (int64_t i = 0; i < n; i++) in[i] = (uint8_t)stand_column(p, set[i], bend, 0, hs[i], old);
   int ok = in[0];
-  for (int64_t i = 0; i < n && ok; i++) {
-    if (!in[i]) continue;
-    for (int64_t k = p->vt_off[set[i]]; k < p->vt_off[set[i] + 1] && ok; k++) {
-      int64_t t = p->vt[k];
-      ok = layers_quality(p, t, 0, nm) >= quality_floor(q0[t], 0.25);
-    }
-  }
+  for (int64_t i = 0; i < n && ok; i++)
+    if (in[i]) ok = column_ok(p, set[i], nm, q0);
   for (int64_t i = 0; i < n; i++) {
     if (!in[i]) continue;
     if (ok)
@@ -247,12 +253,7 @@ static int orthogonal_first_level(vm_prism *p) {
         int fam = k / ntry;
         if (!stand_column(p, v, tries[k % ntry], fam == 1 ? LEAN : 0, fam == 2 ? hs : 1, old))
           continue;
-        int ok = 1;
-        for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
-          int64_t t = p->vt[j];
-          ok = layers_quality(p, t, 0, nm) >= quality_floor(q0[t], 0.25);
-        }
-        if (ok)
+        if (column_ok(p, v, nm, q0))
           moved[v] = again = 1;
         else
           restore_column(p, v, nm, old);
