@@ -55,11 +55,22 @@ typedef struct {
 static void progress(void *user, const vm_prism_progress *p) {
   progress_state *ps = user;
   if (ps->cli->quiet) return;
+  /* a solve's iterations every 10th; the phases' own steps (cutting
+   * rounds, marching's layers) each, the others every 10th */
   static const char *const what[] = {"height", "F", "pairs", "mean t/T", "height"};
-  if ((int)p->phase != ps->last_phase || p->phase == VM_PRISM_PHASE_CUT ||
-      p->phase == VM_PRISM_PHASE_MARCH || p->step % 10 == 0)
+  int first = (int)p->phase != ps->last_phase;
+  if (p->solver) {
+    if (first || p->step % 10 == 0) {
+      fprintf(stderr, "%-10s %5d  %-8s %.6g  ", vm_prism_phase_name(p->phase), p->step, "F",
+              p->value);
+      if (p->count >= 0) fprintf(stderr, "inverted %lld  ", (long long)p->count);
+      fprintf(stderr, "%7.2fs\n", p->elapsed);
+    }
+  } else if (first || p->phase == VM_PRISM_PHASE_CUT || p->phase == VM_PRISM_PHASE_MARCH ||
+             p->step % 10 == 0) {
     fprintf(stderr, "%-10s %5d  %-8s %.6g  %7.2fs\n", vm_prism_phase_name(p->phase), p->step,
             what[p->phase], p->value, p->elapsed);
+  }
   ps->last_phase = (int)p->phase;
 }
 

@@ -23,8 +23,8 @@
 
 static void progress(void *user, const vm_prism_progress *pg) {
   (void)user;
-  fprintf(stderr, "  [%6.2f s] %-10s %4d  %.6g  %lld\n", pg->elapsed, vm_prism_phase_name(pg->phase),
-          pg->step, pg->value, (long long)pg->count);
+  fprintf(stderr, "  [%6.2f s] %-10s %4d %s %.6g  %lld\n", pg->elapsed, vm_prism_phase_name(pg->phase),
+          pg->step, pg->solver ? "F" : " ", pg->value, (long long)pg->count);
 }
 
 /* Warnings (a marching stopped early, ...) on stderr, so a "(warn)" row

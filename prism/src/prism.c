@@ -40,9 +40,10 @@ double pr_time_left(const vm_prism *p) {
   return p->o.time_limit > 0 ? p->o.time_limit - pr_elapsed(p) : INFINITY;
 }
 
-void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count) {
+void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count,
+                 int solver) {
   if (!p->o.progress) return;
-  vm_prism_progress pg = {ph, step, value, count, pr_elapsed(p)};
+  vm_prism_progress pg = {ph, step, value, count, pr_elapsed(p), solver};
   p->o.progress(p->o.user, &pg);
 }
 
@@ -492,7 +493,7 @@ int vm_prism_thin(vm_prism *p) {
   p->rep.prisms = nt;
   p->done = 1;
   p->rep.time[VM_PRISM_PHASE_THIN] = omp_get_wtime() - t0;
-  pr_progress(p, VM_PRISM_PHASE_THIN, 1, hmax, 0);
+  pr_progress(p, VM_PRISM_PHASE_THIN, 1, hmax, 0, 0);
   return VM_OK;
 }
 

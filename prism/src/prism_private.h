@@ -105,7 +105,9 @@ void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
 
 /* Time since creation. */
 double pr_elapsed(const vm_prism *p);
-void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count);
+/* Report progress (solver: 1 for a solve's iteration, see vm_prism_progress). */
+void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count,
+                 int solver);
 /* Time limit left (seconds, +inf if none). */
 double pr_time_left(const vm_prism *p);
 

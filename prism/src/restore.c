@@ -207,7 +207,7 @@ int vm_prism_restore(vm_prism *p) {
       double c = fabs(t[v] - told[v]);
       change = c > change ? c : change;
     }
-    pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np);
+    pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np, 0);
     if (np > np0 || change < 1e-6 * T) break;
   }
   p->rep.intersections = np;

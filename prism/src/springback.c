@@ -21,7 +21,7 @@ static void monitor(void *user, const vm_iter_info *it) {
   d->steps += it->tau < 1 ? it->tau : 1;
   /* in the cutting phase the progress steps are rounds (pairs left), not
    * the iterations of the local re-solves */
-  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted);
+  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted, 1);
 }
 
 static int budget_spent(void *user, int iter, const double *x) {
@@ -240,7 +240,7 @@ int vm_prism_cut(vm_prism *p) {
     int64_t nmark = 0;
     for (int64_t v = 0; v < p->nw; v++) nmark += mark[v];
     if (round == 0) p->rep.cut_pairs_first = np;
-    pr_progress(p, VM_PRISM_PHASE_CUT, round, (double)np, nmark);
+    pr_progress(p, VM_PRISM_PHASE_CUT, round, (double)np, nmark, 0);
     if (np == 0) break;
     if (round >= p->o.max_cut_rounds) {
       st = VM_WARN_MAXITER;

@@ -21,6 +21,11 @@ check 'grep -q "\"inverted_corner_tets\": 0," "$dir/a.json"' "--json: no inverte
 check 'grep -q "\"intersecting_pairs\": 0," "$dir/a.json"' "--json: no intersecting pair"
 check 'grep -q "\"layers\": 4," "$dir/a.json"' "--json: 4 layers"
 check 'grep -q "^springback" "$dir/a.err"' "progress on stderr"
+# a solve's iterations carry their functional F, marching's splits their
+# layer heights (marching's solves used to print F under "height": values
+# far above the thickness)
+T=$(grep -o "thickness [0-9.e+-]*" "$dir/a.err" | head -1 | awk '{print $2}')
+check 'grep -Eq "^springback +10  F +[0-9.e+-]+ " "$dir/a.err" && grep -Eq "^march +1  height " "$dir/a.err" && awk -v T="$T" "\$1 == \"march\" && \$3 == \"height\" && !(\$4 > 0 && \$4 <= T) { bad = 1 } END { exit bad }" "$dir/a.err"' "progress: F for solves, heights within T ($T) for marching's layers"
 check 'grep -q "^\$MeshFormat" "$dir/a.msh" && sed -n 2p "$dir/a.msh" | grep -q "^4.1 0 8"' ".msh is Gmsh 4.1"
 check 'grep -q "\"wall\"" "$dir/a.msh" && grep -q "\"outer\"" "$dir/a.msh"' ".msh names the wall and outer families"
 # the default 20 layers: every smooth column's first side edge within 5

@@ -4,7 +4,7 @@
 # not under the sanitizers): valid and free of intersections; at 5 % at
 # least 95 % of the columns at full thickness and every smooth column's
 # first side edge within 5 degrees of the wall normal; at 20 % at least 65 %
-# at full thickness and at most 2 smooth columns beyond 5 degrees.
+# at full thickness and no smooth column beyond 5 degrees either.
 set -u
 prism=$1
 dir=$(mktemp -d)
@@ -25,10 +25,10 @@ if [ -f "$plane" ]; then
   "$prism" -q -t 0.2 --json "$plane" "$dir/p20.vmsh" >"$dir/p20.json" 2>"$dir/p20.err"
   rc=$?
   check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/p20.json"' "plane.stl at 20 %: exit 0, valid (got $rc)"
-  # two smooth columns stay tilted where standing them up would invert a
-  # prism (docs/prism.md, known limits); the target is none
-  over=$(grep -o '"normal_dev_over_5deg": [0-9]*' "$dir/p20.json" | awk '{print $2}')
-  check '[ -n "$over" ] && [ "$over" -le 2 ]' "plane.stl at 20 %: at most 2 smooth columns' first layers beyond 5 degrees (got $over, $(grep -o '"normal_dev_max_deg": [0-9.]*' "$dir/p20.json"))"
+  # two columns lying nearly flat stayed tilted while each was stood up
+  # alone or with its ring (every such try inverted a prism), until the
+  # tilted ones were solved for with their neighbours
+  check 'grep -q "\"normal_dev_over_5deg\": 0," "$dir/p20.json"' "plane.stl at 20 %: no smooth column's first layer beyond 5 degrees ($(grep -o '"normal_dev_max_deg": [0-9.]*' "$dir/p20.json"))"
   # cutting ends (it used to run out of rounds on wing tips and leave the
   # restoring undone: 21 % of columns at full thickness, mean 0.72 T; then
   # 61.8 % while cutting answered diagonal-split artefacts)

@@ -49,6 +49,10 @@ typedef struct vm_prism_progress {
                         mean thickness / T (restore), layer height (march) */
   int64_t count;     /* phase-specific: inverted nodes (solves), prisms to cut */
   double elapsed;    /* seconds since the layer was created */
+  int solver;        /* 1: an iteration of a solve (step: iteration, value: F,
+                        count: inverted nodes or -1 where not computed) inside
+                        any phase, including marching's splits and its last
+                        solve of tilted columns */
 } vm_prism_progress;
 
 typedef void (*vm_prism_progress_fn)(void *user, const vm_prism_progress *p);
