@@ -1,4 +1,5 @@
-/* apps/cli_report.c: --report DIR for vm-quality and vm-volume. */
+/* apps/cli_report.c: --report DIR for vm-quality, vm-volume, vm-surface and
+ * vm-prism. */
 #include "cli_report.h"
 
 #include <stdio.h>
@@ -74,5 +75,15 @@ int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, cons
                         o->target_size};
   if (st >= 0) st = vm_report_mesh(rp, "before-", "before", before, &qo, NULL);
   if (st >= 0) st = vm_report_mesh(rp, "after-", "after", after, &qo, NULL);
+  return finish(cli, r, dir, st);
+}
+
+int vm_cli_report_result(const vm_cli *cli, vm_report **r, const char *dir, int st,
+                         const char *label, const vm_mesh *m, const char *field,
+                         const vm_report_history *hist, const char *caption) {
+  vm_quality_opts qo = {VM_RULE_CORNER, 0};
+  if (st >= 0 && hist && vm_report_history_count(hist) > 0)
+    st = vm_report_convergence(*r, "convergence", caption, hist);
+  if (st >= 0) st = vm_report_mesh(*r, "", label, m, &qo, field);
   return finish(cli, r, dir, st);
 }

@@ -29,4 +29,15 @@ int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, cons
                          const vm_report_history *hist, const vm_volume_opts *o,
                          const vm_volume_report *rep);
 
+/* The stages' --report (vm-surface, vm-prism), after the run: the rows the
+ * caller has added (st: their status; < 0 reports that error), then the
+ * convergence plot of `hist` (with `caption`) if it has samples, the
+ * standard pictures of the result `m` under `label` (vm_report_mesh,
+ * corner rule: histograms, slices of volume elements, the surface coloured
+ * by `field`, NULL for the default) and DIR/index.html. Destroys *r.
+ * Returns an exit code. */
+int vm_cli_report_result(const vm_cli *cli, vm_report **r, const char *dir, int st,
+                         const char *label, const vm_mesh *m, const char *field,
+                         const vm_report_history *hist, const char *caption);
+
 #endif

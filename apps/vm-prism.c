@@ -7,6 +7,7 @@
 #include <strings.h>
 
 #include "cli.h"
+#include "cli_report.h"
 #include "cli_verify.h"
 #include "varmesh/io.h"
 #include "varmesh/quadrature.h"
@@ -41,6 +42,10 @@ static const char usage[] =
     "  --threads N            OpenMP threads (results do not depend on it)\n"
     "  --format F             output format (vmsh, msh, vtu, vtk, cgns, su2)\n"
     "  --binary               binary output where the format has both\n"
+    "  --report DIR           write DIR/index.html with pictures: convergence (F per\n"
+    "                         solver iteration, pairs per cutting round), quality\n"
+    "                         histograms, slices through the layers, the surface\n"
+    "                         coloured by the achieved thickness\n"
     "  --json                 JSON summary on stdout\n"
     "  -q, --quiet            no progress on stderr\n"
     "  --help, --version\n"
@@ -50,10 +55,22 @@ static const char usage[] =
 typedef struct {
   vm_cli *cli;
   int last_phase;
+  vm_report_history *hist; /* --report: every solver iteration and cutting round */
+  int total;               /* samples so far (the history's x axis) */
+  double F;                /* the last functional, carried through cutting rounds */
 } progress_state;
 
 static void progress(void *user, const vm_prism_progress *p) {
   progress_state *ps = user;
+  if (ps->hist) {
+    /* M: intersecting pairs while cutting (the barrier keeps every prism
+     * valid, so 0 elsewhere) */
+    if (p->solver) ps->F = p->value;
+    if (p->solver || p->phase == VM_PRISM_PHASE_CUT)
+      vm_report_history_add(ps->hist, vm_prism_phase_name(p->phase), ++ps->total, ps->F,
+                            p->phase == VM_PRISM_PHASE_CUT && !p->solver ? (int64_t)p->value : 0,
+                            NAN);
+  }
   if (ps->cli->quiet) return;
   /* a solve's iterations every 10th; the phases' own steps (cutting
    * rounds, marching's layers) each, the others every 10th */
@@ -124,11 +141,13 @@ int main(int argc, char **argv) {
   vm_cli_init(&cli, "vm-prism");
   vm_prism_opts o = vm_prism_opts_default();
   vm_write_opts wo = vm_write_opts_default();
-  const char *in = NULL, *out = NULL, *fmt = NULL;
+  const char *in = NULL, *out = NULL, *fmt = NULL, *report_dir = NULL;
   double T_abs = 0, T_rel = 0.05;
   int json = 0, rc = VM_EXIT_OK;
   vm_mesh *m = NULL, *res = NULL;
   vm_prism *p = NULL;
+  vm_report *report = NULL;
+  vm_report_history *hist = NULL;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
     double x;
@@ -141,6 +160,12 @@ int main(int argc, char **argv) {
       cli.quiet = 1;
     } else if (!strcmp(a, "--binary")) {
       wo.binary = 1;
+    } else if (!strcmp(a, "--report")) {
+      i++;
+      if (!(report_dir = val)) {
+        rc = vm_cli_usage_error(&cli, "--report expects a directory");
+        goto done;
+      }
     } else if (!strcmp(a, "--format")) {
       i++;
       if (!(fmt = val)) {
@@ -241,7 +266,18 @@ int main(int argc, char **argv) {
                             o.first_height, o.thickness);
     goto done;
   }
-  progress_state ps = {&cli, -1};
+  /* the report is made (or refused) before the run */
+  if (report_dir) {
+    char title[512];
+    snprintf(title, sizeof title, "vm-prism: %s", in);
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
+    if (vm_report_history_create(cli.ctx, &hist) < 0) {
+      vm_cli_error(&cli, "out of memory");
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+  }
+  progress_state ps = {&cli, -1, hist, 0, NAN};
   o.progress = progress;
   o.user = &ps;
   if (vm_prism_create(cli.ctx, m, &o, &p) < 0) {
@@ -371,7 +407,55 @@ int main(int argc, char **argv) {
       printf("\"%s\": %.3f, ", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
     printf("\"total\": %.3f}}\n", r.time_total);
   }
+  if (report) {
+    int st2 = vm_report_heading(report, "run");
+    if (st2 >= 0) st2 = vm_report_row(report, "input, output", "%s, %s", in, out);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "wall triangles, prisms, layers (requested)",
+                          "%lld, %lld, %d (%d)", (long long)r.wall_triangles,
+                          (long long)r.prisms, r.layers, r.layers_requested);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "thickness T (of the model's length), first height, growth",
+                          "%g (%.3g), %g, %g", r.thickness, r.thickness / L, r.first_height,
+                          r.growth);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "columns at full thickness", "%.1f %%", 100 * r.full_fraction);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "thickness / T: min, mean, max", "%.3f, %.3f, %.3f",
+                          r.thick_min, r.thick_mean, r.thick_max);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "inverted corner tets, intersecting pairs, min scaled Jacobian",
+                          "%lld, %lld, %.3g", (long long)r.inverted, (long long)npairs, r.sj_min);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "first layer off the wall normal (smooth vertices)",
+                          "max %.2f deg, %lld of %lld above 5 deg", r.normal_dev_max,
+                          (long long)r.normal_dev_over5, (long long)r.smooth_vertices);
+    if (st2 >= 0) st2 = vm_report_row(report, "max growth of successive heights", "%.3f", r.growth_max);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "springback iterations, cutting rounds (pairs at first)",
+                          "%d, %d (%lld)", r.springback_iter, r.cut_rounds,
+                          (long long)r.cut_pairs_first);
+    char times[256];
+    int len = 0;
+    for (int k = 0; k < VM_PRISM_NPHASES && len < (int)sizeof times; k++)
+      len += snprintf(times + len, sizeof times - (size_t)len, "%s%s %.2f s", k ? ", " : "",
+                      vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
+    if (st2 >= 0) st2 = vm_report_row(report, "time per phase", "%s (%.2f s in all)", times, r.time_total);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "valid, verified (exact)", "%s, %s",
+                          rc == VM_EXIT_OK ? "yes" : "no", verified ? "yes" : "no");
+    int rrc = vm_cli_report_result(&cli, &report, report_dir, st2, "prism layers", res,
+                                   "thickness", hist,
+                                   "Convergence of the run: the functional F per solver "
+                                   "iteration (springback, the solves after cutting, "
+                                   "marching), the intersecting pairs left per cutting round "
+                                   "in the M panel (0 elsewhere: every prism stays valid); "
+                                   "dashed lines separate the phases.");
+    if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
+  }
 done:
+  vm_report_destroy(&report);
+  vm_report_history_destroy(&hist);
   vm_mesh_destroy(&res);
   vm_prism_destroy(&p);
   vm_mesh_destroy(&m);

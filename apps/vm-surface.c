@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "cli.h"
+#include "cli_report.h"
 #include "varmesh/adapt.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
@@ -49,6 +50,9 @@ static const char usage[] =
     "  --threads N             OpenMP threads (results do not depend on it)\n"
     "  --format F, --binary    output format; binary where the format has both\n"
     "  --progress-every N      a progress line every N iterations (default 20)\n"
+    "  --report DIR            write DIR/index.html with pictures: convergence of the\n"
+    "                          adaptation (F per iteration), quality histograms, the\n"
+    "                          surface coloured by its (filtered) mean curvature\n"
     "  --json                  JSON summary on stdout\n"
     "  -q, --quiet             no progress\n"
     "  --help, --version\n"
@@ -58,10 +62,16 @@ static const char usage[] =
 typedef struct {
   vm_cli *cli;
   int every;
+  vm_report_history *hist; /* --report: every iteration */
 } progress_state;
 
 static void progress(void *user, const vm_adapt_progress *p) {
   progress_state *ps = user;
+  if (ps->hist) {
+    char phase[32];
+    snprintf(phase, sizeof phase, "round %d", p->round);
+    vm_report_history_add(ps->hist, phase, p->total_iter, p->F, 0, NAN);
+  }
   if (ps->cli->quiet || (p->iter % ps->every && p->iter != 1)) return;
   fprintf(stderr, "vm-surface: adapt round %d it %5d  F %.8e  |grad| %.3e  tau %.2e  %7.2fs\n",
           p->round, p->iter, p->F, p->grad_norm, p->tau, p->elapsed);
@@ -129,7 +139,9 @@ int main(int argc, char **argv) {
   vm_repair_opts ro = vm_repair_opts_default();
   vm_remesh_opts mo = vm_remesh_opts_default();
   vm_write_opts wo = vm_write_opts_default();
-  const char *in = NULL, *out = NULL;
+  const char *in = NULL, *out = NULL, *report_dir = NULL;
+  vm_report *report = NULL;
+  vm_report_history *hist = NULL;
   int step = STEP_ALL, repair = TRI_AUTO, remesh = TRI_AUTO, json = 0, fout = VM_FMT_AUTO;
   double sliver = 15, c_abs = -1, thr = -1, cap = -1;
   long every = 20, lv;
@@ -228,6 +240,12 @@ int main(int argc, char **argv) {
         vm_ctx_set_threads(cli.ctx, (int)lv);
       else
         every = lv;
+    } else if (!strcmp(a, "--report")) {
+      i++;
+      if (!(report_dir = val)) {
+        rc = vm_cli_usage_error(&cli, "--report expects a directory");
+        goto done;
+      }
     } else if (!strcmp(a, "--format")) {
       i++;
       if ((rc = vm_cli_format(&cli, val, &fout)) != VM_EXIT_OK) goto done;
@@ -245,6 +263,17 @@ int main(int argc, char **argv) {
   if (fout == VM_FMT_AUTO && vm_format_from_path(out) == VM_FMT_AUTO)
     fout = vm_format_from_path(in);
 
+  /* the report is made (or refused) before the run */
+  if (report_dir) {
+    char title[512];
+    snprintf(title, sizeof title, "vm-surface %s: %s", steps[step], in);
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
+    if (vm_report_history_create(cli.ctx, &hist) < 0) {
+      vm_cli_error(&cli, "out of memory");
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+  }
   if (vm_mesh_read(cli.ctx, in, VM_FMT_AUTO, &m) < 0) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
     rc = VM_EXIT_INPUT;
@@ -363,7 +392,7 @@ int main(int argc, char **argv) {
       rc = VM_EXIT_INPUT;
       goto done;
     }
-    progress_state ps = {&cli, (int)every};
+    progress_state ps = {&cli, (int)every, hist};
     ao.monitor = progress;
     ao.user = &ps;
     vm_cli_catch_interrupts(&cli);
@@ -468,7 +497,43 @@ int main(int argc, char **argv) {
     vm_json_double(stdout, wall_seconds() - t0);
     printf("}\n");
   }
+  if (report) {
+    int st2 = vm_report_heading(report, "run");
+    if (st2 >= 0) st2 = vm_report_row(report, "input, output", "%s, %s", in, out);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "step; vertices, faces", "%s; %lld, %lld", steps[step],
+                          (long long)m->nv, (long long)m->ne);
+    if (st2 >= 0 && do_repair)
+      st2 = vm_report_row(report, "repair",
+                          "merged %lld points, removed %lld invalid/duplicate and %lld "
+                          "degenerate faces, reoriented %lld, stitched %lld edges; %s, %lld "
+                          "components, %lld self-intersections",
+                          (long long)rr.merged_vertices, (long long)rr.removed_polygons,
+                          (long long)rr.removed_degenerate, (long long)rr.reoriented,
+                          (long long)rr.stitched, rr.border_edges ? "open" : "closed",
+                          (long long)rr.components, (long long)rr.self_intersections);
+    if (st2 >= 0 && did_remesh)
+      st2 = vm_report_row(report, "remeshed", "target edge length %g, %lld -> %lld vertices",
+                          mo.target_edge_length, (long long)nv_before_remesh, (long long)m->nv);
+    if (st2 >= 0 && adapted)
+      st2 = vm_report_row(report, "adaptation",
+                          "%d iterations in %d rounds (%s), F %.6e -> %.6e; c %g; %lld flipped; "
+                          "max distance to the input %g; %.2f s",
+                          ar.iterations, ar.rounds, ar.stop, ar.F_initial, ar.F, ar.c,
+                          (long long)ar.flipped, ar.max_distance, ar.elapsed);
+    if (st2 >= 0)
+      st2 = vm_report_row(report, "smallest angle: input, output", "%.2f, %.2f deg",
+                          min_angle_in, vm_surface_min_angle(m));
+    int rrc = vm_cli_report_result(&cli, &report, report_dir, st2, "surface", m, NULL, hist,
+                                   "Convergence of the adaptation: the functional (20) F per "
+                                   "iteration (the metric and normals are updated between "
+                                   "rounds, so F jumps there); dashed lines separate the "
+                                   "rounds.");
+    if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
+  }
 done:
+  vm_report_destroy(&report);
+  vm_report_history_destroy(&hist);
   vm_surface_projector_destroy(&ref);
   vm_surface_features_free(cli.ctx, &fin);
   vm_mesh_destroy(&input);

@@ -2,10 +2,13 @@
 # test/report/test_report_cli.sh: --report end to end: vm-gen rotcube ->
 # vm-volume --report writes index.html and its figures (every PNG decodes
 # with cairo and is not blank, every link of the page resolves);
-# vm-quality --report on a surface draws the surface; bad report arguments
-# fail with the documented exit codes; no temporary files are left.
+# vm-quality --report on a surface draws the surface; the stages' own
+# --report: vm-surface (convergence of the adaptation, the surface coloured
+# by curvature) and vm-prism (convergence, slices through the layers, the
+# surface coloured by the achieved thickness); bad report arguments fail
+# with the documented exit codes; no temporary files are left.
 set -u
-gen=$1 vol=$2 qual=$3 tr=$4
+gen=$1 vol=$2 qual=$3 tr=$4 surf=$5 prism=$6
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -49,6 +52,32 @@ check '[ $? -eq 0 ] && [ -s "$dir/rq/surface.png" ] && [ -s "$dir/rq/quality.png
 check 'links_ok "$dir/rq/index.html"' "its page's links resolve"
 "$qual" -q --report "$dir/rv" "$dir/rc.vmsh" >/dev/null
 check '[ $? -eq 0 ] && [ -s "$dir/rv/slice.png" ] && [ ! -e "$dir/rv/surface.png" ]' "vm-quality --report slices a volume mesh"
+
+# the stages' reports, on the coarsest aircraft
+"$gen" aircraft --resolution 1 "$dir/air.stl" >/dev/null
+"$surf" -q --report "$dir/rs" "$dir/air.stl" "$dir/air-s.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 0 ] && [ -f "$dir/air-s.vmsh" ]' "vm-surface --report exits 0 and writes the mesh (got $rc: $(cat "$dir/err"))"
+for f in index.html convergence.png quality.png surface.png; do
+  check '[ -s "$dir/rs/$f" ]' "vm-surface: rs/$f written"
+done
+check 'links_ok "$dir/rs/index.html"' "vm-surface: every link of its page resolves to a PNG"
+check 'grep -q "adaptation" "$dir/rs/index.html" && grep -q "mean_curvature" "$dir/rs/index.html"' "vm-surface: the adaptation's numbers, the surface coloured by mean curvature"
+OMP_WAIT_POLICY=passive "$prism" -q -n 4 --report "$dir/rp" "$dir/air-s.vmsh" "$dir/air.msh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 0 ] && [ -f "$dir/air.msh" ]' "vm-prism --report exits 0 and writes the mesh (got $rc: $(cat "$dir/err"))"
+for f in index.html convergence.png quality.png slice.png slice-layer.png surface.png; do
+  check '[ -s "$dir/rp/$f" ]' "vm-prism: rp/$f written"
+done
+check '"$tr" --png "$dir"/rp/*.png "$dir"/rs/*.png' "the stages' PNGs decode and are not blank"
+check 'links_ok "$dir/rp/index.html"' "vm-prism: every link of its page resolves to a PNG"
+check 'grep -q "columns at full thickness" "$dir/rp/index.html" && grep -q "thickness" "$dir/rp/index.html"' "vm-prism: the run's numbers, the surface coloured by thickness"
+"$prism" -q --report "$dir/no/such" "$dir/air-s.vmsh" "$dir/air2.msh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ ! -e "$dir/air2.msh" ]' "vm-prism fails before the run when the report cannot be made (got $rc)"
+"$surf" -q --report "$dir/no/such" "$dir/air.stl" "$dir/air2.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ ! -e "$dir/air2.vmsh" ]' "vm-surface fails before the run when the report cannot be made (got $rc)"
 
 # errors
 "$qual" -q --report "$dir/rf" --report-field nope "$dir/air.vmsh" >/dev/null 2>"$dir/err"

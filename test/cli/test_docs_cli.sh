@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# test/cli/test_docs_cli.sh: the docs keep up with the programs: every
+# option a program's --help lists appears on its page docs/cli/PROG.md
+# (--help and --version are documented once, in docs/cli.md), and
+# docs/cli.md links every page.
+set -u
+root=$1
+shift
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+for prog in "$@"; do
+  name=$(basename "$prog")
+  page="$root/docs/cli/$name.md"
+  check '[ -f "$page" ]' "$name has a page"
+  [ -f "$page" ] || continue
+  missing=
+  # the option column of each help line that starts with a dash: up to the
+  # first gap of two spaces
+  for o in $("$prog" --help | grep -E '^ +-' | sed -E 's/^ +//; s/  .*//' | grep -oE -- '--[a-z0-9-]+' | sort -u); do
+    case $o in --help|--version) continue ;; esac
+    grep -q -- "$o\b" "$page" || missing="$missing $o"
+  done
+  check '[ -z "$missing" ]' "$name: every option of --help on its page (missing:${missing:- none})"
+  check 'grep -q "(cli/$name.md)" "$root/docs/cli.md"' "docs/cli.md links $name's page"
+done
+check 'grep -q -- "--help" "$root/docs/cli.md" && grep -q -- "--version" "$root/docs/cli.md"' "docs/cli.md documents --help and --version"
+exit $fail
