@@ -6,8 +6,10 @@
 
 #include "varmesh/ctx.h"
 
-int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm_report **out) {
+int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm_report **out,
+                       vm_report_history **hist) {
   int st = vm_report_create(cli->ctx, dir, title, out);
+  if (st >= 0 && hist) st = vm_report_history_create(cli->ctx, hist);
   if (st >= 0) return VM_EXIT_OK;
   vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
   return st == VM_ERR_UNSUPPORTED ? VM_EXIT_USAGE : VM_EXIT_INPUT;
@@ -29,7 +31,7 @@ int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
   vm_report *r;
   char title[512];
   snprintf(title, sizeof title, "vm-quality: %s", path);
-  int rc = vm_cli_report_open(cli, dir, title, &r);
+  int rc = vm_cli_report_open(cli, dir, title, &r, NULL);
   if (rc != VM_EXIT_OK) return rc;
   int st = vm_report_heading(r, "input");
   if (st >= 0) st = vm_report_row(r, "file", "%s", path);

@@ -9,9 +9,11 @@
 #include "varmesh/report.h"
 #include "varmesh/untangle.h"
 
-/* Create the report directory and object. Returns VM_EXIT_OK, or after an
- * error message VM_EXIT_USAGE (this build has no cairo) or VM_EXIT_INPUT. */
-int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm_report **out);
+/* Create the report directory and object, and (hist not NULL) an empty
+ * convergence history for the run. Returns VM_EXIT_OK, or after an error
+ * message VM_EXIT_USAGE (this build has no cairo) or VM_EXIT_INPUT. */
+int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm_report **out,
+                       vm_report_history **hist);
 
 /* vm-quality --report: the quality table and pictures of one mesh
  * (vm_report_mesh) and DIR/index.html. field: colours a surface picture

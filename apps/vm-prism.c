@@ -270,12 +270,8 @@ int main(int argc, char **argv) {
   if (report_dir) {
     char title[512];
     snprintf(title, sizeof title, "vm-prism: %s", in);
-    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
-    if (vm_report_history_create(cli.ctx, &hist) < 0) {
-      vm_cli_error(&cli, "out of memory");
-      rc = VM_EXIT_INPUT;
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report, &hist)) != VM_EXIT_OK)
       goto done;
-    }
   }
   progress_state ps = {&cli, -1, hist, 0, NAN};
   o.progress = progress;

@@ -267,12 +267,8 @@ int main(int argc, char **argv) {
   if (report_dir) {
     char title[512];
     snprintf(title, sizeof title, "vm-surface %s: %s", steps[step], in);
-    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
-    if (vm_report_history_create(cli.ctx, &hist) < 0) {
-      vm_cli_error(&cli, "out of memory");
-      rc = VM_EXIT_INPUT;
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report, &hist)) != VM_EXIT_OK)
       goto done;
-    }
   }
   if (vm_mesh_read(cli.ctx, in, VM_FMT_AUTO, &m) < 0) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));

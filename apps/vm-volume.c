@@ -276,8 +276,9 @@ int main(int argc, char **argv) {
   if (report_dir) {
     char title[512];
     snprintf(title, sizeof title, "vm-volume: %s", in);
-    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report)) != VM_EXIT_OK) goto done;
-    if (vm_mesh_clone(m, &before) < 0 || vm_report_history_create(cli.ctx, &hist) < 0) {
+    if ((rc = vm_cli_report_open(&cli, report_dir, title, &report, &hist)) != VM_EXIT_OK)
+      goto done;
+    if (vm_mesh_clone(m, &before) < 0) {
       vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
       rc = VM_EXIT_INPUT;
       goto done;

@@ -204,7 +204,7 @@ void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
         for (int k = 0; k < 3; k++) x[9 + 3 * i + k] = x[3 * i + k] + h[c[i]] * u[k];
       }
       double q = pr_prism_quality(x);
-      if (q >= 0.5 || (s == 0 && q > 0.05 && widens(x))) taken = 1;
+      if (q >= 0.5 || (s == 0 && q > PR_FAIR_QUALITY && widens(x))) taken = 1;
       if (taken || q > bq) {
         bq = q;
         memcpy(bx, x, sizeof bx);

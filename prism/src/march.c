@@ -44,6 +44,15 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
   return q;
 }
 
+#define TILT_LIMIT 5.0 /* degrees: the first layer's orthogonality target */
+/* Angle in degrees between side edge o -> x and the unit normal n (180 for
+ * an edge of zero length). */
+static double tilt_deg(const double *o, const double *x, const double *n) {
+  double e[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
+  double l = pr_norm(e), cs = l > 0 ? pr_dot(e, n) / l : -1;
+  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+}
+
 /* Column v stood up at the wall (along its normal; a column at a sharp
  * edge or corner along its blended direction, p->dir): each of levels
  * 1..nm keeps its height above the wall's tangent plane (its component
@@ -278,15 +287,10 @@ static int orthogonal_first_level(vm_prism *p) {
 
 /* Tilt of column v's first side edge from its wall normal, in degrees. */
 static double first_tilt(const vm_prism *p, int64_t v) {
-  size_t lsz = (size_t)(3 * p->nw);
-  double e[3];
-  for (int c = 0; c < 3; c++) e[c] = p->lev[lsz + 3 * v + c] - p->wall[3 * v + c];
-  double n = pr_norm(e), cs = n > 0 ? pr_dot(e, p->vnrm + 3 * v) / n : -1;
-  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+  return tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
 }
 
 #define TILT_SOLVE 4.5    /* degrees: smooth columns the patch solve takes */
-#define TILT_LIMIT 5.0    /* degrees: the first layer's orthogonality target */
 #define SOLVE_RINGS 2     /* rings of neighbours that move with them */
 #define SOLVE_WEIGHT 1e4  /* weight (12) of the first layer in the patch */
 #define SOLVE_ITER 50     /* Newton iterations per chunk of a patch solve */
@@ -378,7 +382,7 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
         memcpy(x + 3 * i, base + 3 * v, 3 * sizeof *x);
         memcpy(x + 9 + 3 * i, up + 3 * v, 3 * sizeof *x);
       }
-      int own = k > 0 && pr_prism_quality(x) > 0.05;
+      int own = k > 0 && pr_prism_quality(x) > PR_FAIR_QUALITY;
       memcpy((double *)tf->data + 18 * e, own ? x : tg + 18 * t, sizeof x);
       w[e] = k == 0 ? SOLVE_WEIGHT : 1;
     }
@@ -401,12 +405,10 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
     st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, SOLVE_ITER, VM_PRISM_PHASE_MARCH, &it);
     if (st < 0 || it < SOLVE_ITER) break;
     int64_t left = 0;
-    for (int64_t v = 0; v < nw; v++) {
-      if (ring[v] < 0 || !p->smooth[v]) continue;
-      double e[3];
-      for (int c = 0; c < 3; c++) e[c] = m->xyz[3 * (nc + vid[v]) + c] - p->wall[3 * v + c];
-      left += pr_dot(e, p->vnrm + 3 * v) < cos(TILT_LIMIT * PR_PI / 180) * pr_norm(e);
-    }
+    for (int64_t v = 0; v < nw; v++)
+      if (ring[v] >= 0 && p->smooth[v])
+        left += tilt_deg(p->wall + 3 * v, m->xyz + 3 * (nc + vid[v]), p->vnrm + 3 * v) >
+                TILT_LIMIT;
     if (!left || left >= prev) break;
     prev = left;
   }
@@ -596,7 +598,7 @@ int vm_prism_march(vm_prism *p) {
         const int32_t *c = m2->conn + 6 * (nt + t);
         double x[18];
         for (int q = 0; q < 6; q++) memcpy(x + 3 * q, m2->xyz + 3 * (int64_t)c[q], 3 * sizeof *x);
-        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > 0.05 ? x : tg + 18 * t, sizeof x);
+        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > PR_FAIR_QUALITY ? x : tg + 18 * t, sizeof x);
       }
       /* a split that cannot be made valid ends the marching early (the
        * paper's option): levels 0..k are valid, and so is the remainder
@@ -786,14 +788,11 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     int64_t ns = 0, over = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v]) continue;
-      double e[3];
-      for (int c = 0; c < 3; c++) e[c] = L[lsz + 3 * v + c] - p->wall[3 * v + c];
-      double cs = pr_dot(e, p->vnrm + 3 * v) / pr_norm(e);
-      double a = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+      double a = tilt_deg(p->wall + 3 * v, L + lsz + 3 * v, p->vnrm + 3 * v);
       dmax = a > dmax ? a : dmax;
       dsum += a;
       ns++;
-      over += a > 5;
+      over += a > TILT_LIMIT;
     }
     R.normal_dev_over5 = over;
     R.normal_dev_max = dmax;

@@ -12,6 +12,8 @@
 
 #define PR_PI 3.14159265358979323846
 
+/* A prism at least this good (pr_prism_quality) may be its own target. */
+#define PR_FAIR_QUALITY 0.05
 /* Element field holding the per-prism target vertex coordinates. */
 #define PRISM_TARGET_FIELD "vm_prism_target"
 
