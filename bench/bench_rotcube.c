@@ -30,7 +30,7 @@ static void usage(void) {
           "penalty|oneway|barrier|adaptive|foldover]\n"
           "                     [--eps-inner N] [--local-threshold N] [--theta T]\n"
           "                     [--theta-untangle T]\n"
-          "                     [--explicit | --newton] [--threads N] [--verbose] [--where]\n"
+          "                     [--explicit | --newton] [--staged] [--qi-steps N] [--threads N] [--verbose] [--where]\n"
           "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all)\n");
 }
 
@@ -105,6 +105,11 @@ int main(int argc, char **argv) {
       i++;
     } else if (!strcmp(a, "--where")) {
       where = 1;
+    } else if (!strcmp(a, "--staged")) {
+      o.staged = 1;
+    } else if (!strcmp(a, "--qi-steps")) {
+      o.qi_steps = atoi(v);
+      i++;
     } else if (!strcmp(a, "--verbose")) {
       g.verbose = 1;
     } else {

@@ -355,8 +355,8 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
   vm_measure_scalar_fn scalar = p->ops->scalar;
   int nn = R->nnodes;
   double F = 0;
-  node3 nv[64];
-  double fv[64][6];
+  node3 nv[VM_QRULE_MAX_NODES];
+  double fv[VM_QRULE_MAX_NODES][6];
   for (int j = 0; j < nn; j++) {
     node3 *v = order ? &nv[j] : &nv[0];
     double *f = order ? fv[j] : fv[0];
@@ -878,7 +878,7 @@ int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p)) \
     reduction(+ : inv) reduction(min : mind, phimin, psimin)
   for (int64_t i = 0; i < p->nae; i++) {
-    double s[64], det[64];
+    double s[VM_QRULE_MAX_NODES], det[VM_QRULE_MAX_NODES];
     elem_sd(p, i, x, s, det);
     int nn = (int)(p->noff[i + 1] - p->noff[i]);
     for (int j = 0; j < nn; j++) {
@@ -906,7 +906,7 @@ int vm_problem_node_dets(vm_problem *p, const double *x, double *det) {
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_dets: NULL argument") : VM_ERR_ARG;
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
   for (int64_t i = 0; i < p->nae; i++) {
-    double s[64];
+    double s[VM_QRULE_MAX_NODES];
     elem_sd(p, i, x, s, det + p->noff[i]);
   }
   return VM_OK;

@@ -426,7 +426,7 @@ int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
 
 int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
   if (!p) return VM_ERR_ARG;
-  if (rule != VM_RULE_CORNER && rule != VM_RULE_GEOMETRIC)
+  if (rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
     return vm_error(p->ctx, VM_ERR_ARG, "unknown quadrature rule %d", (int)rule);
   int64_t *noff, nn;
   int32_t *nelem;

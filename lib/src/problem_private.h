@@ -54,7 +54,7 @@ struct vm_problem {
    * local vertices (a < b) coupled by some node of the rule */
   int rule;
   const vm_qrule *qr[VM_NTYPES];
-  vm_nodepat pat[VM_NTYPES][64];
+  vm_nodepat pat[VM_NTYPES][VM_QRULE_MAX_NODES];
   int npair[VM_NTYPES];
   signed char pair[VM_NTYPES][VM_MAX_PAIRS][2];
 
@@ -73,8 +73,8 @@ struct vm_problem {
   double *tgt_fld;  /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
   double *Snode;    /* nn*d*d or NULL */
   double *wnode;    /* nn or NULL */
-  double Sid[VM_NTYPES][64 * 9];
-  double wid[VM_NTYPES][64];
+  double Sid[VM_NTYPES][VM_QRULE_MAX_NODES * 9];
+  double wid[VM_NTYPES][VM_QRULE_MAX_NODES];
   int sdiag[VM_NTYPES]; /* ideal S of every node of the type is diagonal */
   double tvol;      /* sum of w beta kappa det T over all nodes */
 

@@ -29,6 +29,14 @@ static const vm_qnode prism_corner[6] = {
  * directions, oriented along +xi (a subset of the geometric rule) */
 static vm_qnode hex_corner[8];
 static vm_qnode hex_geom[64];
+/* the 6 Kuhn tets of the 6-tet split (0,1,2,6), (0,2,3,6), (0,3,7,6),
+ * (0,7,4,6), (0,4,5,6), (0,5,1,6): det T = 1 on the unit cube each */
+static const vm_qnode hex_split[6] = {
+    {{1, 2, 6}, {0, 0, 0}, 1.0 / 6}, {{2, 3, 6}, {0, 0, 0}, 1.0 / 6},
+    {{3, 7, 6}, {0, 0, 0}, 1.0 / 6}, {{7, 4, 6}, {0, 0, 0}, 1.0 / 6},
+    {{4, 5, 6}, {0, 0, 0}, 1.0 / 6}, {{5, 1, 6}, {0, 0, 0}, 1.0 / 6}};
+static vm_qnode hex_corner_split[14];
+static vm_qnode hex_geom_split[70];
 static vm_qnode prism_geom[12];
 /* set (release) only after the tables and the rule array are complete */
 static atomic_int tables_ready;
@@ -76,6 +84,23 @@ static void build_tables(void) {
         q->tail[2] = (signed char)hexv(i, j, 0);
         q->beta = 1.0 / 8;
       }
+  /* corner + split: half the weight each */
+  for (int q = 0; q < 8; q++) {
+    hex_corner_split[q] = hex_corner[q];
+    hex_corner_split[q].beta = 1.0 / 16;
+  }
+  for (int q = 0; q < 6; q++) {
+    hex_corner_split[8 + q] = hex_split[q];
+    hex_corner_split[8 + q].beta = 1.0 / 12;
+  }
+  for (int q = 0; q < 64; q++) {
+    hex_geom_split[q] = hex_geom[q];
+    hex_geom_split[q].beta = 0.5 * hex_geom[q].beta;
+  }
+  for (int q = 0; q < 6; q++) {
+    hex_geom_split[64 + q] = hex_split[q];
+    hex_geom_split[64 + q].beta = 1.0 / 12;
+  }
   /* prism: columns 1, 2 are the base edges 0-1 and 0-2 of the bottom (weight
    * 1 - xi3) or top (xi3) triangle, column 3 a side edge (weight lambda_i);
    * beta = (1/3 same layer, 1/6 different) * 1/3 */
@@ -95,8 +120,9 @@ static void build_tables(void) {
 }
 
 const vm_qrule *vm_qrule_get(int type, int rule) {
-  static vm_qrule rules[VM_NTYPES][2];
-  if (type < 0 || type >= VM_NTYPES) return NULL;
+  static vm_qrule rules[VM_NTYPES][5];
+  if (type < 0 || type >= VM_NTYPES || rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
+    return NULL;
   if (!atomic_load_explicit(&tables_ready, memory_order_acquire)) {
 #ifdef _OPENMP
 #pragma omp critical(vm_qrule_init)
@@ -111,15 +137,22 @@ const vm_qrule *vm_qrule_get(int type, int rule) {
             (vm_qrule){VM_PYRAMID, VM_RULE_CORNER, 3, 4, 1.0 / 3, pyr_nodes};
         rules[VM_PRISM][0] = (vm_qrule){VM_PRISM, VM_RULE_CORNER, 3, 6, 0.5, prism_corner};
         rules[VM_HEX][0] = (vm_qrule){VM_HEX, VM_RULE_CORNER, 3, 8, 1.0, hex_corner};
-        for (int t = 0; t < VM_NTYPES; t++) rules[t][1] = rules[t][0];
+        for (int t = 0; t < VM_NTYPES; t++)
+          for (int r = 1; r < 5; r++) rules[t][r] = rules[t][0];
         rules[VM_PRISM][1] =
             (vm_qrule){VM_PRISM, VM_RULE_GEOMETRIC, 3, 12, 0.5, prism_geom};
         rules[VM_HEX][1] = (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC, 3, 64, 1.0, hex_geom};
+        rules[VM_HEX][2] = (vm_qrule){VM_HEX, VM_RULE_SPLIT, 3, 6, 1.0, hex_split};
+        rules[VM_HEX][3] =
+            (vm_qrule){VM_HEX, VM_RULE_CORNER_SPLIT, 3, 14, 1.0, hex_corner_split};
+        rules[VM_PRISM][4] = rules[VM_PRISM][1];
+        rules[VM_HEX][4] =
+            (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC_SPLIT, 3, 70, 1.0, hex_geom_split};
         atomic_store_explicit(&tables_ready, 1, memory_order_release);
       }
     }
   }
-  return &rules[type][rule == VM_RULE_GEOMETRIC ? 1 : 0];
+  return &rules[type][rule];
 }
 
 void vm_elem_ideal(int type, double ref[VM_MAX_ELEM_VERTS * 3]) {

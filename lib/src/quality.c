@@ -138,7 +138,7 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
   int have_size = o.target_size > 0 || tsz;
 
   /* per type: node rules, target inverse at unit size, ideal SJ normalizer */
-  double tinv[VM_NTYPES][64 * 9];
+  double tinv[VM_NTYPES][VM_QRULE_MAX_NODES * 9];
   double sj_ideal[VM_NTYPES];
   const vm_qrule *rules[VM_NTYPES], *corner[VM_NTYPES];
   double tinv_c[VM_NTYPES][8 * 9];

@@ -25,6 +25,8 @@ static vm_minimizer_kind case_solver = VM_MINIMIZER_IMPLICIT;
 static double case_theta_untangle = 0;
 /* iterations per eps of the foldover rule (0: the default) */
 static int case_eps_inner = 0;
+/* vm_volume_opts.staged */
+static int case_staged = 0;
 
 /* Untangle a generated rotated cube; check validity with the independent
  * quality code and that fixed vertices did not move by a single bit. */
@@ -49,8 +51,15 @@ static void untangle_case(vm_ctx *ctx, const char *name, int n, double frac, int
   o.solver = case_solver;
   o.theta_untangle = case_theta_untangle;
   if (case_eps_inner > 0) o.eps_inner = case_eps_inner;
+  o.staged = case_staged;
   vm_volume_report r;
   int st = vm_volume_run(ctx, m, NULL, &o, &r);
+  if (case_staged)
+    CHECK(r.split_valid && r.split_M_init > 0 && r.split_M_max >= r.split_M_init &&
+              r.time_split <= r.time_untangle,
+          "%s: the split was tangled (M %lld, max %lld) and untangled first (%.2f s of %.2f)",
+          name, (long long)r.split_M_init, (long long)r.split_M_max, r.time_split,
+          r.time_untangle);
   CHECK(st == VM_OK, "%s: status %d (%s), M %lld -> %lld", name, st, vm_ctx_error(ctx),
         (long long)r.M_init, (long long)r.M_final);
   CHECK(r.M_init > 0, "%s: the problem is tangled (M_init %lld)", name, (long long)r.M_init);
@@ -119,6 +128,79 @@ static void amg_fallback(vm_ctx *ctx) {
           jacobi_steps, r.iter_untangle, (long long)r.M_init, (long long)r.M_final, st);
   vm_free(ctx, ref);
   vm_mesh_destroy(&m);
+}
+
+/* Node determinants of `rule` on the rotated cube (hex or 6 tets per hex). */
+static double *cube_dets(vm_ctx *ctx, int cells, int rule, int64_t *nn) {
+  vm_rotcube_opts ro = vm_rotcube_opts_default();
+  ro.n = 4;
+  ro.alpha = 2.0;
+  ro.cells = cells;
+  vm_mesh *m;
+  vm_problem *P;
+  double *d = NULL;
+  *nn = 0;
+  if (vm_gen_rotated_cube(ctx, &ro, &m, NULL)) return NULL;
+  /* a jiggle so that no two nodes agree by symmetry */
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->vflag[v] != VM_VERTEX_FIXED)
+      for (int k = 0; k < 3; k++) m->xyz[3 * v + k] += 0.01 * sin(1.7 * (double)v + k);
+  if (vm_problem_create(ctx, m, &P) == VM_OK) {
+    if (vm_problem_set_rule(P, (vm_rule)rule) == VM_OK &&
+        vm_problem_set_target_ideal(P, 0.25) == VM_OK) {
+      *nn = vm_problem_num_nodes(P);
+      d = vm_alloc_array(ctx, (size_t)*nn, sizeof *d);
+      if (d && vm_problem_node_dets(P, m->xyz, d) < 0) *nn = 0;
+    }
+    vm_problem_destroy(&P);
+  }
+  vm_mesh_destroy(&m);
+  return d;
+}
+
+/* The split rule of a hex mesh is its 6-tet split, node by node (the
+ * generator's --tets mesh: same vertices, the same 6 tets per cube in the
+ * same order); the guarded rules are the base rule's nodes then the split's. */
+static void split_rules(vm_ctx *ctx) {
+  int64_t nt, ns, nc, ncs, ng, ngs;
+  double *t = cube_dets(ctx, VM_GEN_TETS, VM_RULE_CORNER, &nt);
+  double *sp = cube_dets(ctx, VM_GEN_HEX, VM_RULE_SPLIT, &ns);
+  double *c = cube_dets(ctx, VM_GEN_HEX, VM_RULE_CORNER, &nc);
+  double *cs = cube_dets(ctx, VM_GEN_HEX, VM_RULE_CORNER_SPLIT, &ncs);
+  double *g = cube_dets(ctx, VM_GEN_HEX, VM_RULE_GEOMETRIC, &ng);
+  double *gs = cube_dets(ctx, VM_GEN_HEX, VM_RULE_GEOMETRIC_SPLIT, &ngs);
+  CHECK(nt == 64 * 6 && ns == nt && nc == 64 * 8 && ncs == 64 * 14 && ng == 64 * 64 &&
+            ngs == 64 * 70,
+        "split rules: node counts %lld %lld %lld %lld %lld %lld", (long long)nt, (long long)ns,
+        (long long)nc, (long long)ncs, (long long)ng, (long long)ngs);
+  if (nt == 64 * 6 && ns == nt && nc == 64 * 8 && ncs == 64 * 14 && ng == 64 * 64 &&
+      ngs == 64 * 70) {
+    int64_t bad = 0, neg = 0;
+    for (int64_t q = 0; q < nt; q++) {
+      /* the ideal tet and the cube's Kuhn tet differ in T: compare signs and
+       * ratios, the same for every node of the mesh */
+      neg += sp[q] <= 0;
+      if (fabs(sp[q] / t[q] - sp[0] / t[0]) > 1e-9 * fabs(sp[0] / t[0])) bad++;
+    }
+    CHECK(bad == 0, "split rule = the 6-tet split: %lld of %lld nodes differ", (long long)bad,
+          (long long)nt);
+    CHECK(neg > 0, "the test problem is tangled (%lld split nodes inverted)", (long long)neg);
+    int64_t bc = 0, bg = 0;
+    for (int64_t e = 0; e < 64; e++) {
+      for (int q = 0; q < 8; q++) bc += cs[14 * e + q] != c[8 * e + q];
+      for (int q = 0; q < 6; q++) bc += cs[14 * e + 8 + q] != sp[6 * e + q];
+      for (int q = 0; q < 64; q++) bg += gs[70 * e + q] != g[64 * e + q];
+      for (int q = 0; q < 6; q++) bg += gs[70 * e + 64 + q] != sp[6 * e + q];
+    }
+    CHECK(bc == 0 && bg == 0, "guarded rules: base nodes then split nodes (%lld, %lld differ)",
+          (long long)bc, (long long)bg);
+  }
+  vm_free(ctx, t);
+  vm_free(ctx, sp);
+  vm_free(ctx, c);
+  vm_free(ctx, cs);
+  vm_free(ctx, g);
+  vm_free(ctx, gs);
 }
 
 /* The same run twice gives the same bits. */
@@ -212,6 +294,12 @@ int main(void) {
   case_eps_inner = 3;
   untangle_case(ctx, "tets n=16 7pi/8 foldover", 16, 0.875, VM_GEN_TETS, VM_UNTANGLE_FOLDOVER,
                 VM_RULE_CORNER, NULL);
+  /* the pi cube, which no direct schedule untangles as hexes: its split
+   * first, then the corner tets with the split held valid (n = 16: ~11 s) */
+  case_staged = 1;
+  untangle_case(ctx, "hex n=16 pi staged", 16, 1.0, VM_GEN_HEX, VM_UNTANGLE_FOLDOVER,
+                VM_RULE_CORNER, NULL);
+  case_staged = 0;
   case_eps_inner = 0;
   case_theta_untangle = 0;
   case_solver = VM_MINIMIZER_NEWTON;
@@ -222,6 +310,7 @@ int main(void) {
   untangle_case(ctx, "hex n=12 3pi/8 newton", 12, 0.375, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
                 VM_RULE_CORNER, NULL);
   case_solver = VM_MINIMIZER_IMPLICIT;
+  split_rules(ctx);
   determinism(ctx);
   impossible(ctx);
   amg_fallback(ctx);

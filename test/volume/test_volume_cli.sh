@@ -26,6 +26,23 @@ check 'grep -q "verify: every quadrature simplex (corner rule) positively orient
 check '[ $? -eq 0 ]' "the output is valid by vm-quality"
 check '[ ! -e "$dir/out.vtk.tmp"* ] 2>/dev/null; true' "no temporary files left"
 
+# --staged on the pi-rotated cube (n = 16: two free layers between the fixed
+# boundary and the fixed inner cube), which the default schedule leaves
+# tangled: the 6-tet split, then the corners with the split held valid
+"$gen" rotcube --n 16 --angle pi "$dir/pi.vtk"
+"$vol" --staged --threads 2 --progress-every 20 --json "$dir/pi.vtk" "$dir/pi-out.vtk" \
+  >"$dir/pi.json" 2>"$dir/pi.err"
+rc=$?
+check '[ $rc -eq 0 ]' "vm-volume --staged exits 0 on the pi cube, n = 16 (got $rc)"
+check 'grep -q "\"staged\": true" "$dir/pi.json" && grep -q "\"split_valid\": true" "$dir/pi.json" &&
+  grep -q "\"method\": \"foldover\"" "$dir/pi.json"' "JSON: staged, split untangled, foldover implied"
+check 'grep -q "^split  *it" "$dir/pi.err" && grep -q "^guarded  *it" "$dir/pi.err" &&
+  grep -q "^optimize  *it" "$dir/pi.err"' "progress lines of the split, guarded and optimize phases"
+check 'grep -q "staged: the 6-tet split.s M 1720 .* untangled after" "$dir/pi.err"' \
+  "the split's own count is reported"
+"$qual" --require-valid "$dir/pi-out.vtk" >/dev/null
+check '[ $? -eq 0 ]' "the staged output is valid by vm-quality"
+
 # --slip-boundary: the boundary slides on the cube's faces and edges; the
 # corners and the inner cube stay; the file's fields pass through
 "$gen" rotcube --n 8 --angle pi/2 --free-boundary "$dir/slip.vtk"

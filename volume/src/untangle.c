@@ -28,6 +28,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.opt_iter = 100;
   o.local_threshold = 100;
   o.local_rings = 3;
+  o.eps_restart = 1e-2;
   return o;
 }
 
@@ -57,12 +58,15 @@ typedef struct {
   int64_t nnodes;
   double *dets;     /* per node, at the last statistics */
   double *node_eps; /* one-way penalty */
+  int split_stage;  /* staged: untangling the 6-tet split (M_max, best not kept) */
+  uint8_t *guard;   /* staged: nodes kept admissible (eps = delta0), or NULL */
   double *best;     /* coordinates with the fewest inverted nodes */
   int64_t best_M;
   int64_t M;        /* at the last statistics */
   double min_det;
   double eps;
   const char *phase;
+  const char *phase_name; /* of the global untangling phase */
   int phase_iter;
   int total_iter;
   int go_local;     /* the global phase stops when few nodes remain inverted */
@@ -73,6 +77,7 @@ typedef struct {
   double pressure;  /* adaptive: multiplier of (35), halved on stalls */
   int block_iter;   /* foldover: iterations at the current eps */
   double F_block0;  /* foldover: F before the first of them */
+  double eps_restart; /* foldover: least eps after a stalled local round */
   double t0;
 } ut_state;
 
@@ -90,12 +95,19 @@ static int stats(ut_state *s, const double *x) {
   double mn = INFINITY;
   for (int64_t q = 0; q < s->nnodes; q++) {
     if (s->dets[q] <= 0) M++;
-    if (s->dets[q] < mn) mn = s->dets[q];
+    /* a guard's small positive det is not what eps should follow */
+    if (s->dets[q] < mn && (!s->guard || !s->guard[q] || s->dets[q] <= 0)) mn = s->dets[q];
   }
   s->M = M;
   s->min_det = mn;
-  if (M > s->rep->M_max) s->rep->M_max = M;
-  if (M < s->best_M) {
+  if (s->split_stage) {
+    if (M > s->rep->split_M_max) s->rep->split_M_max = M;
+  } else if (M > s->rep->M_max) {
+    s->rep->M_max = M;
+  }
+  /* the split's counts are not the rule's (the guarded stage's are: its
+   * split nodes stay positive) */
+  if (!s->split_stage && M < s->best_M) {
     s->best_M = M;
     memcpy(s->best, x, (size_t)s->m->nv * 3 * sizeof *x);
   }
@@ -145,7 +157,8 @@ static int update_eps(ut_state *s, int first) {
      * of that block, which fixes the new eps: chi_eps'(D) = mu chi_eps(D)
      * <=> eps' = 2 sqrt(mu' (mu' - D)) with mu' = mu chi_eps(D) */
     if (first) {
-      s->eps = neg > 0 ? neg : o->delta0;
+      s->eps = fmax(neg > 0 ? neg : o->delta0, s->eps_restart);
+      s->eps_restart = 0;
       s->block_iter = 0;
       break;
     }
@@ -168,6 +181,15 @@ static int update_eps(ut_state *s, int first) {
       int st = vm_problem_set_node_eps(s->P, s->node_eps);
       if (st < 0) return st;
     }
+  }
+  if (s->guard) {
+    /* staged: the split's nodes, all positive, are held there by the
+     * smallest eps (a wall of height ~ 1/delta0 at det = 0) */
+    int oneway = o->method == VM_UNTANGLE_PENALTY_ONEWAY;
+    for (int64_t q = 0; q < s->nnodes; q++)
+      s->node_eps[q] = s->guard[q] ? o->delta0 : oneway ? s->node_eps[q] : s->eps;
+    int st = vm_problem_set_node_eps(s->P, s->node_eps);
+    if (st < 0) return st;
   }
   prm.eps = s->eps;
   return vm_problem_set_params(s->P, &prm);
@@ -315,6 +337,9 @@ static int local_phase(ut_state *s, int *budget) {
        * far below |min det|, where the penalty of the folds left is so
        * steep that the explicit steps no longer move them */
       s->eps = 0;
+      /* and not below eps_restart: a fold squeezed flat (det ~ -1e-10)
+       * would restart from an eps too small to lift it */
+      s->eps_restart = s->o->eps_restart;
     } else {
       stalls = 0;
     }
@@ -344,6 +369,73 @@ static double qi_feasible_t(ut_state *s, double lo) {
   return a;
 }
 
+/* Global untangling, local rounds, and back to global if they stall. */
+static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budget) {
+  const vm_volume_opts *o = s->o;
+  vm_measure_params prm = *prm0;
+  vm_minimize_result res;
+  int st = VM_OK;
+  for (int round = 0; s->M > 0 && *budget > 0 && !out_of_time(s) && round < 50; round++) {
+    vm_measure_kind k = o->method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
+    prm.drop_chi2 = 1;
+    vm_measure_params pu = prm;
+    if (o->theta_untangle > 0) pu.theta = o->theta_untangle;
+    if ((st = vm_problem_set_measure(s->P, k, &pu)) < 0) return st;
+    if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
+    s->go_local = o->local_threshold > 0;
+    int64_t M0 = s->M;
+    st = run_phase(s, s->phase_name, o->solver, *budget, before_untangle, &res);
+    s->rep->iter_untangle += res.iterations;
+    *budget -= res.iterations > 0 ? res.iterations : 1;
+    if (st < 0) return st;
+    if ((st = stats(s, s->m->xyz)) < 0) return st;
+    if (s->M > 0 && s->M < o->local_threshold) {
+      vm_problem_set_measure(s->P, k, &prm);
+      if ((st = local_phase(s, budget)) < 0) return st;
+      vm_problem_set_node_eps(s->P, NULL);
+    }
+    if (s->M > 0 && s->M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
+  }
+  return st;
+}
+
+static int has_hex(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (m->etype[e] == VM_HEX) return 1;
+  return 0;
+}
+
+/* Switch the problem to `rule` for a stage: node arrays sized for it, the
+ * split's nodes of the guarded rules marked as guards. */
+static int set_stage_rule(ut_state *s, vm_rule rule) {
+  int st = vm_problem_set_rule(s->P, rule);
+  if (st < 0) return st;
+  s->nnodes = vm_problem_num_nodes(s->P);
+  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
+  vm_free(s->ctx, s->dets);
+  vm_free(s->ctx, s->node_eps);
+  vm_free(s->ctx, s->guard);
+  s->guard = NULL;
+  s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
+  s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
+  if (!s->dets || !s->node_eps) return VM_ERR_NOMEM;
+  if (rule == VM_RULE_CORNER_SPLIT || rule == VM_RULE_GEOMETRIC_SPLIT) {
+    /* the split's nodes follow the base rule's */
+    int first_guard = vm_qrule_get(VM_HEX, rule == VM_RULE_CORNER_SPLIT ? VM_RULE_CORNER
+                                                                         : VM_RULE_GEOMETRIC)
+                          ->nnodes;
+    if (!(s->guard = vm_alloc_array(s->ctx, nn, 1))) return VM_ERR_NOMEM;
+    const int32_t *nel = vm_problem_node_elements(s->P);
+    int64_t first = 0;
+    for (int64_t q = 0; q < s->nnodes; q++) {
+      if (q == 0 || nel[q] != nel[q - 1]) first = q;
+      s->guard[q] = s->m->etype[nel[q]] == VM_HEX && q - first >= first_guard;
+    }
+  }
+  s->eps = 0;
+  return VM_OK;
+}
+
 int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
                   const vm_volume_opts *opts, vm_volume_report *report) {
   vm_volume_opts o = opts ? *opts : vm_volume_opts_default();
@@ -358,6 +450,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
   s.surf = surf;
   s.t0 = now();
   s.best_M = INT64_MAX;
+  s.phase_name = "untangle";
   int st = vm_problem_create(ctx, m, &s.P);
   if (st < 0) return st;
   vm_measure_params prm = vm_measure_params_default();
@@ -381,28 +474,29 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
   rep.M_init = rep.M_max = s.M;
   int budget = o.max_iter;
   vm_minimize_result res;
-  /* global untangling, local rounds, and back to global if they stall */
-  for (int round = 0; s.M > 0 && budget > 0 && !out_of_time(&s) && round < 50; round++) {
-    vm_measure_kind k = o.method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
-    prm.drop_chi2 = 1;
-    vm_measure_params pu = prm;
-    if (o.theta_untangle > 0) pu.theta = o.theta_untangle;
-    if ((st = vm_problem_set_measure(s.P, k, &pu)) < 0) goto done;
-    if ((st = vm_problem_set_node_eps(s.P, NULL)) < 0) goto done;
-    s.go_local = o.local_threshold > 0;
-    int64_t M0 = s.M;
-    st = run_phase(&s, "untangle", o.solver, budget, before_untangle, &res);
-    rep.iter_untangle += res.iterations;
-    budget -= res.iterations > 0 ? res.iterations : 1;
+  if (o.staged && (o.rule == VM_RULE_CORNER || o.rule == VM_RULE_GEOMETRIC) && has_hex(m) &&
+      s.M > 0) {
+    /* the 6-tet split first (the most freedom to find the twist), then the
+     * rule's nodes with the split kept admissible, then the rule alone */
+    s.split_stage = 1;
+    if ((st = set_stage_rule(&s, VM_RULE_SPLIT)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+    rep.split_M_init = s.M;
+    s.phase_name = "split";
+    st = untangle_rounds(&s, &prm, &budget);
+    s.split_stage = 0;
     if (st < 0) goto done;
-    if ((st = stats(&s, m->xyz)) < 0) goto done;
-    if (s.M > 0 && s.M < o.local_threshold) {
-      vm_problem_set_measure(s.P, k, &prm);
-      if ((st = local_phase(&s, &budget)) < 0) goto done;
-      vm_problem_set_node_eps(s.P, NULL);
+    rep.split_valid = s.M == 0;
+    rep.time_split = now() - s.t0;
+    if (s.M == 0) {
+      vm_rule g = o.rule == VM_RULE_CORNER ? VM_RULE_CORNER_SPLIT : VM_RULE_GEOMETRIC_SPLIT;
+      if ((st = set_stage_rule(&s, g)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+      s.phase_name = "guarded";
+      if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
     }
-    if (s.M > 0 && s.M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
+    if ((st = set_stage_rule(&s, o.rule)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+    s.phase_name = "untangle";
   }
+  if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
   if (s.M > 0 && s.best_M < s.M) memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
   rep.time_untangle = now() - s.t0;
   if (s.M == 0 && !out_of_time(&s)) {
@@ -445,11 +539,17 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
 done:
   rep.time_total = now() - s.t0;
   rep.timed_out = out_of_time(&s);
+  if (st == VM_ERR_INTERRUPTED && (s.split_stage || s.guard)) {
+    /* interrupted while staged: count the rule's own nodes again */
+    s.split_stage = 0;
+    if (set_stage_rule(&s, o.rule) < 0 || stats(&s, m->xyz) < 0) s.M = INT64_MAX;
+  }
   if (st == VM_ERR_INTERRUPTED && s.best_M < INT64_MAX && s.M > s.best_M)
     memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
   vm_free(ctx, s.dets);
   vm_free(ctx, s.node_eps);
   vm_free(ctx, s.best);
+  vm_free(ctx, s.guard);
   vm_problem_destroy(&s.P);
   if (report) *report = rep;
   return st;

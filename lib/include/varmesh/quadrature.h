@@ -12,8 +12,16 @@ extern "C" {
 typedef enum {
   VM_RULE_CORNER = 0,    /* corner simplices: tri/tet itself, quad 4 triangles,
                             hex 8 tets, prism 6 tets, pyramid 4 base-corner tets */
-  VM_RULE_GEOMETRIC = 1  /* (24): hex 64 compound matrices, prism 12; other
+  VM_RULE_GEOMETRIC = 1, /* (24): hex 64 compound matrices, prism 12; other
                             types use their corner rule, which is geometric */
+  VM_RULE_SPLIT = 2,     /* hex: the 6 Kuhn tets around the 0-6 diagonal (the
+                            mesh's 6-tet split); other types their corner rule.
+                            For untangling only: no quality meaning of its own */
+  VM_RULE_CORNER_SPLIT = 3,   /* hex: the 8 corner tets, then the 6 Kuhn
+                                 tets (nodes 8..13); other types corner */
+  VM_RULE_GEOMETRIC_SPLIT = 4 /* hex: the 64 nodes of (24), then the 6 Kuhn
+                                 tets (nodes 64..69); prism its geometric
+                                 rule; other types corner */
 } vm_rule;
 
 /* One quadrature node: a d x d "compound" edge matrix whose column k is
@@ -30,6 +38,9 @@ typedef struct vm_qnode {
   double beta;
 } vm_qnode;
 
+/* The most nodes of any rule (hex, VM_RULE_GEOMETRIC_SPLIT). */
+enum { VM_QRULE_MAX_NODES = 70 };
+
 typedef struct vm_qrule {
   int type;      /* element type */
   int rule;      /* the rule actually used (VM_RULE_CORNER or _GEOMETRIC) */
@@ -39,7 +50,7 @@ typedef struct vm_qrule {
   const vm_qnode *nodes;
 } vm_qrule;
 
-/* The rule for an element type; NULL for an unknown type. */
+/* The rule for an element type; NULL for an unknown type or rule. */
 const vm_qrule *vm_qrule_get(int type, int rule);
 
 /* Vertices of the ideal element with unit edge length (equilateral

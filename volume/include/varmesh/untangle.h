@@ -67,6 +67,14 @@ typedef struct vm_volume_opts {
   int local_threshold;       /* go local when fewer nodes than this are inverted (100) */
   int local_rings;           /* rings of elements around inverted ones (default 3) */
   int qi_steps;              /* quasi-isometric continuation steps (0: off) */
+  int staged;                /* meshes with hexahedra, corner or geometric rule:
+                                untangle the hexes' 6-tet split first, then the
+                                rule's nodes with the split held admissible
+                                (VM_RULE_CORNER_SPLIT / _GEOMETRIC_SPLIT, the
+                                split's nodes at eps = delta0), then the rule */
+  double eps_restart;        /* foldover: eps after a stalled local round is at
+                                least this (default 1e-2; det C is relative to
+                                the target) */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;
@@ -87,6 +95,11 @@ typedef struct vm_volume_report {
   double phi_min, psi_min, min_det; /* final, over all nodes */
   double t_reached;         /* quasi-iso: the largest t with a finite W_t (0 if off) */
   int valid;                /* M_final == 0 */
+  int64_t split_M_init;     /* staged: inverted split tets at the start */
+  int64_t split_M_max;      /* staged: the most while untangling the split (M_max
+                               counts the rule's nodes, split stage excluded) */
+  int split_valid;          /* staged: the split was untangled */
+  double time_split;        /* staged: seconds until then */
   vm_stop_reason last_stop; /* how the last minimizer run stopped */
 } vm_volume_report;
 
