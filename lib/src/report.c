@@ -950,7 +950,8 @@ int vm_report_convergence(vm_report *r, const char *name, const char *caption,
     cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
     snprintf(buf, sizeof buf, "M: %lld after the first iteration, %lld at the end",
              (long long)h->M[0], (long long)h->M[h->n - 1]);
-    text(cr, p[0].x0 + p[0].w - 8, p[0].y0 + 4, 11, 1, 0, buf);
+    /* on the title row, clear of the phase names inside the panel */
+    text(cr, p[0].x0 + p[0].w, p[0].y0 - 8, 11, 1, 1, buf);
   }
   return canvas_finish(r, &c, name, caption);
 }
