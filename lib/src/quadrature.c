@@ -47,6 +47,14 @@ static int hexv(int i, int j, int k) {
   return v[i][j][k];
 }
 
+/* dst: the n nodes of base, then the 6 of the split, each at half its weight */
+static void with_split(vm_qnode *dst, const vm_qnode *base, int n) {
+  for (int q = 0; q < n + 6; q++) {
+    dst[q] = q < n ? base[q] : hex_split[q - n];
+    dst[q].beta *= 0.5;
+  }
+}
+
 static void build_tables(void) {
   /* (24) for the trilinear map: column 1 is the xi1-edge at (j, k) with
    * weight b_j(xi2) b_k(xi3); column 2 the xi2-edge at (i', k'), column 3 the
@@ -84,23 +92,8 @@ static void build_tables(void) {
         q->tail[2] = (signed char)hexv(i, j, 0);
         q->beta = 1.0 / 8;
       }
-  /* corner + split: half the weight each */
-  for (int q = 0; q < 8; q++) {
-    hex_corner_split[q] = hex_corner[q];
-    hex_corner_split[q].beta = 1.0 / 16;
-  }
-  for (int q = 0; q < 6; q++) {
-    hex_corner_split[8 + q] = hex_split[q];
-    hex_corner_split[8 + q].beta = 1.0 / 12;
-  }
-  for (int q = 0; q < 64; q++) {
-    hex_geom_split[q] = hex_geom[q];
-    hex_geom_split[q].beta = 0.5 * hex_geom[q].beta;
-  }
-  for (int q = 0; q < 6; q++) {
-    hex_geom_split[64 + q] = hex_split[q];
-    hex_geom_split[64 + q].beta = 1.0 / 12;
-  }
+  with_split(hex_corner_split, hex_corner, 8);
+  with_split(hex_geom_split, hex_geom, 64);
   /* prism: columns 1, 2 are the base edges 0-1 and 0-2 of the bottom (weight
    * 1 - xi3) or top (xi3) triangle, column 3 a side edge (weight lambda_i);
    * beta = (1/3 same layer, 1/6 different) * 1/3 */
@@ -120,9 +113,9 @@ static void build_tables(void) {
 }
 
 const vm_qrule *vm_qrule_get(int type, int rule) {
-  static vm_qrule rules[VM_NTYPES][5];
-  if (type < 0 || type >= VM_NTYPES || rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
-    return NULL;
+  enum { NRULES = VM_RULE_GEOMETRIC_SPLIT + 1 };
+  static vm_qrule rules[VM_NTYPES][NRULES];
+  if (type < 0 || type >= VM_NTYPES || rule < VM_RULE_CORNER || rule >= NRULES) return NULL;
   if (!atomic_load_explicit(&tables_ready, memory_order_acquire)) {
 #ifdef _OPENMP
 #pragma omp critical(vm_qrule_init)
@@ -138,7 +131,7 @@ const vm_qrule *vm_qrule_get(int type, int rule) {
         rules[VM_PRISM][0] = (vm_qrule){VM_PRISM, VM_RULE_CORNER, 3, 6, 0.5, prism_corner};
         rules[VM_HEX][0] = (vm_qrule){VM_HEX, VM_RULE_CORNER, 3, 8, 1.0, hex_corner};
         for (int t = 0; t < VM_NTYPES; t++)
-          for (int r = 1; r < 5; r++) rules[t][r] = rules[t][0];
+          for (int r = 1; r < NRULES; r++) rules[t][r] = rules[t][0];
         rules[VM_PRISM][1] =
             (vm_qrule){VM_PRISM, VM_RULE_GEOMETRIC, 3, 12, 0.5, prism_geom};
         rules[VM_HEX][1] = (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC, 3, 64, 1.0, hex_geom};

@@ -405,11 +405,8 @@ static int has_hex(const vm_mesh *m) {
   return 0;
 }
 
-/* Switch the problem to `rule` for a stage: node arrays sized for it, the
- * split's nodes of the guarded rules marked as guards. */
-static int set_stage_rule(ut_state *s, vm_rule rule) {
-  int st = vm_problem_set_rule(s->P, rule);
-  if (st < 0) return st;
+/* The per-node arrays sized for the problem's present rule; no guards. */
+static int size_node_arrays(ut_state *s) {
   s->nnodes = vm_problem_num_nodes(s->P);
   size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
   vm_free(s->ctx, s->dets);
@@ -418,7 +415,15 @@ static int set_stage_rule(ut_state *s, vm_rule rule) {
   s->guard = NULL;
   s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
   s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
-  if (!s->dets || !s->node_eps) return VM_ERR_NOMEM;
+  return s->dets && s->node_eps ? VM_OK : VM_ERR_NOMEM;
+}
+
+/* Switch the problem to `rule` for a stage: node arrays sized for it, the
+ * split's nodes of the guarded rules marked as guards. */
+static int set_stage_rule(ut_state *s, vm_rule rule) {
+  int st = vm_problem_set_rule(s->P, rule);
+  if (st < 0 || (st = size_node_arrays(s)) < 0) return st;
+  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
   if (rule == VM_RULE_CORNER_SPLIT || rule == VM_RULE_GEOMETRIC_SPLIT) {
     /* the split's nodes follow the base rule's */
     int first_guard = vm_qrule_get(VM_HEX, rule == VM_RULE_CORNER_SPLIT ? VM_RULE_CORNER
@@ -461,15 +466,13 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
   else
     st = vm_problem_set_target_ideal(s.P, o.target_size);
   if (st < 0) goto done;
-  s.nnodes = vm_problem_num_nodes(s.P);
-  rep.nodes = s.nnodes;
-  s.dets = vm_alloc_array(ctx, (size_t)(s.nnodes ? s.nnodes : 1), sizeof *s.dets);
-  s.node_eps = vm_alloc_array(ctx, (size_t)(s.nnodes ? s.nnodes : 1), sizeof *s.node_eps);
   s.best = vm_alloc_array(ctx, (size_t)m->nv * 3 + 1, sizeof *s.best);
-  if (!s.dets || !s.node_eps || !s.best) {
+  if (!s.best) {
     st = VM_ERR_NOMEM;
     goto done;
   }
+  if ((st = size_node_arrays(&s)) < 0) goto done;
+  rep.nodes = s.nnodes;
   if ((st = stats(&s, m->xyz)) < 0) goto done;
   rep.M_init = rep.M_max = s.M;
   int budget = o.max_iter;
