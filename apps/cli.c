@@ -10,7 +10,6 @@
 #include <unistd.h>
 
 #include "varmesh/io.h"
-#include "varmesh/surface_io.h"
 
 static void log_stderr(void *user, int level, const char *msg) {
   const vm_cli *cli = user;
@@ -41,7 +40,6 @@ void vm_cli_init(vm_cli *cli, const char *prog) {
     exit(VM_EXIT_INPUT);
   }
   vm_ctx_set_log(cli->ctx, log_stderr, cli);
-  vm_surface_register_formats(cli->ctx);
 }
 
 void vm_cli_finish(vm_cli *cli) { vm_ctx_destroy(&cli->ctx); }

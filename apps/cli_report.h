@@ -7,7 +7,6 @@
 #include "cli.h"
 #include "varmesh/quality.h"
 #include "varmesh/report.h"
-#include "varmesh/untangle.h"
 
 /* Create the report directory and object, and (hist not NULL) an empty
  * convergence history for the run. Returns VM_EXIT_OK, or after an error
@@ -26,10 +25,16 @@ int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
  * plot of `hist`, quality pictures of the mesh before and after, and
  * DIR/index.html (dir as given to vm_cli_report_open). Destroys *r.
  * Returns an exit code. */
+struct vm_volume_opts;
+struct vm_volume_report;
 int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, const char *in,
                          const char *out, const vm_mesh *before, const vm_mesh *after,
-                         const vm_report_history *hist, const vm_volume_opts *o,
-                         const vm_volume_report *rep);
+                         const vm_report_history *hist, const struct vm_volume_opts *o,
+                         const struct vm_volume_report *rep);
+
+/* Write DIR/index.html of report *r unless st < 0 (then report the error),
+ * destroy *r, and return an exit code. */
+int vm_cli_report_finish(const vm_cli *cli, vm_report **r, const char *dir, int st);
 
 /* The stages' --report (vm-surface, vm-prism), after the run: the rows the
  * caller has added (st: their status; < 0 reports that error), then the

@@ -8,7 +8,7 @@
 
 #include "cli.h"
 #include "varmesh/aircraft.h"
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/io.h"
 
 static const char usage[] =

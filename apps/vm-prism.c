@@ -12,7 +12,7 @@
 #include "varmesh/io.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/prism.h"
-#include "varmesh/prism_export.h"
+#include "varmesh/io.h"
 
 static const char usage[] =
     "usage: vm-prism [options] IN OUT\n"
@@ -323,8 +323,8 @@ int main(int argc, char **argv) {
       goto done;
     }
   }
-  int wst = kind == OUT_CGNS  ? vm_write_cgns(cli.ctx, res, out)
-            : kind == OUT_SU2 ? vm_write_su2(cli.ctx, res, out)
+  int wst = kind == OUT_CGNS  ? vm_mesh_write(cli.ctx, res, out, VM_FMT_CGNS, NULL)
+            : kind == OUT_SU2 ? vm_mesh_write(cli.ctx, res, out, VM_FMT_SU2, NULL)
                               : vm_mesh_write(cli.ctx, res, out, fout, &wo);
   if (wst < 0) {
     vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));

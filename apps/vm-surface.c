@@ -14,6 +14,7 @@
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
 #include "varmesh/io.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
 
 static const char usage[] =

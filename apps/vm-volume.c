@@ -12,7 +12,7 @@
 #include "varmesh/quality.h"
 #include "varmesh/slip.h"
 #include "varmesh/topology.h"
-#include "varmesh/untangle.h"
+#include "varmesh/volume.h"
 
 static const char usage[] =
     "usage: vm-volume [options] IN OUT\n"

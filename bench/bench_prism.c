@@ -18,7 +18,6 @@
 #include "varmesh/io.h"
 #include "varmesh/prism.h"
 #include "varmesh/quadrature.h"
-#include "varmesh/surface_io.h"
 #include "varmesh/verify.h"
 
 static void progress(void *user, const vm_prism_progress *pg) {
@@ -192,7 +191,6 @@ int main(int argc, char **argv) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_log(ctx, log_warn, NULL);
-  vm_surface_register_formats(ctx);
   printf("| case | T/L | prisms | time s (wall / CPU) | full | thick/T min / mean / max | inverted (own / CGAL) "
          "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL outer+wall) | max "
          "growth | layers |\n");

@@ -6,10 +6,10 @@
 #include <string.h>
 #include <time.h>
 
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/problem.h"
 #include "varmesh/quality.h"
-#include "varmesh/untangle.h"
+#include "varmesh/volume.h"
 
 static const char *angle_names[] = {"pi/8", "3pi/8", "pi/2", "7pi/8", "pi"};
 static const double angle_frac[] = {1.0 / 8, 3.0 / 8, 0.5, 7.0 / 8, 1.0};

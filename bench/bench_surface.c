@@ -19,8 +19,8 @@
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
 #include "varmesh/io.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
-#include "varmesh/surface_io.h"
 
 typedef struct {
   double v;
@@ -213,7 +213,6 @@ int main(int argc, char **argv) {
   vm_mesh *m = NULL, *input = NULL, *start = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_threads(ctx, threads);
-  vm_surface_register_formats(ctx);
   double t0 = omp_get_wtime(), c0 = cpu_seconds();
   if (vm_mesh_read(ctx, path, VM_FMT_AUTO, &m) < 0) {
     fprintf(stderr, "bench_surface: %s\n", vm_ctx_error(ctx));

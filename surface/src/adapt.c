@@ -7,7 +7,8 @@
 #include <omp.h>
 #include <string.h>
 
-#include "surface_private.h"
+#include "varmesh/surface_mesh.h"
+#include "vec3.h"
 #include "varmesh/features.h"
 #include "varmesh/minimize.h"
 #include "varmesh/problem.h"
@@ -43,10 +44,10 @@ double vm_surface_min_angle(const vm_mesh *m) {
       const double *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
       const double *r = m->xyz + 3 * (int64_t)c[(a + k - 1) % k];
       double u[3], v[3];
-      vm_s_sub(q, p, u);
-      vm_s_sub(r, p, v);
-      double lu = vm_s_norm(u), lv = vm_s_norm(v);
-      double cs = lu > 0 && lv > 0 ? vm_s_dot(u, v) / (lu * lv) : 1.0;
+      vm_sub3(q, p, u);
+      vm_sub3(r, p, v);
+      double lu = vm_norm3(u), lv = vm_norm3(v);
+      double cs = lu > 0 && lv > 0 ? vm_dot3(u, v) / (lu * lv) : 1.0;
       if (cs > cmax) cmax = cs;
     }
   }
@@ -64,8 +65,8 @@ double vm_surface_mean_edge(const vm_mesh *m) {
     for (int a = 0; a < k; a++) {
       const double *p = m->xyz + 3 * (int64_t)c[a], *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
       double d[3];
-      vm_s_sub(q, p, d);
-      s += vm_s_norm(d);
+      vm_sub3(q, p, d);
+      s += vm_norm3(d);
       n++;
     }
   }
@@ -87,7 +88,7 @@ static void mesh_scales(const vm_mesh *m, double *h, double *diag) {
   }
   *h = vm_surface_mean_edge(m);
   double d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-  *diag = n ? vm_s_norm(d) : 0;
+  *diag = n ? vm_norm3(d) : 0;
 }
 
 typedef struct {
@@ -117,11 +118,11 @@ static int update_metric(adapt_state *s, const double *x) {
     double n[3] = {0, 0, 0}, gm = 0;
     for (int a = 0; a < k; a++) {
       double cr[3];
-      vm_s_cross(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
+      vm_cross3(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
       for (int r = 0; r < 3; r++) n[r] += cr[r];
       gm += s->g[c[a]];
     }
-    Ag += gm / k * 0.5 * vm_s_norm(n);
+    Ag += gm / k * 0.5 * vm_norm3(n);
     ideal += t == VM_TRI ? s->sqrt3_4 : 1.0;
   }
   if (!(Ag > 0) || !(ideal > 0))
@@ -155,7 +156,7 @@ static void element_normals_one(const vm_mesh *m, const double *x, int64_t e, do
   n[0] = n[1] = n[2] = 0;
   for (int a = 0; a < k; a++) {
     double cr[3];
-    vm_s_cross(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
+    vm_cross3(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
     for (int r = 0; r < 3; r++) n[r] += cr[r];
   }
 }
@@ -176,12 +177,12 @@ static int64_t first_degenerate(const vm_mesh *m) {
       const double *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
       const double *r = m->xyz + 3 * (int64_t)c[(a + k - 1) % k];
       double u[3], v[3], w[3], n[3];
-      vm_s_sub(q, p, u);
-      vm_s_sub(r, p, v);
-      vm_s_sub(r, q, w);
-      vm_s_cross(u, v, n);
-      double l2 = fmax(vm_s_dot(u, u), fmax(vm_s_dot(v, v), vm_s_dot(w, w)));
-      if (!(vm_s_norm(n) > 1e-12 * l2)) return e;
+      vm_sub3(q, p, u);
+      vm_sub3(r, p, v);
+      vm_sub3(r, q, w);
+      vm_cross3(u, v, n);
+      double l2 = fmax(vm_dot3(u, u), fmax(vm_dot3(v, v), vm_dot3(w, w)));
+      if (!(vm_norm3(n) > 1e-12 * l2)) return e;
     }
   }
   return -1;
@@ -335,7 +336,7 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
     for (int64_t e = 0; e < m->ne; e++) {
       double n1[3];
       element_normals_one(m, m->xyz, e, n1);
-      if (vm_s_dot(n1, en0 + 3 * e) <= 0) r.flipped++;
+      if (vm_dot3(n1, en0 + 3 * e) <= 0) r.flipped++;
     }
     r.min_angle_after = vm_surface_min_angle(m);
     /* distance of the vertices to the reference */
@@ -347,8 +348,8 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
         st = nn;
         goto done;
       }
-      vm_s_sub(q, m->xyz + 3 * v, d);
-      if (vm_s_norm(d) > dmax) dmax = vm_s_norm(d);
+      vm_sub3(q, m->xyz + 3 * v, d);
+      if (vm_norm3(d) > dmax) dmax = vm_norm3(d);
     }
     r.max_distance = dmax;
     st = vm_surface_curvature(m, &filt, NULL);

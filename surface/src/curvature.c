@@ -6,7 +6,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "surface_private.h"
+#include "varmesh/surface_mesh.h"
+#include "vec3.h"
 
 /* A triangle whose doubled area is below this fraction of its squared
  * longest edge is degenerate: its cotangents are meaningless. */
@@ -30,17 +31,17 @@ typedef struct {
 static int tri_geometry(const double *xyz, const int32_t *t, tri_geom *g) {
   const double *p[3] = {xyz + 3 * (int64_t)t[0], xyz + 3 * (int64_t)t[1],
                         xyz + 3 * (int64_t)t[2]};
-  vm_s_sub(p[2], p[1], g->e[0]);
-  vm_s_sub(p[0], p[2], g->e[1]);
-  vm_s_sub(p[1], p[0], g->e[2]);
+  vm_sub3(p[2], p[1], g->e[0]);
+  vm_sub3(p[0], p[2], g->e[1]);
+  vm_sub3(p[1], p[0], g->e[2]);
   double lmax = 0;
   for (int k = 0; k < 3; k++) {
-    g->l2[k] = vm_s_dot(g->e[k], g->e[k]);
+    g->l2[k] = vm_dot3(g->e[k], g->e[k]);
     if (g->l2[k] > lmax) lmax = g->l2[k];
   }
   double c[3];
-  vm_s_cross(g->e[2], g->e[1], c); /* (b - a) x (a - c) = -(b - a) x (c - a) */
-  g->area2 = vm_s_norm(c);
+  vm_cross3(g->e[2], g->e[1], c); /* (b - a) x (a - c) = -(b - a) x (c - a) */
+  g->area2 = vm_norm3(c);
   if (!(g->area2 > DEGENERATE_REL * lmax) || !isfinite(g->area2)) return 0;
   for (int k = 0; k < 3; k++) g->n[k] = -c[k] / g->area2;
   return 1;
@@ -49,7 +50,7 @@ static int tri_geometry(const double *xyz, const int32_t *t, tri_geom *g) {
 /* Angle at corner k: between -e[k+2] ... expressed with the two edges at k:
  * u = e[(k+2)%3] (from k to k+1), v = -e[(k+1)%3] (from k to k+2). */
 static double corner_dot(const tri_geom *g, int k) {
-  return -vm_s_dot(g->e[(k + 2) % 3], g->e[(k + 1) % 3]);
+  return -vm_dot3(g->e[(k + 2) % 3], g->e[(k + 1) % 3]);
 }
 
 static void accumulate_normals(const vm_mesh *m, const vm_surf_tris *T, double *nrm,
@@ -71,7 +72,7 @@ static void accumulate_normals(const vm_mesh *m, const vm_surf_tris *T, double *
   }
   for (int64_t v = 0; v < m->nv; v++) {
     double *n = nrm + 3 * v;
-    double l = vm_s_norm(n);
+    double l = vm_norm3(n);
     if (l > 0)
       for (int r = 0; r < 3; r++) n[r] /= l;
   }
@@ -150,7 +151,7 @@ int vm_surface_mean_curvature(const vm_mesh *m, double *H, double *normals, doub
     }
   }
   for (int64_t v = 0; v < nv; v++)
-    H[v] = A[v] > 0 ? -vm_s_dot(lap + 3 * v, nrm + 3 * v) / (2 * A[v]) : 0.0;
+    H[v] = A[v] > 0 ? -vm_dot3(lap + 3 * v, nrm + 3 * v) / (2 * A[v]) : 0.0;
   /* open dual cells: take the mean of the interior neighbours */
   int64_t nb = 0;
   for (int64_t v = 0; v < nv; v++) {

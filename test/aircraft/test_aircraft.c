@@ -9,7 +9,6 @@
 
 #include "varmesh/aircraft.h"
 #include "varmesh/io.h"
-#include "varmesh/surface_io.h"
 #include "vmtest.h"
 
 #define T_PI 3.14159265358979323846
@@ -454,7 +453,6 @@ static void check_roundtrip(vm_ctx *ctx) {
   unlink(path);
   /* STL through the surface formats: same triangles (vertices merged by
    * coordinates, so all of them must be distinct points) */
-  vm_surface_register_formats(ctx);
   o.tag_components = 0;
   vm_mesh_destroy(&m);
   vm_gen_aircraft(ctx, &o, &m);

@@ -13,11 +13,11 @@
 #include <unistd.h>
 
 #include "varmesh/ctx.h"
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/io.h"
 #include "varmesh/mesh.h"
 #include "varmesh/topology.h"
-#include "varmesh/untangle.h"
+#include "varmesh/volume.h"
 #include "vmtest.h"
 
 typedef struct run_result {

@@ -3,7 +3,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/quality.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/topology.h"

@@ -16,7 +16,6 @@
 #include "varmesh/ctx.h"
 #include "varmesh/io.h"
 #include "varmesh/mesh.h"
-#include "varmesh/surface_io.h"
 
 typedef struct vm_fuzz_reader {
   const char *dir;  /* corpus folder: test/fuzz/corpus/<dir>, test/fuzz/regress/<dir> */
@@ -147,7 +146,6 @@ static inline int vm_fuzz_read(const vm_fuzz_reader *r, const uint8_t *data, siz
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) abort();
   vm_ctx_set_log(ctx, vm_fuzz_discard_log, NULL);
-  VM_FUZZ_REQUIRE(vm_surface_register_formats(ctx) == VM_OK, "register surface formats");
   long live0 = vm_ctx_alloc_live(ctx), count0 = vm_ctx_alloc_count(ctx);
   if (fail_at > 0) vm_ctx_set_alloc_fail(ctx, fail_at);
   vm_mesh *m = (vm_mesh *)(uintptr_t)1; /* must be overwritten */

@@ -10,7 +10,6 @@
 #include "varmesh/ctx.h"
 #include "varmesh/io.h"
 #include "varmesh/mesh.h"
-#include "varmesh/surface_io.h"
 
 #define DIE(...)                    \
   do {                              \
@@ -100,7 +99,6 @@ int main(int argc, char **argv) {
   mkdir(out, 0777);
   vm_ctx *ctx;
   if (vm_ctx_create(&ctx)) DIE("no context");
-  vm_surface_register_formats(ctx);
   vm_mesh *vol = volume_mesh(ctx), *pl = planar_mesh(ctx), *sf = surface_mesh(ctx);
   const vm_mesh *ms[3] = {vol, pl, sf};
   const char *mn[3] = {"volume", "planar", "surface"};

@@ -17,7 +17,7 @@
 
 #include "varmesh/aircraft.h"
 #include "varmesh/ctx.h"
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/mesh.h"
 #include "varmesh/quality.h"
 #include "varmesh/report.h"

@@ -6,7 +6,6 @@
 
 #include "shapes.h"
 #include "varmesh/io.h"
-#include "varmesh/surface_io.h"
 
 int main(int argc, char **argv) {
   if (argc != 3) {
@@ -16,7 +15,6 @@ int main(int argc, char **argv) {
   vm_ctx *ctx = NULL;
   vm_mesh *m = NULL;
   if (vm_ctx_create(&ctx)) return 1;
-  vm_surface_register_formats(ctx);
   const char *k = argv[1];
   int st = 0;
   if (!strcmp(k, "lens")) {

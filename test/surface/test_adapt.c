@@ -11,6 +11,7 @@
 #include "varmesh/adapt.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
 #include "vmtest.h"
 

@@ -9,6 +9,7 @@
 #include "shapes.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
 #include "vmtest.h"
 

@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include "varmesh/io.h"
-#include "varmesh/surface_io.h"
 #include "vmtest.h"
 
 /* ---- log capture ---- */
@@ -823,8 +822,6 @@ int main(void) {
   vm_ctx_create(&ctx);
   logbuf L;
   vm_ctx_set_log(ctx, log_fn, &L);
-  CHECK(vm_surface_register_formats(ctx) == VM_OK, "register");
-  CHECK(vm_surface_register_formats(NULL) == VM_ERR_ARG, "register NULL");
   const char *broot = getenv("VM_BUILD_ROOT");
   snprintf(tmpdir, sizeof tmpdir, "%s/surface_io_XXXXXX", broot ? broot : ".");
   if (!mkdtemp(tmpdir)) {

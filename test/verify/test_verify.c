@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "varmesh/ctx.h"
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/mesh.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/verify.h"

@@ -8,12 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
 #include "varmesh/slip.h"
 #include "varmesh/topology.h"
-#include "varmesh/untangle.h"
+#include "varmesh/volume.h"
 #include "vmtest.h"
 
 static const double PI = 3.14159265358979323846;

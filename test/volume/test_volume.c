@@ -6,9 +6,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "varmesh/generate.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/quality.h"
-#include "varmesh/untangle.h"
+#include "varmesh/volume.h"
 #include "vmtest.h"
 
 static const double PI = 3.14159265358979323846;

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "varmesh/features.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
 #include "varmesh/topology.h"
 

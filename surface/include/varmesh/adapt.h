@@ -10,6 +10,7 @@
 
 #include "varmesh/curvature.h"
 #include "varmesh/mesh.h"
+#include "varmesh/project.h"
 #include "varmesh/repair.h"
 
 #ifdef __cplusplus

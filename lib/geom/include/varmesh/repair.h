@@ -1,0 +1,99 @@
+/* varmesh/repair.h: repair of an imported surface with CGAL (orient,
+ * stitch, degenerate faces, isolated vertices, self-intersections),
+ * isotropic remeshing with protected features, and Hausdorff distances. */
+#ifndef VARMESH_REPAIR_H
+#define VARMESH_REPAIR_H
+
+#include <stdint.h>
+
+#include "varmesh/features.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_repair_opts {
+  int require_closed; /* refuse a surface that stays open (default 1) */
+  int check_self_intersections; /* (default 1): found ones are an error if
+                                   require_closed, else a warning */
+} vm_repair_opts;
+
+vm_repair_opts vm_repair_opts_default(void);
+
+/* What vm_surface_repair found and did. */
+typedef struct vm_repair_report {
+  int64_t nv_in, nf_in;          /* vertices and faces before */
+  int64_t nv, nf;                /* after (triangles) */
+  int64_t merged_vertices;       /* duplicate points merged */
+  int64_t removed_polygons;      /* duplicate or invalid (repeated vertex) faces removed */
+  int64_t removed_degenerate;    /* zero-area faces found and removed (by edge collapses/flips) */
+  int64_t removed_isolated;      /* vertices used by no face */
+  int64_t reoriented;            /* faces whose orientation was reversed */
+  int64_t stitched;              /* border edge pairs stitched */
+  int64_t border_edges;          /* left after repair (0: closed) */
+  int64_t holes;                 /* border cycles */
+  int64_t components;            /* connected components */
+  int64_t self_intersections;    /* pairs of intersecting faces (if checked, else -1) */
+  double volume;                 /* enclosed volume (closed surfaces; else 0) */
+} vm_repair_report;
+
+/* Repair the surface m in place (its 2D elements; volume elements are an
+ * error): merge duplicate points, drop faces with a repeated vertex and
+ * duplicate faces, orient consistently (CGAL orient_polygon_soup), stitch
+ * coincident borders, remove degenerate (zero-area) faces, remove isolated
+ * vertices, triangulate quads, check for self-intersections, and orient
+ * every closed component outward (orient_to_bound_a_volume). The result is
+ * a triangle mesh with new vertex numbering: fields and vertex flags of m
+ * are dropped (one VM_LOG_WARN if there were any), attributes kept.
+ * Refused (negative status, m unchanged, one line naming what and where):
+ *  - VM_ERR_FORMAT: a non-manifold edge or vertex, or a surface that cannot
+ *    be oriented consistently (it would have to be cut); an open surface
+ *    (border edges left) when o->require_closed; self-intersections when
+ *    checked and o->require_closed; nothing left after repair;
+ *  - VM_ERR_ARG, VM_ERR_NOMEM, VM_ERR_BACKEND.
+ * rep may be NULL; o NULL means defaults. */
+int vm_surface_repair(vm_mesh *m, const vm_repair_opts *o, vm_repair_report *rep);
+
+/* Pairs of intersecting triangles of a triangle mesh m (faces sharing a
+ * vertex or an edge intersect only if they overlap beyond that). Writes
+ * the count to *count and, if pairs != NULL, a vm_malloc'd array of
+ * 2 * count element indices, sorted (free with vm_free). */
+int vm_surface_self_intersections(const vm_mesh *m, int64_t *count, int32_t **pairs);
+
+typedef struct vm_remesh_opts {
+  double target_edge_length; /* > 0 */
+  int iterations;            /* (default 5) */
+  int relaxation_steps;      /* tangential relaxation per iteration (default 1) */
+  double keep_angle;         /* feature-line vertices where the line turns by more than
+                                this (degrees, default 10) are kept like corners */
+} vm_remesh_opts;
+
+vm_remesh_opts vm_remesh_opts_default(void);
+
+/* Isotropic remeshing (CGAL PMP::isotropic_remeshing) of the triangle mesh
+ * m in place to edge length o->target_edge_length, new vertices projected
+ * onto the input surface. Features in f (of m; may be NULL) are protected:
+ * feature edges are constrained (split, or collapsed along their line,
+ * never flipped; their vertices never move off the line) and corners, and
+ * line vertices where the line turns by more than o->keep_angle, are kept
+ * in place (so a line loses only vertices where it is nearly straight). On success m holds the new mesh (fields and flags
+ * dropped) and f, if given, the features of the new mesh (same corners,
+ * the constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG
+ * (not a closed-or-open manifold triangle mesh, bad options), VM_ERR_NOMEM,
+ * VM_ERR_BACKEND. */
+int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_remesh_opts *o,
+                      double corner_deg);
+
+/* Approximate one-sided Hausdorff distances between two triangle meshes:
+ * the largest distance from a sample of a's surface to b (*ab) and of b's
+ * to a (*ba); samples are the vertices, edge points and a regular grid of
+ * spacing `spacing` on every face (<= 0: 1/100 of the bounding box
+ * diagonal of a). Deterministic. Either output may be NULL. */
+int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
+                         double *ba);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

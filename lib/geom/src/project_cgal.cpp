@@ -1,0 +1,396 @@
+// surface/src/project_cgal.cpp: CGAL adapter: closest-point projection onto
+// a reference surface and its feature lines (AABB trees) for the
+// minimizer's slip vertices, point-to-surface distances, Hausdorff.
+#include <CGAL/AABB_segment_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "cxx_private.h"
+#include "varmesh/project.h"
+#include "varmesh/repair.h"
+
+namespace {
+
+// plain double arithmetic: the queries lie on the surface, where the
+// filtered predicates of Epick keep falling back to exact arithmetic
+typedef CGAL::Simple_cartesian<double> K;
+typedef K::Point_3 Point;
+typedef K::Vector_3 Vector;
+typedef K::Triangle_3 Triangle;
+typedef K::Segment_3 Segment;
+typedef std::vector<Triangle>::const_iterator TriIt;
+typedef CGAL::AABB_triangle_primitive<K, TriIt> TriPrim;
+typedef CGAL::AABB_tree<CGAL::AABB_traits<K, TriPrim>> TriTree;
+typedef std::vector<Segment>::const_iterator SegIt;
+typedef CGAL::AABB_segment_primitive<K, SegIt> SegPrim;
+typedef CGAL::AABB_tree<CGAL::AABB_traits<K, SegPrim>> SegTree;
+
+// Triangles of the 2D elements of m (quads split along 0-2) and their
+// vertex indices; degenerate triangles break the AABB distance code and
+// are left out.
+void collect_triangles(const vm_mesh *m, std::vector<Triangle> &tri, std::vector<int32_t> &tv) {
+  auto P = [m](int32_t v) {
+    const double *x = m->xyz + 3 * static_cast<int64_t>(v);
+    return Point(x[0], x[1], x[2]);
+  };
+  auto add = [&](int32_t a, int32_t b, int32_t c) {
+    Triangle t(P(a), P(b), P(c));
+    if (t.is_degenerate()) return;
+    tri.push_back(t);
+    tv.push_back(a);
+    tv.push_back(b);
+    tv.push_back(c);
+  };
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    if (m->etype[e] == VM_TRI) {
+      add(c[0], c[1], c[2]);
+    } else if (m->etype[e] == VM_QUAD) {
+      add(c[0], c[1], c[2]);
+      add(c[0], c[2], c[3]);
+    }
+  }
+}
+
+struct TriSurface {
+  std::vector<Triangle> tri;
+  std::vector<int32_t> tv;
+  std::vector<Vector> normal;
+  std::unique_ptr<TriTree> tree;
+  int64_t nv = 0;
+  void build(const vm_mesh *m) {
+    nv = m->nv;
+    collect_triangles(m, tri, tv);
+    normal.reserve(tri.size());
+    for (const Triangle &t : tri) {
+      Vector n = CGAL::cross_product(t[1] - t[0], t[2] - t[0]);
+      double l = std::sqrt(n.squared_length());
+      normal.push_back(l > 0 ? n / l : Vector(0, 0, 0));
+    }
+    tree.reset(new TriTree(tri.begin(), tri.end()));
+    tree->accelerate_distance_queries();
+  }
+};
+
+// Closest point of segment s to p, and the segment parameter t in [0, 1].
+Point closest_on_segment(const Segment &s, const Point &p, double *t) {
+  Vector d = s.target() - s.source();
+  double l2 = d.squared_length();
+  double u = l2 > 0 ? ((p - s.source()) * d) / l2 : 0.0;
+  u = u < 0 ? 0 : u > 1 ? 1 : u;
+  *t = u;
+  return s.source() + u * d;
+}
+
+// Two unit vectors orthogonal to the unit direction t.
+void orthogonal_pair(const double t[3], double n[6]) {
+  double a[3] = {0, 0, 0};
+  int k = std::fabs(t[0]) <= std::fabs(t[1]) && std::fabs(t[0]) <= std::fabs(t[2]) ? 0
+          : std::fabs(t[1]) <= std::fabs(t[2])                                        ? 1
+                                                                                      : 2;
+  a[k] = 1;
+  double u[3] = {t[1] * a[2] - t[2] * a[1], t[2] * a[0] - t[0] * a[2], t[0] * a[1] - t[1] * a[0]};
+  double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  for (int i = 0; i < 3; i++) u[i] /= lu;
+  double w[3] = {t[1] * u[2] - t[2] * u[1], t[2] * u[0] - t[0] * u[2], t[0] * u[1] - t[1] * u[0]};
+  for (int i = 0; i < 3; i++) {
+    n[i] = u[i];
+    n[3 + i] = w[i];
+  }
+}
+
+}  // namespace
+
+struct vm_surface_projector {
+  vm_ctx *ctx;
+  TriSurface surf;
+  // feature lines: segments of line k are seg[lstart[k] .. lstart[k+1])
+  std::vector<Segment> seg;
+  std::vector<int32_t> seg_line;
+  std::vector<std::size_t> lstart;
+  std::unique_ptr<SegTree> segtree;
+  std::vector<Point> corner;
+  int32_t nline = 0;
+};
+
+extern "C" {
+static int project_cb(void *user, int surf_id, const double p[3], double out[3], double normals[9]);
+}
+
+static int project_cb(void *user, int surf_id, const double p[3], double out[3], double normals[9]) {
+  vm_surface_projector *pr = static_cast<vm_surface_projector *>(user);
+  VM_CXX_BEGIN
+  if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return VM_ERR_NUMERIC;
+  Point q(p[0], p[1], p[2]);
+  if (surf_id == 0) {
+    if (pr->surf.tri.empty()) return VM_ERR_ARG;
+    auto cp = pr->surf.tree->closest_point_and_primitive(q);
+    std::size_t fi = static_cast<std::size_t>(cp.second - pr->surf.tri.begin());
+    out[0] = cp.first.x();
+    out[1] = cp.first.y();
+    out[2] = cp.first.z();
+    const Vector &n = pr->surf.normal[fi];
+    normals[0] = n.x();
+    normals[1] = n.y();
+    normals[2] = n.z();
+    return 1;
+  }
+  if (surf_id < 0 || surf_id > pr->nline) return VM_ERR_ARG;
+  std::size_t b = pr->lstart[static_cast<std::size_t>(surf_id) - 1],
+              e = pr->lstart[static_cast<std::size_t>(surf_id)];
+  if (b == e) return VM_ERR_ARG;
+  double best = INFINITY, bt = 0;
+  std::size_t bi = b;
+  Point bp = q;
+  for (std::size_t i = b; i < e; i++) {
+    double t;
+    Point c = closest_on_segment(pr->seg[i], q, &t);
+    double d = CGAL::squared_distance(c, q);
+    if (d < best) {
+      best = d;
+      bi = i;
+      bp = c;
+      bt = t;
+    }
+  }
+  out[0] = bp.x();
+  out[1] = bp.y();
+  out[2] = bp.z();
+  // direction: the segment's; at a joint of two segments, their mean
+  Vector d = pr->seg[bi].to_vector();
+  d = d / std::sqrt(d.squared_length());
+  auto neighbour = [&](std::size_t j) {
+    Vector dj = pr->seg[j].to_vector();
+    double l = std::sqrt(dj.squared_length());
+    if (l > 0) d = d + dj / l;
+  };
+  if (bt == 0 && bi > b && pr->seg[bi - 1].target() == pr->seg[bi].source()) neighbour(bi - 1);
+  if (bt == 1 && bi + 1 < e && pr->seg[bi + 1].source() == pr->seg[bi].target()) neighbour(bi + 1);
+  double l = std::sqrt(d.squared_length());
+  double t[3] = {d.x() / l, d.y() / l, d.z() / l};
+  orthogonal_pair(t, normals);
+  return 2;
+  VM_CXX_END(pr->ctx, "projection")
+}
+
+extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
+                                           const vm_surface_features *f,
+                                           vm_surface_projector **out) {
+  if (!out || !ref) return vm_error(ctx, VM_ERR_ARG, "projector: NULL argument");
+  *out = NULL;
+  if (f && f->nv != ref->nv)
+    return vm_error(ctx, VM_ERR_ARG, "projector: the features belong to another mesh");
+  vm_surface_projector *p = NULL;
+  VM_CXX_BEGIN
+  std::unique_ptr<vm_surface_projector> pr(new vm_surface_projector);
+  pr->ctx = ctx;
+  pr->surf.build(ref);
+  if (pr->surf.tri.empty())
+    return vm_error(ctx, VM_ERR_ARG, "projector: the reference has no non-degenerate face");
+  if (f)
+    for (int64_t v = 0; v < f->nv; v++)
+      if (f->vclass[v] == VM_FEATURE_CORNER)
+        pr->corner.emplace_back(ref->xyz[3 * v], ref->xyz[3 * v + 1], ref->xyz[3 * v + 2]);
+  if (f && f->nline > 0) {
+    pr->nline = f->nline;
+    // order each line's edges into a chain so neighbouring segments are adjacent
+    std::vector<std::vector<int64_t>> by_line(static_cast<std::size_t>(f->nline) + 1);
+    for (int64_t k = 0; k < f->nedge; k++) by_line[static_cast<std::size_t>(f->eline[k])].push_back(k);
+    pr->lstart.push_back(0);
+    for (int32_t l = 1; l <= f->nline; l++) {
+      const std::vector<int64_t> &ed = by_line[static_cast<std::size_t>(l)];
+      // chain: start at an end (a vertex used once) if there is one
+      std::vector<std::pair<int32_t, int32_t>> es;
+      for (int64_t k : ed) es.emplace_back(f->edge[2 * k], f->edge[2 * k + 1]);
+      std::unordered_map<int32_t, std::vector<std::size_t>> inc;
+      for (std::size_t j = 0; j < es.size(); j++) {
+        inc[es[j].first].push_back(j);
+        inc[es[j].second].push_back(j);
+      }
+      std::vector<char> used(es.size(), 0);
+      int32_t cur = es.empty() ? -1 : es[0].first;
+      for (const std::pair<int32_t, int32_t> &a : es) {
+        if (inc[a.first].size() == 1) {
+          cur = a.first;
+          break;
+        }
+        if (inc[a.second].size() == 1) {
+          cur = a.second;
+          break;
+        }
+      }
+      std::size_t next_unused = 0;
+      for (std::size_t n = 0; n < es.size(); n++) {
+        std::size_t pick = es.size();
+        for (std::size_t j : inc[cur])
+          if (!used[j]) {
+            pick = j;
+            break;
+          }
+        if (pick == es.size()) {  // not a simple chain: continue from any unused edge
+          while (used[next_unused]) next_unused++;
+          pick = next_unused;
+          cur = es[pick].first;
+        }
+        used[pick] = 1;
+        int32_t nxt = es[pick].first == cur ? es[pick].second : es[pick].first;
+        const double *pa = ref->xyz + 3 * static_cast<int64_t>(cur);
+        const double *pb = ref->xyz + 3 * static_cast<int64_t>(nxt);
+        pr->seg.emplace_back(Point(pa[0], pa[1], pa[2]), Point(pb[0], pb[1], pb[2]));
+        pr->seg_line.push_back(l);
+        cur = nxt;
+      }
+      pr->lstart.push_back(pr->seg.size());
+    }
+    pr->segtree.reset(new SegTree(pr->seg.begin(), pr->seg.end()));
+    pr->segtree->accelerate_distance_queries();
+  } else {
+    pr->lstart.push_back(0);
+  }
+  p = pr.release();
+  *out = p;
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+extern "C" void vm_surface_projector_destroy(vm_surface_projector **p) {
+  if (!p || !*p) return;
+  delete *p;
+  *p = NULL;
+}
+
+extern "C" vm_surface_ops vm_surface_projector_ops(vm_surface_projector *p) {
+  vm_surface_ops ops;
+  ops.project = project_cb;
+  ops.user = p;
+  return ops;
+}
+
+extern "C" int32_t vm_surface_projector_nlines(const vm_surface_projector *p) {
+  return p ? p->nline : 0;
+}
+
+extern "C" int vm_surface_projector_assign(vm_surface_projector *p, const vm_mesh *m,
+                                           const vm_surface_features *f, double tol,
+                                           int32_t *vsurf) {
+  if (!p || !m || !f || !vsurf || f->nv != m->nv || !(tol >= 0)) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  VM_CXX_BEGIN
+  const double tol2 = tol * tol;
+  for (int64_t v = 0; v < m->nv; v++) {
+    int c = f->vclass[v];
+    if (c == VM_FEATURE_SMOOTH) {
+      vsurf[v] = 0;
+      continue;
+    }
+    if (c == VM_FEATURE_CORNER) {
+      vsurf[v] = -1;
+      continue;
+    }
+    vsurf[v] = 0;
+    if (!p->segtree) continue;
+    Point q(m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
+    auto cp = p->segtree->closest_point_and_primitive(q);
+    if (CGAL::squared_distance(cp.first, q) > tol2) continue;
+    vsurf[v] = p->seg_line[static_cast<std::size_t>(cp.second - p->seg.begin())];
+    for (const Point &k : p->corner)
+      if (CGAL::squared_distance(k, q) <= tol2) {
+        vsurf[v] = -1;
+        break;
+      }
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+extern "C" int vm_surface_projector_distance(vm_surface_projector *p, int64_t n, const double *pts,
+                                             double *dist) {
+  if (!p || n < 0 || (n > 0 && (!pts || !dist))) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  VM_CXX_BEGIN
+  for (int64_t i = 0; i < n; i++) {
+    Point q(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
+    dist[i] = std::sqrt(p->surf.tree->squared_distance(q));
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+extern "C" int vm_surface_projector_interpolate(vm_surface_projector *p, const double *field,
+                                                int64_t n, const double *pts, double *out) {
+  if (!p || !field || n < 0 || (n > 0 && (!pts || !out))) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  VM_CXX_BEGIN
+  for (int64_t i = 0; i < n; i++) {
+    Point q(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
+    auto cp = p->surf.tree->closest_point_and_primitive(q);
+    std::size_t fi = static_cast<std::size_t>(cp.second - p->surf.tri.begin());
+    const Triangle &t = p->surf.tri[fi];
+    // barycentric coordinates of the closest point (it lies in the triangle)
+    Vector e1 = t[1] - t[0], e2 = t[2] - t[0], r = cp.first - t[0];
+    double d11 = e1 * e1, d12 = e1 * e2, d22 = e2 * e2, r1 = r * e1, r2 = r * e2;
+    double det = d11 * d22 - d12 * d12;
+    double b1 = det > 0 ? (d22 * r1 - d12 * r2) / det : 0.0;
+    double b2 = det > 0 ? (d11 * r2 - d12 * r1) / det : 0.0;
+    b1 = std::min(1.0, std::max(0.0, b1));
+    b2 = std::min(1.0 - b1, std::max(0.0, b2));
+    const int32_t *v = &p->surf.tv[3 * fi];
+    out[i] = (1 - b1 - b2) * field[v[0]] + b1 * field[v[1]] + b2 * field[v[2]];
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+namespace {
+
+// Largest distance from samples of `from` to the surface `to`.
+double one_sided(const std::vector<Triangle> &from, const TriTree &to, double spacing) {
+  double worst = 0;
+  for (const Triangle &t : from) {
+    double lmax = std::sqrt(std::max({(t[1] - t[0]).squared_length(), (t[2] - t[1]).squared_length(),
+                                      (t[0] - t[2]).squared_length()}));
+    int n = static_cast<int>(std::ceil(lmax / spacing));
+    n = std::max(1, std::min(n, 64));
+    for (int i = 0; i <= n; i++)
+      for (int j = 0; i + j <= n; j++) {
+        double a = static_cast<double>(i) / n, b = static_cast<double>(j) / n;
+        Point q = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);
+        worst = std::max(worst, to.squared_distance(q));
+      }
+  }
+  return std::sqrt(worst);
+}
+
+}  // namespace
+
+extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
+                                    double *ba) {
+  if (!a || !b) return VM_ERR_ARG;
+  vm_ctx *ctx = a->ctx;
+  VM_CXX_BEGIN
+  TriSurface sa, sb;
+  sa.build(a);
+  sb.build(b);
+  if (sa.tri.empty() || sb.tri.empty())
+    return vm_error(ctx, VM_ERR_ARG, "hausdorff: a mesh has no non-degenerate face");
+  if (!(spacing > 0)) {
+    CGAL::Bbox_3 bb = sa.tree->bbox();
+    double diag = std::sqrt((bb.xmax() - bb.xmin()) * (bb.xmax() - bb.xmin()) +
+                            (bb.ymax() - bb.ymin()) * (bb.ymax() - bb.ymin()) +
+                            (bb.zmax() - bb.zmin()) * (bb.zmax() - bb.zmin()));
+    spacing = diag / 100;
+  }
+  if (ab) *ab = one_sided(sa.tri, *sb.tree, spacing);
+  if (ba) *ba = one_sided(sb.tri, *sa.tree, spacing);
+  return VM_OK;
+  VM_CXX_END(ctx, "hausdorff")
+}

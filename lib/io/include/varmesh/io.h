@@ -1,0 +1,172 @@
+/* varmesh/io.h: reading and writing meshes in every format the project
+ * knows (one table of readers and writers, registered by the library
+ * itself), dispatch by extension, and atomic (temporary file + rename)
+ * output. */
+#ifndef VARMESH_IO_H
+#define VARMESH_IO_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "varmesh/ctx.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+  VM_FMT_AUTO = 0,  /* from the file name's extension */
+  VM_FMT_VMSH,      /* .vmsh  binary (docs/vmsh.md) */
+  VM_FMT_VMSH_TEXT, /* .vmsht text variant */
+  VM_FMT_VTK,       /* .vtk   legacy VTK, ASCII or binary */
+  VM_FMT_VTU,       /* .vtu   VTK XML unstructured grid */
+  VM_FMT_MSH,       /* .msh   Gmsh 4.1 (read 2.2 too) */
+  VM_FMT_MEDIT,     /* .mesh  MEDIT / mmg / TetGen */
+  VM_FMT_STL,       /* .stl   ASCII or binary (surfaces) */
+  VM_FMT_OBJ,       /* .obj   Wavefront (surfaces) */
+  VM_FMT_OFF,       /* .off   (surfaces) */
+  VM_FMT_PLY,       /* .ply   ASCII or binary (surfaces) */
+  VM_FMT_SU2,       /* .su2   SU2's native mesh, ASCII (volume meshes, markers) */
+  VM_FMT_CGNS,      /* .cgns  CGNS unstructured zone through libcgns */
+  VM_FMT_COUNT
+} vm_format;
+
+/* Format from a path's extension (case-insensitive); VM_FMT_AUTO if unknown. */
+int vm_format_from_path(const char *path);
+/* Format from a name ("vtk", "vtu", "msh", "mesh", "vmsh", "vmsht", "stl", ...). */
+int vm_format_from_name(const char *name);
+const char *vm_format_name(int format);
+/* 1 if this build can read (write) the format, 0 if not. */
+int vm_format_can_read(int format);
+int vm_format_can_write(int format);
+/* 1 if this build was made with libcgns (VM_FMT_CGNS), 0 if not. */
+int vm_have_cgns(void);
+
+typedef struct vm_write_opts {
+  int binary;      /* VTK legacy, .msh, STL: 1 binary, 0 ASCII (default 0 for
+                      VTK/.msh/STL; VTU always writes base64 binary) */
+  int msh_version; /* 41 (default) or 22 */
+} vm_write_opts;
+
+/* Default options: ASCII, msh 4.1. */
+vm_write_opts vm_write_opts_default(void);
+
+/* Reader from memory: `name` is used only in error messages. */
+typedef int (*vm_reader_fn)(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
+                            vm_mesh **out);
+/* Writer to a path (the writer must use vm_outfile for atomicity). */
+typedef int (*vm_writer_fn)(vm_ctx *ctx, const vm_mesh *m, const char *path,
+                            const vm_write_opts *opts);
+
+/* Read a mesh. format VM_FMT_AUTO guesses from the extension. Files larger
+ * than the host can hold are refused; every count is checked against the
+ * file size before allocating. Errors are one line: "path: record: what". */
+int vm_mesh_read(vm_ctx *ctx, const char *path, int format, vm_mesh **out);
+/* The same from a buffer (fuzzing, tests). */
+int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
+                        int format, vm_mesh **out);
+/* Write a mesh atomically: either the complete file appears at `path` or
+ * nothing there changes. Returns VM_WARN_LOSSY (> 0) if the format could not
+ * carry something (each loss is logged at VM_LOG_WARN). opts may be NULL. */
+int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
+                  const vm_write_opts *opts);
+
+/* Read a whole file into a new buffer (freed with vm_free). */
+int vm_read_file(vm_ctx *ctx, const char *path, uint8_t **buf, size_t *len);
+
+/* Atomic output: writes go to "<path>.tmp.<pid>.<n>", commit renames it over
+ * path; abort (or a failed commit) removes the temporary file. */
+typedef struct vm_outfile vm_outfile;
+int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out);
+FILE *vm_outfile_fp(vm_outfile *f);
+int vm_outfile_commit(vm_outfile **f);
+void vm_outfile_abort(vm_outfile **f);
+
+/* Surface formats (STL, OBJ, OFF, PLY).
+ *
+ * Reading (every format): a mesh with dim = 3, all vertices FREE, no fields,
+ * elements VM_TRI and VM_QUAD in file order. Text coordinates are parsed as
+ * doubles (all digits kept); binary ones are widened exactly (binary STL
+ * float32; PLY float or double). Every input face is kept:
+ *  - polygons with 5 to 1024 vertices are ear-clipped into n-2 triangles in
+ *    the plane of their Newell normal (orientation kept; one VM_LOG_WARN with
+ *    the count); larger ones are refused (VM_ERR_UNSUPPORTED);
+ *  - faces with a repeated vertex and edges shared by more than two faces
+ *    are kept as read and reported once each at VM_LOG_WARN (repair is the
+ *    surface stage's job, not the reader's);
+ *  - STL is a triangle soup: corners with identical coordinates (exact
+ *    comparison, -0 == +0) become one vertex, numbered in order of first use;
+ *    STL facet normals are ignored; nonzero binary attribute words are
+ *    dropped with a warning.
+ *  - OBJ/OFF/PLY keep the file's vertex numbering (no merging, unused
+ *    vertices kept); normals, colors, texture coordinates, groups,
+ *    materials and other PLY properties/elements are dropped, one
+ *    VM_LOG_WARN per kind.
+ * Binary vs ASCII STL: binary iff the size is 84 + 50 n (n from the header),
+ * whatever the first bytes say; a file starting with "solid" that contains a
+ * NUL byte is treated as a binary STL of the wrong size.
+ * Errors (negative status, one line: "name: line N: what" for text,
+ * "name: triangle K: what" for binary STL, "name: byte B: face K: what" for
+ * binary PLY, "name: what" for whole-file problems): empty input, truncated
+ * or lying counts, malformed records, non-finite coordinates, vertex indices
+ * out of range, faces with fewer than 3 vertices, OFF variants 4OFF, nOFF
+ * and OFF BINARY (VM_ERR_UNSUPPORTED), data after the last record.
+ *
+ * Writing: atomic (temporary file + rename, via vm_outfile). Coordinates are
+ * written with 17 significant digits, so ASCII output reads back bit-exact;
+ * binary PLY stores doubles; binary STL stores float32 (rounded to nearest).
+ *  - STL: ASCII by default, binary if opts->binary; quads are split into two
+ *    triangles (0,1,2),(0,2,3) with a warning. Facet normals are computed.
+ *  - OBJ, OFF: triangles and quads, all vertices in mesh order.
+ *  - PLY: ASCII by default, binary_little_endian if opts->binary; double
+ *    x, y, z and an int vertex_indices list.
+ * Only surface elements can be written: a mesh with only volume elements
+ * gives VM_ERR_UNSUPPORTED and writes nothing; a mixed mesh has its
+ * triangles and quads written (all vertices, numbering kept) and its volume
+ * elements dropped with a warning. Fields, vertex flags / slip surface ids
+ * and attributes cannot be carried: one VM_LOG_WARN each. Any such loss
+ * makes the writer return VM_WARN_LOSSY (> 0) after writing the file.
+ *
+ * OpenMesh's own I/O is not used: in 9.0 its readers and writers round
+ * coordinates to float and its OBJ reader skips unparsable vertex lines
+ * silently, so the io library parses and writes these formats itself. */
+
+/* Solver formats (SU2, CGNS): volume meshes with named boundaries.
+ *
+ * How faces are grouped. The volume elements of the mesh's top dimension
+ * become the cells. Boundary faces (TRI / QUAD elements of the mesh) are
+ * grouped by the int element field "gmsh:physical" and named by the
+ * attributes "gmsh:physical_name:2:<tag>" ("wall", "outer" for the output
+ * of vm_prism_result); a face without a tag, or a tag without a name, goes
+ * to a family named "boundary_<tag>". If the mesh has no faces at all,
+ * its boundary faces (vm_mesh_boundary) form one family "boundary".
+ * Element fields of the cells (int or f64, one component; for example
+ * "layer") are written where the format can hold them.
+ *
+ * SU2 native mesh (.su2, ASCII): NDIME=3, NELEM with VTK type ids and
+ * 0-based indices, NPOIN with coordinates printed with 17 significant
+ * digits, NMARK with one MARKER_TAG per family. Fields cannot be stored
+ * (VM_WARN_LOSSY after writing, one VM_LOG_WARN). Atomic.
+ * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no volume elements),
+ * VM_ERR_UNSUPPORTED (pyramids mixed with others are fine; 2D meshes are
+ * not), VM_ERR_IO, VM_ERR_NOMEM.
+ *
+ * CGNS (.cgns, through libcgns): one base (cell dimension 3), one
+ * unstructured zone, coordinates in double, one element section per cell
+ * type (TETRA_4, PYRA_5, PENTA_6, HEXA_8; 1-based, VTK order equals CGNS
+ * order for these types), one section per face family (TRI_3 / QUAD_4),
+ * a Family_t per face family (BCWall for "wall", BCFarfield for "outer",
+ * else BCTypeUserDefined) and a BC_t per family referring to it by
+ * FamilyName with its element range at FaceCenter; cell fields as a
+ * cell-centred FlowSolution_t. Atomic (temporary file + rename).
+ * Returns VM_OK, VM_WARN_LOSSY (vertex fields, flags and attributes are
+ * not written), VM_ERR_UNSUPPORTED (built without libcgns), VM_ERR_ARG,
+ * VM_ERR_IO, VM_ERR_BACKEND (libcgns failed; its message on ctx),
+ * VM_ERR_NOMEM. */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

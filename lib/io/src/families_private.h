@@ -1,0 +1,26 @@
+/* lib/io/src/families_private.h: what the SU2 and CGNS writers share: the
+ * cells of the mesh and its boundary faces grouped into named families. */
+#ifndef VARMESH_FAMILIES_PRIVATE_H
+#define VARMESH_FAMILIES_PRIVATE_H
+
+#include <stdint.h>
+
+#include "varmesh/mesh.h"
+
+typedef struct {
+  int64_t ncell;
+  int32_t *cell;   /* element indices of the cells (top dimension) */
+  int nfam;
+  char **name;     /* family names (vm_strdup) */
+  int64_t *fbeg;   /* faces of family f: [fbeg[f], fbeg[f+1]) */
+  int64_t nface;
+  int32_t *fv;     /* 4 vertices per face (unused -1) */
+  uint8_t *fnv;    /* 3 or 4 */
+  int32_t *felem;  /* the face's element in the mesh, -1 if extracted */
+} ex_groups;
+
+/* Group the mesh's faces (see varmesh/io.h). */
+int ex_groups_build(vm_ctx *ctx, const vm_mesh *m, ex_groups *g);
+void ex_groups_free(vm_ctx *ctx, ex_groups *g);
+
+#endif

@@ -1,0 +1,266 @@
+/* lib/src/io.c: format dispatch by extension, whole-file reading with size
+ * checks, and atomic output through a temporary file and rename. */
+#include "varmesh/io.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "formats_private.h"
+
+/* Every format the project knows, in one table: its id, the names a user
+ * may give it (the first is the canonical one, then the file extensions),
+ * its reader and its writer (NULL where the format cannot be read or
+ * written). The library registers them itself: every program reads and
+ * writes every format. */
+static const struct vm_format_entry {
+  int fmt;
+  const char *names[3];
+  vm_reader_fn read;
+  vm_writer_fn write;
+} format_tab[] = {
+    {VM_FMT_VMSH, {"vmsh"}, vm_read_vmsh, vm_write_vmsh},
+    {VM_FMT_VMSH_TEXT, {"vmsht"}, vm_read_vmsh, vm_write_vmsh_text},
+    {VM_FMT_VTK, {"vtk"}, vm_read_vtk, vm_write_vtk},
+    {VM_FMT_VTU, {"vtu"}, vm_read_vtu, vm_write_vtu},
+    {VM_FMT_MSH, {"msh", "gmsh"}, vm_read_msh, vm_write_msh},
+    {VM_FMT_MEDIT, {"mesh", "medit"}, vm_read_medit, vm_write_medit},
+    {VM_FMT_STL, {"stl"}, vm_read_stl, vm_write_stl},
+    {VM_FMT_OBJ, {"obj"}, vm_read_obj, vm_write_obj},
+    {VM_FMT_OFF, {"off"}, vm_read_off, vm_write_off},
+    {VM_FMT_PLY, {"ply"}, vm_read_ply, vm_write_ply},
+    {VM_FMT_SU2, {"su2"}, NULL, vm_write_su2},
+    {VM_FMT_CGNS, {"cgns"}, NULL, vm_write_cgns},
+};
+#define NFORMATS (sizeof format_tab / sizeof format_tab[0])
+
+static const struct vm_format_entry *entry(int fmt) {
+  for (size_t i = 0; i < NFORMATS; i++)
+    if (format_tab[i].fmt == fmt) return &format_tab[i];
+  return NULL;
+}
+
+int vm_format_from_name(const char *name) {
+  for (size_t i = 0; i < NFORMATS; i++)
+    for (int k = 0; k < 3 && format_tab[i].names[k]; k++)
+      if (!strcasecmp(name, format_tab[i].names[k])) return format_tab[i].fmt;
+  return VM_FMT_AUTO;
+}
+
+int vm_format_from_path(const char *path) {
+  const char *dot = strrchr(path, '.');
+  const char *slash = strrchr(path, '/');
+  if (!dot || (slash && dot < slash)) return VM_FMT_AUTO;
+  return vm_format_from_name(dot + 1);
+}
+
+const char *vm_format_name(int f) {
+  if (f == VM_FMT_AUTO) return "auto";
+  const struct vm_format_entry *e = entry(f);
+  return e ? e->names[0] : "?";
+}
+
+int vm_format_can_read(int f) {
+  const struct vm_format_entry *e = entry(f);
+  return e && e->read;
+}
+
+int vm_format_can_write(int f) {
+  const struct vm_format_entry *e = entry(f);
+  return e && e->write;
+}
+
+vm_write_opts vm_write_opts_default(void) {
+  vm_write_opts o = {0, 41};
+  return o;
+}
+
+static void handlers(int fmt, vm_reader_fn *rd, vm_writer_fn *wr) {
+  const struct vm_format_entry *e = entry(fmt);
+  *rd = e ? e->read : NULL;
+  *wr = e ? e->write : NULL;
+}
+
+int vm_read_file(vm_ctx *ctx, const char *path, uint8_t **buf, size_t *len) {
+  *buf = NULL;
+  *len = 0;
+  FILE *f = fopen(path, "rb");
+  if (!f) return vm_error(ctx, VM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  struct stat st;
+  if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+    fclose(f);
+    return vm_error(ctx, VM_ERR_IO, "%s: not a regular file", path);
+  }
+  if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX / 2) {
+    fclose(f);
+    return vm_error(ctx, VM_ERR_IO, "%s: file too large", path);
+  }
+  size_t n = (size_t)st.st_size;
+  uint8_t *b = vm_malloc(ctx, n + 1);
+  if (!b) {
+    fclose(f);
+    return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory reading %zu bytes", path, n);
+  }
+  size_t got = fread(b, 1, n, f);
+  int bad = ferror(f);
+  fclose(f);
+  if (bad || got != n) {
+    vm_free(ctx, b);
+    return vm_error(ctx, VM_ERR_IO, "%s: read error", path);
+  }
+  b[n] = 0; /* text readers may rely on a terminating NUL */
+  *buf = b;
+  *len = n;
+  return VM_OK;
+}
+
+int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
+                        int format, vm_mesh **out) {
+  *out = NULL;
+  if (format == VM_FMT_AUTO) format = vm_format_from_path(name);
+  if (format == VM_FMT_AUTO)
+    return vm_error(ctx, VM_ERR_ARG, "%s: cannot tell the format from the extension", name);
+  vm_reader_fn rd;
+  vm_writer_fn wr;
+  handlers(format, &rd, &wr);
+  if (!rd)
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be read",
+                    name, vm_format_name(format));
+  int st = rd(ctx, name, buf, len, out);
+  if (st < 0) {
+    vm_mesh_destroy(out);
+    return st;
+  }
+  st = vm_mesh_check(*out);
+  if (st < 0) {
+    /* prefix the file name to the invariant message */
+    char msg[900];
+    snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
+    vm_mesh_destroy(out);
+    return vm_error(ctx, st, "%s: %s", name, msg);
+  }
+  return VM_OK;
+}
+
+int vm_mesh_read(vm_ctx *ctx, const char *path, int format, vm_mesh **out) {
+  *out = NULL;
+  if (format == VM_FMT_AUTO) format = vm_format_from_path(path);
+  if (format == VM_FMT_AUTO)
+    return vm_error(ctx, VM_ERR_ARG, "%s: cannot tell the format from the extension", path);
+  uint8_t *buf;
+  size_t len;
+  int st = vm_read_file(ctx, path, &buf, &len);
+  if (st) return st;
+  st = vm_mesh_read_memory(ctx, path, buf, len, format, out);
+  vm_free(ctx, buf);
+  return st;
+}
+
+int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
+                  const vm_write_opts *opts) {
+  if (format == VM_FMT_AUTO) format = vm_format_from_path(path);
+  if (format == VM_FMT_AUTO)
+    return vm_error(ctx, VM_ERR_ARG, "%s: cannot tell the format from the extension", path);
+  vm_reader_fn rd;
+  vm_writer_fn wr;
+  handlers(format, &rd, &wr);
+  if (!wr)
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be written",
+                    path, vm_format_name(format));
+  vm_write_opts def = vm_write_opts_default();
+  int st = vm_mesh_check(m);
+  if (st < 0) return st;
+  return wr(ctx, m, path, opts ? opts : &def);
+}
+
+struct vm_outfile {
+  vm_ctx *ctx;
+  FILE *fp;
+  char *path;
+  char *tmp;
+};
+
+int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out) {
+  *out = NULL;
+  static const char suffix[] = ".tmp.";
+  size_t n = strlen(path) + sizeof suffix + 48;
+  vm_outfile *f = vm_calloc(ctx, 1, sizeof *f);
+  char *tmp = vm_malloc(ctx, n);
+  char *p = vm_strdup(ctx, path);
+  if (!f || !tmp || !p) {
+    vm_free(ctx, f);
+    vm_free(ctx, tmp);
+    vm_free(ctx, p);
+    return VM_ERR_NOMEM;
+  }
+  /* pid + a counter keep concurrent writers of the same path apart */
+  static _Thread_local unsigned long counter;
+  snprintf(tmp, n, "%s%s%ld.%lu", path, suffix, (long)getpid(), ++counter);
+  f->fp = fopen(tmp, "wb");
+  if (!f->fp) {
+    int e = errno;
+    vm_free(ctx, f);
+    vm_free(ctx, tmp);
+    vm_free(ctx, p);
+    return vm_error(ctx, VM_ERR_IO, "%s: cannot create: %s", path, strerror(e));
+  }
+  f->ctx = ctx;
+  f->tmp = tmp;
+  f->path = p;
+  *out = f;
+  return VM_OK;
+}
+
+FILE *vm_outfile_fp(vm_outfile *f) { return f->fp; }
+
+static void outfile_free(vm_outfile *f) {
+  vm_ctx *ctx = f->ctx;
+  vm_free(ctx, f->tmp);
+  vm_free(ctx, f->path);
+  vm_free(ctx, f);
+}
+
+void vm_outfile_abort(vm_outfile **pf) {
+  if (!pf || !*pf) return;
+  vm_outfile *f = *pf;
+  if (f->fp) fclose(f->fp);
+  remove(f->tmp);
+  outfile_free(f);
+  *pf = NULL;
+}
+
+int vm_outfile_commit(vm_outfile **pf) {
+  vm_outfile *f = *pf;
+  vm_ctx *ctx = f->ctx;
+  int bad = fflush(f->fp) != 0 || ferror(f->fp);
+  bad |= fclose(f->fp) != 0;
+  f->fp = NULL;
+  if (bad) {
+    int st = vm_error(ctx, VM_ERR_IO, "%s: write failed: %s", f->path, strerror(errno));
+    vm_outfile_abort(pf);
+    return st;
+  }
+  if (rename(f->tmp, f->path) != 0) {
+    int st = vm_error(ctx, VM_ERR_IO, "%s: cannot rename into place: %s", f->path,
+                      strerror(errno));
+    vm_outfile_abort(pf);
+    return st;
+  }
+  outfile_free(f);
+  *pf = NULL;
+  return VM_OK;
+}
+
+int vm_error_name_prefix(vm_ctx *ctx, int st, const char *name) {
+  const char *e = vm_ctx_error(ctx);
+  size_t nl = strlen(name);
+  if (strncmp(e, name, nl) || e[nl] != ':') {
+    char msg[900];
+    snprintf(msg, sizeof msg, "%s", e);
+    vm_error(ctx, st, "%s: %s", name, msg);
+  }
+  return st;
+}

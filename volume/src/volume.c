@@ -1,0 +1,559 @@
+/* volume/src/volume.c: the volume stage's schedule: global untangling by
+ * penalty (35) or barrier contraction (39), local untangling of subdomains
+ * around what is still inverted, optimization with a barrier measure, and
+ * quasi-isometric continuation (11). */
+#include "varmesh/volume.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "varmesh/problem.h"
+#include "varmesh/topology.h"
+
+vm_volume_opts vm_volume_opts_default(void) {
+  vm_volume_opts o;
+  memset(&o, 0, sizeof o);
+  o.method = VM_UNTANGLE_ADAPTIVE;
+  o.solver = VM_MINIMIZER_IMPLICIT;
+  o.rule = VM_RULE_CORNER;
+  o.measure = VM_MEASURE_BALANCED;
+  o.theta = 0.8;
+  o.delta0 = 1e-11;
+  o.sigma = 0.5;
+  o.kappa = 0.7;
+  o.eps_inner = 10;
+  o.max_iter = 20000;
+  o.opt_iter = 100;
+  o.local_threshold = 100;
+  o.local_rings = 3;
+  o.eps_restart = 1e-2;
+  return o;
+}
+
+const char *vm_untangle_method_name(vm_untangle_method m) {
+  switch (m) {
+  case VM_UNTANGLE_PENALTY:
+    return "penalty";
+  case VM_UNTANGLE_PENALTY_ONEWAY:
+    return "penalty-oneway";
+  case VM_UNTANGLE_BARRIER:
+    return "barrier";
+  case VM_UNTANGLE_ADAPTIVE:
+    return "adaptive";
+  case VM_UNTANGLE_FOLDOVER:
+    return "foldover";
+  }
+  return "?";
+}
+
+typedef struct {
+  vm_ctx *ctx;
+  vm_mesh *m;
+  vm_problem *P;
+  const vm_volume_opts *o;
+  vm_volume_report *rep;
+  const vm_surface_ops *surf;
+  int64_t nnodes;
+  double *dets;     /* per node, at the last statistics */
+  double *node_eps; /* one-way penalty */
+  int split_stage;  /* staged: untangling the 6-tet split (M_max, best not kept) */
+  uint8_t *guard;   /* staged: nodes kept admissible (eps = delta0), or NULL */
+  double *best;     /* coordinates with the fewest inverted nodes */
+  int64_t best_M;
+  int64_t M;        /* at the last statistics */
+  double min_det;
+  double eps;
+  const char *phase;
+  const char *phase_name; /* of the global untangling phase */
+  int phase_iter;
+  int total_iter;
+  int go_local;     /* the global phase stops when few nodes remain inverted */
+  double F_before;  /* adaptive: F before and after the last step (same eps) */
+  double F_after;
+  int have_step;
+  int done;         /* adaptive: det >= eps everywhere: untangled with margin */
+  double pressure;  /* adaptive: multiplier of (35), halved on stalls */
+  int block_iter;   /* foldover: iterations at the current eps */
+  double F_block0;  /* foldover: F before the first of them */
+  double eps_restart; /* foldover: least eps after a stalled local round */
+  double t0;
+} ut_state;
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Node determinants at x: M, min det, and the best state so far. */
+static int stats(ut_state *s, const double *x) {
+  int st = vm_problem_node_dets(s->P, x, s->dets);
+  if (st < 0) return st;
+  int64_t M = 0;
+  double mn = INFINITY;
+  for (int64_t q = 0; q < s->nnodes; q++) {
+    if (s->dets[q] <= 0) M++;
+    /* a guard's small positive det is not what eps should follow */
+    if (s->dets[q] < mn && (!s->guard || !s->guard[q] || s->dets[q] <= 0)) mn = s->dets[q];
+  }
+  s->M = M;
+  s->min_det = mn;
+  if (s->split_stage) {
+    if (M > s->rep->split_M_max) s->rep->split_M_max = M;
+  } else if (M > s->rep->M_max) {
+    s->rep->M_max = M;
+  }
+  /* the split's counts are not the rule's (the guarded stage's are: its
+   * split nodes stay positive) */
+  if (!s->split_stage && M < s->best_M) {
+    s->best_M = M;
+    memcpy(s->best, x, (size_t)s->m->nv * 3 * sizeof *x);
+  }
+  return VM_OK;
+}
+
+/* (35), or (39) for the barrier; the one-way variant gives non-degenerate
+ * nodes delta0; the adaptive rule lowers eps by the progress of the last
+ * step. Called before every untangling iteration. */
+static int update_eps(ut_state *s, int first) {
+  const vm_volume_opts *o = s->o;
+  double neg = s->min_det < 0 ? -s->min_det : 0;
+  vm_measure_params prm = *vm_problem_params(s->P);
+  switch (o->method) {
+  case VM_UNTANGLE_BARRIER:
+    if (first)
+      s->eps = neg > 0 ? 1.5 * neg : o->delta0;
+    else
+      s->eps = fmax(o->delta0, s->eps - o->sigma * (s->eps - neg)); /* (39) */
+    /* degenerate (det = 0) nodes need eps > 0 strictly above |min det| */
+    if (s->eps <= neg) s->eps = neg + o->delta0;
+    break;
+  case VM_UNTANGLE_ADAPTIVE: {
+    /* (35) scaled by a pressure factor that halves whenever a step stalls
+     * (a stationary point of P_eps with folds left: a smaller eps makes
+     * folds dearer), and falling by at most kappa per iteration, so nodes
+     * squeezed towards det = 0 from below see a smooth penalty and cross
+     * instead of shrinking with eps; done once det >= eps everywhere */
+    double e35 = sqrt(o->delta0 * o->delta0 + 0.004 * neg * neg);
+    if (first) {
+      s->pressure = 1;
+      s->eps = e35;
+      break;
+    }
+    if (s->M == 0 && s->min_det >= s->eps) {
+      s->done = 1;
+      break;
+    }
+    if (s->have_step && s->F_before - s->F_after < 1e-3 * fabs(s->F_before))
+      s->pressure = fmax(0.5 * s->pressure, 0.1);
+    s->eps = fmax(fmax(s->pressure * e35, o->delta0), o->kappa * s->eps);
+    break;
+  }
+  case VM_UNTANGLE_FOLDOVER: {
+    /* eps stays for eps_inner iterations (or until a step stalls); then
+     * chi_eps at the worst node is scaled by mu = min(F_end/F_start, 0.9)
+     * of that block, which fixes the new eps: chi_eps'(D) = mu chi_eps(D)
+     * <=> eps' = 2 sqrt(mu' (mu' - D)) with mu' = mu chi_eps(D) */
+    if (first) {
+      s->eps = fmax(neg > 0 ? neg : o->delta0, s->eps_restart);
+      s->eps_restart = 0;
+      s->block_iter = 0;
+      break;
+    }
+    int stalled = s->have_step && s->F_before - s->F_after <= 1e-6 * fabs(s->F_before);
+    if (s->block_iter < o->eps_inner && !stalled) break; /* re-applied: a phase may reset it */
+    double D = s->min_det, q = sqrt(s->eps * s->eps + D * D);
+    double chi = D >= 0 ? 0.5 * (D + q) : 0.5 * s->eps * s->eps / (q - D);
+    double ratio = s->block_iter > 0 && s->F_block0 > 0 ? s->F_after / s->F_block0 : 1;
+    double mu = fmin(ratio, 0.9) * chi;
+    s->eps = D < mu ? 2 * sqrt(mu * (mu - D)) : o->delta0;
+    if (s->eps < o->delta0) s->eps = o->delta0;
+    s->block_iter = 0;
+    break;
+  }
+  default:
+    s->eps = sqrt(o->delta0 * o->delta0 + 0.004 * neg * neg); /* (35) */
+    if (o->method == VM_UNTANGLE_PENALTY_ONEWAY) {
+      for (int64_t q = 0; q < s->nnodes; q++)
+        s->node_eps[q] = s->dets[q] > 0 ? o->delta0 : s->eps;
+      int st = vm_problem_set_node_eps(s->P, s->node_eps);
+      if (st < 0) return st;
+    }
+  }
+  if (s->guard) {
+    /* staged: the split's nodes, all positive, are held there by the
+     * smallest eps (a wall of height ~ 1/delta0 at det = 0) */
+    int oneway = o->method == VM_UNTANGLE_PENALTY_ONEWAY;
+    for (int64_t q = 0; q < s->nnodes; q++)
+      s->node_eps[q] = s->guard[q] ? o->delta0 : oneway ? s->node_eps[q] : s->eps;
+    int st = vm_problem_set_node_eps(s->P, s->node_eps);
+    if (st < 0) return st;
+  }
+  prm.eps = s->eps;
+  return vm_problem_set_params(s->P, &prm);
+}
+
+static int before_untangle(void *user, int iter, const double *x) {
+  ut_state *s = user;
+  int st = stats(s, x);
+  if (st < 0) return st;
+  int adaptive = s->o->method == VM_UNTANGLE_ADAPTIVE;
+  /* the adaptive rule goes on past M = 0 until min det clears mu */
+  if (s->M == 0 && (!adaptive || s->done)) return 1;
+  if (s->go_local && s->M > 0 && s->M < s->o->local_threshold) return 1;
+  if ((st = update_eps(s, iter == 1 && s->eps == 0)) < 0) return st;
+  if (adaptive && s->M == 0 && s->done) return 1;
+  s->have_step = 0;
+  return VM_OK;
+}
+
+static int before_plain(void *user, int iter, const double *x) {
+  (void)user;
+  (void)iter;
+  (void)x;
+  return 0;
+}
+
+static void monitor(void *user, const vm_iter_info *it) {
+  ut_state *s = user;
+  s->F_before = it->F_before;
+  s->F_after = it->F;
+  s->have_step = 1;
+  if (s->block_iter == 0) s->F_block0 = it->F_before;
+  s->block_iter++;
+  s->phase_iter = it->iter;
+  s->total_iter++;
+  if (!s->o->progress) return;
+  vm_volume_progress p = {s->phase,   it->iter,     s->total_iter, it->F,
+                          it->inverted, it->min_det, s->eps,      it->tau,
+                          it->pcg_iters, now() - s->t0};
+  s->o->progress(s->o->user, &p);
+}
+
+/* Run one minimizer phase. */
+static int run_phase(ut_state *s, const char *phase, vm_minimizer_kind kind, int max_iter,
+                     vm_before_iteration_fn hook, vm_minimize_result *res) {
+  const vm_volume_opts *o = s->o;
+  vm_minimizer *mz = NULL;
+  int st = vm_minimizer_create(s->ctx, s->P, kind, &mz);
+  if (st < 0) return st;
+  vm_minimize_options mo = vm_minimize_options_default();
+  mo.max_iter = max_iter;
+  /* untangling phases end by their own tests or limits; optimization when
+   * F stops decreasing */
+  mo.rel_decrease_tol = hook == before_plain ? 1e-9 : 0;
+  mo.grad_rtol = 1e-12;
+  if (o->time_limit > 0) {
+    mo.time_limit = o->time_limit - (now() - s->t0);
+    if (mo.time_limit <= 0) mo.time_limit = 1e-3;
+  }
+  if (kind == VM_MINIMIZER_NEWTON) {
+    /* the coupled 3n system: block Jacobi beats the block AMG per second
+     * while the Hessian changes fast (untangling) */
+    mo.precond = VM_PRECOND_BLOCK_JACOBI;
+    mo.pcg_maxit = 200;
+  }
+  mo.monitor = monitor;
+  mo.before_iteration = hook;
+  mo.user = s;
+  s->phase = phase;
+  if ((st = vm_minimizer_set_options(mz, &mo)) < 0) goto done;
+  if (s->surf && (st = vm_minimizer_set_surfaces(mz, s->surf)) < 0) goto done;
+  st = vm_minimizer_run(mz, s->m->xyz, res);
+  s->rep->last_stop = res->reason;
+done:
+  vm_minimizer_destroy(&mz);
+  return st;
+}
+
+static int out_of_time(const ut_state *s) {
+  return s->o->time_limit > 0 && now() - s->t0 >= s->o->time_limit;
+}
+
+/* Elements within `rings` layers of the elements holding inverted nodes;
+ * vertices of other elements are frozen (saved flags restored by caller). */
+static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t *vel,
+                      uint8_t *emask, uint8_t *vmark) {
+  const vm_mesh *m = s->m;
+  const int32_t *nel = vm_problem_node_elements(s->P);
+  memset(emask, 0, (size_t)m->ne);
+  for (int64_t q = 0; q < s->nnodes; q++)
+    if (s->dets[q] <= 0) emask[nel[q]] = 1;
+  for (int r = 0; r < rings; r++) {
+    memset(vmark, 0, (size_t)m->nv);
+    for (int64_t e = 0; e < m->ne; e++)
+      if (emask[e])
+        for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) vmark[m->conn[k]] = 1;
+    for (int64_t v = 0; v < m->nv; v++)
+      if (vmark[v])
+        for (int64_t k = vrp[v]; k < vrp[v + 1]; k++) emask[vel[k]] = 1;
+  }
+  /* a vertex may move only if every element around it is in the functional:
+   * otherwise it would fold the elements outside unseen */
+  for (int64_t v = 0; v < m->nv; v++) {
+    vmark[v] = vrp[v + 1] > vrp[v];
+    for (int64_t k = vrp[v]; k < vrp[v + 1]; k++)
+      if (!emask[vel[k]]) vmark[v] = 0;
+  }
+  return VM_OK;
+}
+
+/* Local untangling: penalty on subdomains with the explicit solver, rings
+ * growing when a round makes no progress. */
+static int local_phase(ut_state *s, int *budget) {
+  vm_mesh *m = s->m;
+  vm_ctx *ctx = s->ctx;
+  int64_t *vrp = NULL;
+  int32_t *vel = NULL;
+  uint8_t *emask = vm_malloc(ctx, (size_t)m->ne + 1);
+  uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
+  uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
+  int st = (!emask || !vmark || !saved) ? VM_ERR_NOMEM : vm_mesh_vertex_elements(m, &vrp, &vel);
+  int rings = s->o->local_rings, stalls = 0;
+  while (st >= 0 && s->M > 0 && *budget > 0 && !out_of_time(s) && rings <= 4 * s->o->local_rings + 8) {
+    int64_t M0 = s->M;
+    local_mask(s, rings, vrp, vel, emask, vmark);
+    memcpy(saved, m->vflag, (size_t)m->nv);
+    for (int64_t v = 0; v < m->nv; v++)
+      if (!vmark[v]) m->vflag[v] = VM_VERTEX_FIXED;
+    if ((st = vm_problem_set_active(s->P, emask)) < 0) break;
+    vm_minimize_result res;
+    int chunk = *budget < 200 ? *budget : 200;
+    s->go_local = 0;
+    st = run_phase(s, "local", VM_MINIMIZER_EXPLICIT, chunk, before_untangle, &res);
+    memcpy(m->vflag, saved, (size_t)m->nv);
+    int st2 = vm_problem_set_active(s->P, NULL);
+    if (st >= 0 && st2 < 0) st = st2;
+    s->rep->iter_local += res.iterations;
+    *budget -= res.iterations > 0 ? res.iterations : 1;
+    if (st < 0) break;
+    if ((st = stats(s, m->xyz)) < 0) break;
+    if (s->M >= M0) {
+      stalls++;
+      rings += 2;
+      /* eps starts again from the worst det: the rule may have driven it
+       * far below |min det|, where the penalty of the folds left is so
+       * steep that the explicit steps no longer move them */
+      s->eps = 0;
+      /* and not below eps_restart: a fold squeezed flat (det ~ -1e-10)
+       * would restart from an eps too small to lift it */
+      s->eps_restart = s->o->eps_restart;
+    } else {
+      stalls = 0;
+    }
+  }
+  vm_free(ctx, emask);
+  vm_free(ctx, vmark);
+  vm_free(ctx, saved);
+  vm_free(ctx, vrp);
+  vm_free(ctx, vel);
+  return st;
+}
+
+/* Largest t in [lo, 1) with W_t finite at the current mesh (bisection on
+ * the domain test det > t phi). */
+static double qi_feasible_t(ut_state *s, double lo) {
+  vm_measure_params prm = *vm_problem_params(s->P);
+  double a = lo, b = 1.0;
+  for (int k = 0; k < 30; k++) {
+    double t = 0.5 * (a + b), F;
+    prm.t = t;
+    vm_problem_set_params(s->P, &prm);
+    if (vm_problem_value(s->P, s->m->xyz, &F) == VM_OK && isfinite(F))
+      a = t;
+    else
+      b = t;
+  }
+  return a;
+}
+
+/* Global untangling, local rounds, and back to global if they stall. */
+static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budget) {
+  const vm_volume_opts *o = s->o;
+  vm_measure_params prm = *prm0;
+  vm_minimize_result res;
+  int st = VM_OK;
+  for (int round = 0; s->M > 0 && *budget > 0 && !out_of_time(s) && round < 50; round++) {
+    vm_measure_kind k = o->method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
+    prm.drop_chi2 = 1;
+    vm_measure_params pu = prm;
+    if (o->theta_untangle > 0) pu.theta = o->theta_untangle;
+    if ((st = vm_problem_set_measure(s->P, k, &pu)) < 0) return st;
+    if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
+    s->go_local = o->local_threshold > 0;
+    int64_t M0 = s->M;
+    st = run_phase(s, s->phase_name, o->solver, *budget, before_untangle, &res);
+    s->rep->iter_untangle += res.iterations;
+    *budget -= res.iterations > 0 ? res.iterations : 1;
+    if (st < 0) return st;
+    if ((st = stats(s, s->m->xyz)) < 0) return st;
+    if (s->M > 0 && s->M < o->local_threshold) {
+      vm_problem_set_measure(s->P, k, &prm);
+      if ((st = local_phase(s, budget)) < 0) return st;
+      vm_problem_set_node_eps(s->P, NULL);
+    }
+    if (s->M > 0 && s->M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
+  }
+  return st;
+}
+
+static int has_hex(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (m->etype[e] == VM_HEX) return 1;
+  return 0;
+}
+
+/* The per-node arrays sized for the problem's present rule; no guards. */
+static int size_node_arrays(ut_state *s) {
+  s->nnodes = vm_problem_num_nodes(s->P);
+  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
+  vm_free(s->ctx, s->dets);
+  vm_free(s->ctx, s->node_eps);
+  vm_free(s->ctx, s->guard);
+  s->guard = NULL;
+  s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
+  s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
+  return s->dets && s->node_eps ? VM_OK : VM_ERR_NOMEM;
+}
+
+/* Switch the problem to `rule` for a stage: node arrays sized for it, the
+ * split's nodes of the guarded rules marked as guards. */
+static int set_stage_rule(ut_state *s, vm_rule rule) {
+  int st = vm_problem_set_rule(s->P, rule);
+  if (st < 0 || (st = size_node_arrays(s)) < 0) return st;
+  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
+  if (rule == VM_RULE_CORNER_SPLIT || rule == VM_RULE_GEOMETRIC_SPLIT) {
+    /* the split's nodes follow the base rule's */
+    int first_guard = vm_qrule_get(VM_HEX, rule == VM_RULE_CORNER_SPLIT ? VM_RULE_CORNER
+                                                                         : VM_RULE_GEOMETRIC)
+                          ->nnodes;
+    if (!(s->guard = vm_alloc_array(s->ctx, nn, 1))) return VM_ERR_NOMEM;
+    const int32_t *nel = vm_problem_node_elements(s->P);
+    int64_t first = 0;
+    for (int64_t q = 0; q < s->nnodes; q++) {
+      if (q == 0 || nel[q] != nel[q - 1]) first = q;
+      s->guard[q] = s->m->etype[nel[q]] == VM_HEX && q - first >= first_guard;
+    }
+  }
+  s->eps = 0;
+  return VM_OK;
+}
+
+int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
+                  const vm_volume_opts *opts, vm_volume_report *report) {
+  vm_volume_opts o = opts ? *opts : vm_volume_opts_default();
+  vm_volume_report rep;
+  memset(&rep, 0, sizeof rep);
+  ut_state s;
+  memset(&s, 0, sizeof s);
+  s.ctx = ctx;
+  s.m = m;
+  s.o = &o;
+  s.rep = &rep;
+  s.surf = surf;
+  s.t0 = now();
+  s.best_M = INT64_MAX;
+  s.phase_name = "untangle";
+  int st = vm_problem_create(ctx, m, &s.P);
+  if (st < 0) return st;
+  vm_measure_params prm = vm_measure_params_default();
+  prm.theta = o.theta;
+  if ((st = vm_problem_set_rule(s.P, o.rule)) < 0) goto done;
+  if (o.target_xyz)
+    st = vm_problem_set_target_reference(s.P, o.target_xyz);
+  else
+    st = vm_problem_set_target_ideal(s.P, o.target_size);
+  if (st < 0) goto done;
+  s.best = vm_alloc_array(ctx, (size_t)m->nv * 3 + 1, sizeof *s.best);
+  if (!s.best) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  if ((st = size_node_arrays(&s)) < 0) goto done;
+  rep.nodes = s.nnodes;
+  if ((st = stats(&s, m->xyz)) < 0) goto done;
+  rep.M_init = rep.M_max = s.M;
+  int budget = o.max_iter;
+  vm_minimize_result res;
+  if (o.staged && (o.rule == VM_RULE_CORNER || o.rule == VM_RULE_GEOMETRIC) && has_hex(m) &&
+      s.M > 0) {
+    /* the 6-tet split first (the most freedom to find the twist), then the
+     * rule's nodes with the split kept admissible, then the rule alone */
+    s.split_stage = 1;
+    if ((st = set_stage_rule(&s, VM_RULE_SPLIT)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+    rep.split_M_init = s.M;
+    s.phase_name = "split";
+    st = untangle_rounds(&s, &prm, &budget);
+    s.split_stage = 0;
+    if (st < 0) goto done;
+    rep.split_valid = s.M == 0;
+    rep.time_split = now() - s.t0;
+    if (s.M == 0) {
+      vm_rule g = o.rule == VM_RULE_CORNER ? VM_RULE_CORNER_SPLIT : VM_RULE_GEOMETRIC_SPLIT;
+      if ((st = set_stage_rule(&s, g)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+      s.phase_name = "guarded";
+      if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
+    }
+    if ((st = set_stage_rule(&s, o.rule)) < 0 || (st = stats(&s, m->xyz)) < 0) goto done;
+    s.phase_name = "untangle";
+  }
+  if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
+  if (s.M > 0 && s.best_M < s.M) memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
+  rep.time_untangle = now() - s.t0;
+  if (s.M == 0 && !out_of_time(&s)) {
+    /* optimization: a barrier measure keeps the mesh admissible */
+    if ((st = vm_problem_set_node_eps(s.P, NULL)) < 0) goto done;
+    s.eps = 0;
+    if ((st = vm_problem_set_measure(s.P, o.measure, &prm)) < 0) goto done;
+    if (o.opt_iter > 0) {
+      st = run_phase(&s, "optimize", o.solver, o.opt_iter, before_plain, &res);
+      rep.iter_opt += res.iterations;
+      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+    }
+    /* (11): raise t of W_t by continuation to push up the worst element */
+    for (int k = 0; k < o.qi_steps && st >= 0 && !out_of_time(&s); k++) {
+      if ((st = vm_problem_set_measure(s.P, VM_MEASURE_QUASI_ISO, &prm)) < 0) goto done;
+      double tmax = qi_feasible_t(&s, rep.t_reached);
+      vm_measure_params q = prm;
+      q.t = rep.t_reached + 0.9 * (tmax - rep.t_reached);
+      s.eps = q.t;
+      if ((st = vm_problem_set_params(s.P, &q)) < 0) goto done;
+      st = run_phase(&s, "quasi-iso", o.solver, o.opt_iter > 0 ? o.opt_iter : 50, before_plain,
+                     &res);
+      rep.iter_opt += res.iterations;
+      rep.t_reached = q.t;
+    }
+    if (st > 0) st = VM_OK;
+  }
+  if (st >= 0 && (st = stats(&s, m->xyz)) < 0) goto done;
+  {
+    vm_node_stats ns;
+    vm_problem_set_measure(s.P, VM_MEASURE_BALANCED, &prm);
+    vm_problem_node_stats(s.P, m->xyz, &ns);
+    rep.phi_min = ns.phi_min;
+    rep.psi_min = ns.psi_min;
+    rep.min_det = ns.min_det;
+    rep.M_final = ns.inverted;
+  }
+  rep.valid = rep.M_final == 0;
+  if (st >= 0) st = rep.valid ? VM_OK : VM_WARN_INVERTED;
+done:
+  rep.time_total = now() - s.t0;
+  rep.timed_out = out_of_time(&s);
+  if (st == VM_ERR_INTERRUPTED && (s.split_stage || s.guard)) {
+    /* interrupted while staged: count the rule's own nodes again */
+    s.split_stage = 0;
+    if (set_stage_rule(&s, o.rule) < 0 || stats(&s, m->xyz) < 0) s.M = INT64_MAX;
+  }
+  if (st == VM_ERR_INTERRUPTED && s.best_M < INT64_MAX && s.M > s.best_M)
+    memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
+  vm_free(ctx, s.dets);
+  vm_free(ctx, s.node_eps);
+  vm_free(ctx, s.best);
+  vm_free(ctx, s.guard);
+  vm_problem_destroy(&s.P);
+  if (report) *report = rep;
+  return st;
+}
