@@ -1,4 +1,4 @@
-/* lib/src/amg.c: smoothed-aggregation algebraic multigrid preconditioner
+/* lib/core/src/amg.c: smoothed-aggregation algebraic multigrid preconditioner
  * (symmetric V-cycle with damped Jacobi smoothing, dense coarsest solve). */
 #include <math.h>
 #include <omp.h>

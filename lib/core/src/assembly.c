@@ -1,4 +1,4 @@
-/* lib/src/assembly.c: F of (13)/(20), its gradient and Hessian blocks over
+/* lib/core/src/assembly.c: F of (13)/(20), its gradient and Hessian blocks over
  * all quadrature nodes, parallel over an element colouring, with the same
  * bits for any number of threads; node statistics and determinants. */
 #include <math.h>

@@ -1,4 +1,4 @@
-/* lib/src/boundary.c: boundary conditions of the minimizers: fixed, free
+/* lib/core/src/boundary.c: boundary conditions of the minimizers: fixed, free
  * and slip vertices with tangent-cone projectors L_k (30)-(33), and the
  * analytic constraint surfaces (plane, sphere, box). */
 #include "varmesh/boundary.h"

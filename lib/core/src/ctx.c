@@ -1,4 +1,4 @@
-/* lib/src/ctx.c: context: error text, logging, counted allocator with
+/* lib/core/src/ctx.c: context: error text, logging, counted allocator with
  * failure injection, thread count, interrupt flag, seeded RNG. */
 #include "varmesh/ctx.h"
 

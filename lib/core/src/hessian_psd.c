@@ -1,4 +1,4 @@
-/* lib/src/hessian_psd.c: positive semidefinite projection of the Hessian of
+/* lib/core/src/hessian_psd.c: positive semidefinite projection of the Hessian of
  * W(C) = f(s, det), s = tr C^T C: the analytic eigensystem of Smith, de
  * Goes and Kim (2019) in 3D through the signed SVD C = U diag(sig) V^T,
  * dense Jacobi for the small 2D systems. Only the negative eigenpairs are

@@ -1,4 +1,4 @@
-/* lib/src/hessian_psd_private.h: small dense eigensolvers and the analytic
+/* lib/core/src/hessian_psd_private.h: small dense eigensolvers and the analytic
  * eigensystem of the Hessian of W(C) = f(tr C^T C, det C) (Smith, de Goes,
  * Kim 2019), used to project each quadrature node's Hessian to positive
  * semidefinite for Newton's method (hessian_psd.c). */

@@ -1,4 +1,4 @@
-/* lib/src/linsolve_private.h: preconditioner operation table and the
+/* lib/core/src/linsolve_private.h: preconditioner operation table and the
  * deterministic vector kernels shared by pcg.c, amg.c and the minimizers. */
 #ifndef VARMESH_LINSOLVE_PRIVATE_H
 #define VARMESH_LINSOLVE_PRIVATE_H

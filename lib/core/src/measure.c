@@ -1,4 +1,4 @@
-/* lib/src/measure.c: distortion measure interface: registry, parameters and
+/* lib/core/src/measure.c: distortion measure interface: registry, parameters and
  * the chain rule from f(s, det) to W(C), its gradient and Hessian. */
 #include "varmesh/measure.h"
 

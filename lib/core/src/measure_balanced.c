@@ -1,4 +1,4 @@
-/* lib/src/measure_balanced.c: the balanced measure (10) W = phi_theta/det. */
+/* lib/core/src/measure_balanced.c: the balanced measure (10) W = phi_theta/det. */
 #include <math.h>
 
 #include "measure_private.h"

@@ -1,4 +1,4 @@
-/* lib/src/measure_barrier.c: the extended barrier B_eps = phi_theta/(det + eps)
+/* lib/core/src/measure_barrier.c: the extended barrier B_eps = phi_theta/(det + eps)
  * of (17), finite on the widened admissible set det > -eps. */
 #include <math.h>
 

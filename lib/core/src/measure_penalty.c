@@ -1,4 +1,4 @@
-/* lib/src/measure_penalty.c: the penalty form P_eps = phi_theta/chi_eps(det)
+/* lib/core/src/measure_penalty.c: the penalty form P_eps = phi_theta/chi_eps(det)
  * of (14), (16), finite for every det when eps > 0. */
 #include <math.h>
 

@@ -1,4 +1,4 @@
-/* lib/src/measure_private.h: pieces shared by the distortion measure files:
+/* lib/core/src/measure_private.h: pieces shared by the distortion measure files:
  * phi_theta with its partials, the product rule for f = phi(s, det) r(det),
  * and the per-kind function tables collected by measure.c. */
 #ifndef VARMESH_MEASURE_PRIVATE_H

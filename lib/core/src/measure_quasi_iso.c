@@ -1,4 +1,4 @@
-/* lib/src/measure_quasi_iso.c: the quasi-isometric measure (11)
+/* lib/core/src/measure_quasi_iso.c: the quasi-isometric measure (11)
  * W_t = (1-t) phi_theta/(det - t phi_theta), finite where det > t phi_theta. */
 #include <math.h>
 

@@ -1,4 +1,4 @@
-/* lib/src/measure_shape.c: scale-invariant shape measures W_s = (s/3)^{3/2}/det
+/* lib/core/src/measure_shape.c: scale-invariant shape measures W_s = (s/3)^{3/2}/det
  * and the alternative (s/3)/det^{2/3} (3D); both are (s/2)/det in 2D. */
 #include <math.h>
 

@@ -1,4 +1,4 @@
-/* lib/src/mesh.c: the mesh model: element tables, storage, fields,
+/* lib/core/src/mesh.c: the mesh model: element tables, storage, fields,
  * attributes, invariant checks. */
 #include "varmesh/mesh.h"
 

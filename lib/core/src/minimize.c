@@ -1,4 +1,4 @@
-/* lib/src/minimize.c: the minimizer interface and driver: projected
+/* lib/core/src/minimize.c: the minimizer interface and driver: projected
  * gradient (30), line search on tau (33), (37), stopping rules, monitor. */
 #include <math.h>
 #include <omp.h>

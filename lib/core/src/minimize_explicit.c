@@ -1,4 +1,4 @@
-/* lib/src/minimize_explicit.c: the explicit minimizer: H_ij = 0 for i != j
+/* lib/core/src/minimize_explicit.c: the explicit minimizer: H_ij = 0 for i != j
  * (34), a projected 3x3 Newton step per vertex. */
 #include <math.h>
 #include <string.h>

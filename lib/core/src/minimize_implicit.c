@@ -1,4 +1,4 @@
-/* lib/src/minimize_implicit.c: the implicit minimizer: the off-diagonal
+/* lib/core/src/minimize_implicit.c: the implicit minimizer: the off-diagonal
  * entries of the projected blocks L_i^T H_ij L_j are neglected, which
  * splits (32) into one sparse SPD system per coordinate m, each solved
  * inexactly by preconditioned CG.

@@ -1,4 +1,4 @@
-/* lib/src/minimize_newton.c: the Newton minimizer: the full Hessian, with
+/* lib/core/src/minimize_newton.c: the Newton minimizer: the full Hessian, with
  * each quadrature node's part projected to positive semidefinite
  * (vm_problem_eval_blocks, psd), in 3x3 blocks that couple the coordinates
  * of every vertex pair, so twists of the mesh (which need x-y coupling)

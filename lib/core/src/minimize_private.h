@@ -1,4 +1,4 @@
-/* lib/src/minimize_private.h: the minimizer object and the operation table
+/* lib/core/src/minimize_private.h: the minimizer object and the operation table
  * each member of the family (minimize_explicit.c, minimize_implicit.c) fills. */
 #ifndef VARMESH_MINIMIZE_PRIVATE_H
 #define VARMESH_MINIMIZE_PRIVATE_H

@@ -1,4 +1,4 @@
-/* lib/src/pcg.c: CSR matrices, the preconditioner interface with its
+/* lib/core/src/pcg.c: CSR matrices, the preconditioner interface with its
  * Jacobi member, deterministic inner products and preconditioned CG. */
 #include <math.h>
 #include <omp.h>

@@ -1,4 +1,4 @@
-/* lib/src/problem.c: setup of the discrete functional (13)/(20): active
+/* lib/core/src/problem.c: setup of the discrete functional (13)/(20): active
  * elements, quadrature nodes, targets, metric, weights, normals, the vertex
  * graph and the element colouring the assembly runs on. */
 #include "varmesh/problem.h"

@@ -1,4 +1,4 @@
-/* lib/src/problem_private.h: the layout of vm_problem, shared by its setup
+/* lib/core/src/problem_private.h: the layout of vm_problem, shared by its setup
  * (problem.c) and its assembly (assembly.c); lib/ only. */
 #ifndef VARMESH_PROBLEM_PRIVATE_H
 #define VARMESH_PROBLEM_PRIVATE_H

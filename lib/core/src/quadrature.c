@@ -1,4 +1,4 @@
-/* lib/src/quadrature.c: tables of corner and geometric quadrature rules
+/* lib/core/src/quadrature.c: tables of corner and geometric quadrature rules
  * (Theorem 3.1, (24)) and the ideal reference elements. */
 #include "varmesh/quadrature.h"
 

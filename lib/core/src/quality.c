@@ -1,4 +1,4 @@
-/* lib/src/quality.c: Table 1 quality figures (M, phi_min, psi_min) and
+/* lib/core/src/quality.c: Table 1 quality figures (M, phi_min, psi_min) and
  * scaled Jacobians over the quadrature nodes of every element. */
 #include "varmesh/quality.h"
 

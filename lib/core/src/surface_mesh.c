@@ -1,4 +1,4 @@
-/* surface/src/surface_mesh.c: triangles, edges and one-rings of a surface
+/* lib/core/src/surface_mesh.c: triangles, edges and one-rings of a surface
  * mesh, shared by curvature, feature detection and adaptation. */
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* lib/src/topology.c: boundary faces by sorted face keys, boundary marking,
+/* lib/core/src/topology.c: boundary faces by sorted face keys, boundary marking,
  * vertex-to-element adjacency. */
 #include "varmesh/topology.h"
 

@@ -1,4 +1,4 @@
-/* surface/src/aircraft.c: the bundled aircraft model: NACA-section wings,
+/* lib/gen/src/aircraft.c: the bundled aircraft model: NACA-section wings,
  * stabilizers and fin whose root curves are ports of a fuselage ring grid,
  * joined into one closed, outward-oriented triangulation. */
 #include "varmesh/aircraft.h"

@@ -1,4 +1,4 @@
-/* volume/src/generate.c: generated benchmark meshes (uniform and rotated
+/* lib/gen/src/rotcube.c: generated benchmark meshes (uniform and rotated
  * cubes of Section 6.1, hexahedra or Kuhn tetrahedra). */
 #include "varmesh/rotcube.h"
 

@@ -1,4 +1,4 @@
-/* surface/src/features.c: feature edges by dihedral angle (through the
+/* lib/geom/src/features.c: feature edges by dihedral angle (through the
  * OpenMesh adapter), their chaining into feature lines between corners,
  * and the vertex classes handed to the minimizer. */
 #include "varmesh/features.h"

@@ -1,4 +1,4 @@
-// surface/src/features_openmesh.cpp: OpenMesh adapter: half-edge build of
+// lib/geom/src/features_openmesh.cpp: OpenMesh adapter: half-edge build of
 // a surface mesh (which faces would make it non-manifold), dihedral angles
 // and boundary status of its edges.
 

@@ -1,4 +1,4 @@
-// surface/src/project_cgal.cpp: CGAL adapter: closest-point projection onto
+// lib/geom/src/project_cgal.cpp: CGAL adapter: closest-point projection onto
 // a reference surface and its feature lines (AABB trees) for the
 // minimizer's slip vertices, point-to-surface distances, Hausdorff.
 #include <CGAL/AABB_segment_primitive.h>

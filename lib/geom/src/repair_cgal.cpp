@@ -1,4 +1,4 @@
-// surface/src/repair_cgal.cpp: CGAL adapter: repair of an imported surface
+// lib/geom/src/repair_cgal.cpp: CGAL adapter: repair of an imported surface
 // (Polygon_mesh_processing), self-intersection detection, isotropic
 // remeshing with protected features.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

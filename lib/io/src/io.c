@@ -1,4 +1,4 @@
-/* lib/src/io.c: format dispatch by extension, whole-file reading with size
+/* lib/io/src/io.c: format dispatch by extension, whole-file reading with size
  * checks, and atomic output through a temporary file and rename. */
 #include "varmesh/io.h"
 

@@ -1,4 +1,4 @@
-/* lib/src/lex.c: whitespace tokenizer with line numbers for text readers. */
+/* lib/io/src/lex.c: whitespace tokenizer with line numbers for text readers. */
 #include "lex_private.h"
 
 #include <ctype.h>

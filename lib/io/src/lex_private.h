@@ -1,4 +1,4 @@
-/* lib/src/lex_private.h: a whitespace tokenizer over an in-memory text
+/* lib/io/src/lex_private.h: a whitespace tokenizer over an in-memory text
  * buffer with line tracking, shared by the text readers. The buffer need not
  * be NUL-terminated. Errors are recorded as "name: line N: what". */
 #ifndef VARMESH_LEX_PRIVATE_H

@@ -1,4 +1,4 @@
-/* lib/src/medit.c: MEDIT .mesh (ASCII; mmg, TetGen, Gmsh) reader and writer. */
+/* lib/io/src/medit.c: MEDIT .mesh (ASCII; mmg, TetGen, Gmsh) reader and writer. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* lib/src/msh.c: Gmsh .msh reader (4.1 and 2.x, ASCII and binary) and writer (4.1 or 2.2). */
+/* lib/io/src/msh.c: Gmsh .msh reader (4.1 and 2.x, ASCII and binary) and writer (4.1 or 2.2). */
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>

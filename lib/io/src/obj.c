@@ -1,4 +1,4 @@
-/* surface/src/io_obj.c: Wavefront OBJ reader (v and f records; the rest is
+/* lib/io/src/obj.c: Wavefront OBJ reader (v and f records; the rest is
  * reported and skipped) and writer (v and f). */
 #include <math.h>
 #include <string.h>

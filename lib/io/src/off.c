@@ -1,4 +1,4 @@
-/* surface/src/io_off.c: Geomview OFF reader (OFF, COFF, NOFF, CNOFF, STOFF
+/* lib/io/src/off.c: Geomview OFF reader (OFF, COFF, NOFF, CNOFF, STOFF
  * ASCII variants) and writer. */
 #include <math.h>
 #include <string.h>

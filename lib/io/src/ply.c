@@ -1,4 +1,4 @@
-/* surface/src/io_ply.c: PLY reader (ASCII, binary little- and big-endian;
+/* lib/io/src/ply.c: PLY reader (ASCII, binary little- and big-endian;
  * vertex x/y/z and face vertex_indices kept, the rest reported and skipped)
  * and writer (double coordinates, ASCII or binary little-endian). */
 #include <math.h>

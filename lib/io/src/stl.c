@@ -1,4 +1,4 @@
-/* surface/src/io_stl.c: STL reader (binary and ASCII, exact merging of
+/* lib/io/src/stl.c: STL reader (binary and ASCII, exact merging of
  * identical corners into vertices) and writer (ASCII or binary). */
 #include <float.h>
 #include <math.h>

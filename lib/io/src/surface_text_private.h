@@ -1,4 +1,4 @@
-/* surface/src/surface_text_private.h: helpers shared by the surface format
+/* lib/io/src/surface_text_private.h: helpers shared by the surface format
  * readers and writers (text scanning, polygon soup to elements, writer
  * checks, byte order) and the per-format entry points. */
 #ifndef VARMESH_SURFACE_TEXT_PRIVATE_H

@@ -1,4 +1,4 @@
-/* lib/src/vmsh.c: the .vmsh binary and .vmsht text mesh formats (specification: docs/vmsh.md). */
+/* lib/io/src/vmsh.c: the .vmsh binary and .vmsht text mesh formats (specification: docs/vmsh.md). */
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>

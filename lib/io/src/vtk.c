@@ -1,4 +1,4 @@
-/* lib/src/vtk.c: legacy VTK (.vtk) reader and writer, ASCII and binary,
+/* lib/io/src/vtk.c: legacy VTK (.vtk) reader and writer, ASCII and binary,
  * and the cell / convention helpers it shares with the VTU code. */
 #include <inttypes.h>
 #include <math.h>

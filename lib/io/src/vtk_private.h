@@ -1,4 +1,4 @@
-/* lib/src/vtk_private.h: what the legacy VTK (vtk.c) and VTU (vtu.c) readers
+/* lib/io/src/vtk_private.h: what the legacy VTK (vtk.c) and VTU (vtu.c) readers
  * and writers share: turning VTK cells into mesh elements, the vm_flag /
  * vm_surface / fixed conventions, and reporting what the formats lose. */
 #ifndef VARMESH_VTK_PRIVATE_H

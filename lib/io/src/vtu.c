@@ -1,4 +1,4 @@
-/* lib/src/vtu.c: VTK XML unstructured grid (.vtu) reader and writer, with
+/* lib/io/src/vtu.c: VTK XML unstructured grid (.vtu) reader and writer, with
  * its own small XML scanner, base64 coder and zlib inflater. */
 #include <inttypes.h>
 #include <math.h>

@@ -1,4 +1,4 @@
-/* lib/src/report.c: reports with pictures: quality histograms, convergence
+/* lib/report/src/report.c: reports with pictures: quality histograms, convergence
  * plots, a software-rendered surface, planar slices of volume meshes (PNG,
  * drawn with cairo) and the index.html that shows them. */
 #include "varmesh/report.h"

@@ -1,4 +1,4 @@
-/* varmesh/generate.h: generated benchmark meshes: the uniform cube and the
+/* varmesh/rotcube.h: generated benchmark meshes: the uniform cube and the
  * rotated-cube untangling problem of the paper's Section 6.1. */
 #ifndef VARMESH_GENERATE_H
 #define VARMESH_GENERATE_H
