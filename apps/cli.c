@@ -166,7 +166,7 @@ static int takes_value(const vm_opt *o) {
 /* "  -q, --quiet", "  --theta T", "  --repair auto|yes|no" into buf; its length */
 static int opt_column(const vm_opt *o, char *buf, size_t n) {
   int len = snprintf(buf, n, "  %s%s%s", o->alias ? o->alias : "", o->alias ? ", " : "", o->name);
-  if (o->metavar)
+  if (o->metavar && len < (int)n)
     len += snprintf(buf + len, n - (size_t)len, " %s", o->metavar);
   else if (o->kind == VM_OPT_CHOICE)
     for (int i = 0; o->choices[i] && (size_t)len < n; i++)
