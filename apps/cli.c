@@ -53,6 +53,14 @@ void vm_cli_error(const vm_cli *cli, const char *fmt, ...) {
   fprintf(stderr, "%s: error: %s\n", cli->prog, buf);
 }
 
+int vm_cli_input_error(const vm_cli *cli, const char *path) {
+  if (path)
+    vm_cli_error(cli, "%s: %s", path, vm_ctx_error(cli->ctx));
+  else
+    vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+  return VM_EXIT_INPUT;
+}
+
 int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...) {
   char buf[1200];
   va_list ap;
@@ -138,4 +146,172 @@ void vm_json_string(FILE *f, const char *s) {
       fputc(c, f);
   }
   fputc('"', f);
+}
+
+/* Option tables (cli.h). */
+
+static int pick(const char *v, const char *const *names) {
+  for (int i = 0; v && names[i]; i++)
+    if (!strcmp(v, names[i])) return i;
+  return -1;
+}
+
+static int takes_value(const vm_opt *o) {
+  return o->kind == VM_OPT_INT || o->kind == VM_OPT_DOUBLE || o->kind == VM_OPT_STRING ||
+         o->kind == VM_OPT_CHOICE || (o->kind == VM_OPT_CALL && o->metavar);
+}
+
+/* "  -q, --quiet", "  --theta T", "  --repair auto|yes|no" into buf; its length */
+static int opt_column(const vm_opt *o, char *buf, size_t n) {
+  int len = snprintf(buf, n, "  %s%s%s", o->alias ? o->alias : "", o->alias ? ", " : "", o->name);
+  if (o->metavar && len < (int)n)
+    len += snprintf(buf + len, n - (size_t)len, " %s", o->metavar);
+  else if (o->kind == VM_OPT_CHOICE)
+    for (int i = 0; o->choices[i] && (size_t)len < n; i++)
+      len += snprintf(buf + len, n - (size_t)len, "%c%s", i ? '|' : ' ', o->choices[i]);
+  return len < (int)n ? len : (int)n - 1;
+}
+
+/* Help columns wider than this start their help on the next line; help
+ * text is wrapped at word boundaries to end before column HELP_LINE_MAX. */
+enum { HELP_COLUMN_MAX = 28, HELP_LINE_MAX = 80 };
+
+static void print_wrapped(FILE *f, const char *h, int width) {
+  int col = width;
+  while (*h) {
+    size_t n = strcspn(h, " \n");
+    if (*h == ' ' || *h == '\n') {
+      if (*h++ == '\n' && *h) col = fprintf(f, "\n%*s", width, "") - 1;
+      continue;
+    }
+    if (col > width && col + 1 + (int)n >= HELP_LINE_MAX)
+      col = fprintf(f, "\n%*s", width, "") - 1;
+    else if (col > width)
+      col += fprintf(f, " ");
+    col += (int)fwrite(h, 1, n, f);
+    h += n;
+  }
+  fputc('\n', f);
+}
+
+void vm_cli_print_help(const vm_cli_spec *spec, FILE *f) {
+  char col[256];
+  int width = 0;
+  for (const vm_opt *o = spec->opts; o->kind; o++) {
+    int len = o->kind == VM_OPT_HEADING ? 0 : opt_column(o, col, sizeof col);
+    if (len <= HELP_COLUMN_MAX && len > width) width = len;
+  }
+  width += 2;
+  fputs(spec->usage, f);
+  for (const vm_opt *o = spec->opts; o->kind; o++) {
+    if (o->kind == VM_OPT_HEADING) {
+      fputs(o->help, f);
+      continue;
+    }
+    int len = opt_column(o, col, sizeof col);
+    fputs(col, f);
+    fprintf(f, len > HELP_COLUMN_MAX ? "\n%*s" : "%*s", len > HELP_COLUMN_MAX ? width : width - len,
+            "");
+    print_wrapped(f, o->help, width);
+  }
+  fputs("  --help, --version\n", f);
+  if (spec->epilog) fputs(spec->epilog, f);
+}
+
+static int choice_error(const vm_cli *cli, const vm_opt *o) {
+  if (o->error) return vm_cli_usage_error(cli, "%s %s", o->name, o->error);
+  char list[512];
+  int len = 0, n = 0;
+  while (o->choices[n]) n++;
+  for (int i = 0; i < n && len < (int)sizeof list; i++)
+    len += snprintf(list + len, sizeof list - (size_t)len, "%s%s",
+                    i == 0 ? "" : i == n - 1 ? " or " : ", ", o->choices[i]);
+  return vm_cli_usage_error(cli, "%s expects %s", o->name, list);
+}
+
+static int apply(vm_cli *cli, const vm_opt *o, const char *val, void *args) {
+  char *at = (char *)args + o->offset;
+  long lv;
+  int k;
+  switch (o->kind) {
+  case VM_OPT_FLAG:
+    *(int *)at = o->ival;
+    return VM_EXIT_OK;
+  case VM_OPT_INT:
+    if (vm_cli_int(cli, o->name, val, (long)o->lo, (long)o->hi, &lv)) return VM_EXIT_USAGE;
+    *(int *)at = (int)lv;
+    return VM_EXIT_OK;
+  case VM_OPT_DOUBLE:
+    return vm_cli_double(cli, o->name, val, o->lo, o->hi, (double *)at) ? VM_EXIT_USAGE
+                                                                        : VM_EXIT_OK;
+  case VM_OPT_STRING:
+    if (!val)
+      return vm_cli_usage_error(cli, "%s %s", o->name, o->error ? o->error : "expects a value");
+    *(const char **)at = val;
+    return VM_EXIT_OK;
+  case VM_OPT_CHOICE:
+    if ((k = pick(val, o->choices)) < 0) return choice_error(cli, o);
+    *(int *)at = k;
+    return VM_EXIT_OK;
+  case VM_OPT_CALL:
+    return o->fn(cli, o, val, args);
+  default:
+    return VM_EXIT_OK;
+  }
+}
+
+int vm_cli_parse(vm_cli *cli, const vm_cli_spec *spec, void *args, int argc, char **argv) {
+  for (int i = 0; i < argc; i++) {
+    const char *a = argv[i];
+    const vm_opt *o = spec->opts;
+    while (o->kind && (o->kind == VM_OPT_HEADING || (strcmp(a, o->name) &&
+                                                     !(o->alias && !strcmp(a, o->alias)))))
+      o++;
+    if (o->kind) {
+      const char *val = NULL;
+      if (takes_value(o)) val = ++i < argc ? argv[i] : NULL;
+      int rc = apply(cli, o, val, args);
+      if (rc != VM_EXIT_OK) return rc;
+    } else if (!strcmp(a, "--help")) {
+      vm_cli_print_help(spec, stdout);
+      return VM_EXIT_OK;
+    } else if (!strcmp(a, "--version")) {
+      printf("%s (varmesh) %s\n", cli->prog, vm_version());
+      return VM_EXIT_OK;
+    } else if (!strcmp(a, "--list-options")) {
+      for (o = spec->opts; o->kind; o++)
+        if (o->kind != VM_OPT_HEADING) printf("%s\n", o->name);
+      return VM_EXIT_OK;
+    } else if (a[0] == '-' && a[1]) {
+      return vm_cli_usage_error(cli, "unknown option '%s'", a);
+    } else {
+      int k = 0;
+      while (k < spec->noperands && *(const char **)((char *)args + spec->operand[k])) k++;
+      if (k == spec->noperands) return vm_cli_usage_error(cli, "too many arguments");
+      *(const char **)((char *)args + spec->operand[k]) = a;
+    }
+  }
+  for (int k = 0; spec->missing && k < spec->noperands; k++)
+    if (!*(const char **)((char *)args + spec->operand[k]))
+      return vm_cli_usage_error(cli, "%s", spec->missing);
+  return VM_CLI_RUN;
+}
+
+int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
+  (void)opt, (void)value, (void)args;
+  cli->quiet = 1;
+  return VM_EXIT_OK;
+}
+
+int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
+  long n;
+  (void)args;
+  if (vm_cli_int(cli, opt->name, value, 0, 100000000, &n)) return VM_EXIT_USAGE;
+  vm_ctx_set_threads(cli->ctx, (int)n);
+  return VM_EXIT_OK;
+}
+
+int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
+  if (!value && opt->error) return vm_cli_usage_error(cli, "%s %s", opt->name, opt->error);
+  return vm_cli_format(cli, value, (int *)((char *)args + opt->offset));
 }

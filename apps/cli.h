@@ -3,6 +3,7 @@
 #ifndef VARMESH_APPS_CLI_H
 #define VARMESH_APPS_CLI_H
 
+#include <stddef.h>
 #include <stdio.h>
 
 #include "varmesh/ctx.h"
@@ -39,6 +40,9 @@ void vm_cli_error(const vm_cli *cli, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+/* "prog: error: <path>: <ctx message>" (without "<path>: " if path is NULL)
+ * on stderr; returns VM_EXIT_INPUT. */
+int vm_cli_input_error(const vm_cli *cli, const char *path);
 /* Usage error: message + hint, returns VM_EXIT_USAGE. */
 int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -46,7 +50,9 @@ int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...)
 #endif
     ;
 
-/* --help (the usage text on stdout) or --version: returns 1 if `a` is one
+/* For a program that parses its command line itself (vm-prism; the others
+ * use an option table, below):
+ * --help (the usage text on stdout) or --version: returns 1 if `a` is one
  * of them (the program then exits 0), 0 otherwise. */
 int vm_cli_info_option(const vm_cli *cli, const char *a, const char *usage);
 /* An operand of the command line: `a` goes to the first empty one of
@@ -56,6 +62,93 @@ int vm_cli_operand(const vm_cli *cli, const char *a, const char **const *slots, 
 /* The value of --format: the VM_FMT_* of `name` into *fmt, or a usage
  * error (VM_EXIT_USAGE) for a missing or unknown name. */
 int vm_cli_format(const vm_cli *cli, const char *name, int *fmt);
+
+/* Option tables. A program describes its options once, in a static const
+ * array of vm_opt ended by {0}; vm_cli_parse reads the command line from
+ * it, and --help prints the usage text made from it. Values land in the
+ * program's own struct of settings (`args`) at each option's `offset`.
+ *
+ *   VM_OPT_HEADING  not an option: `help` is printed as is (a heading, a
+ *                   paragraph, a second usage line)
+ *   VM_OPT_FLAG     no value: int at offset = `ival`
+ *   VM_OPT_INT      int at offset, an integer in [lo, hi] (vm_cli_int)
+ *   VM_OPT_DOUBLE   double at offset, a number in [lo, hi] (vm_cli_double)
+ *   VM_OPT_STRING   const char * at offset = the value as given
+ *   VM_OPT_CHOICE   int (or an enum) at offset = the index of the value in
+ *                   `choices` (NULL-terminated); metavar defaults to "a|b|c"
+ *   VM_OPT_CALL     fn(cli, opt, value, args) does it all; it takes a value
+ *                   if and only if it has a metavar
+ *
+ * A value is always the next argument ("--theta 0.5"). `error`, if set,
+ * is the usage error for a missing value, or a bad choice, after the
+ * option's name ("expects a directory" -> "--report expects a directory");
+ * without it a choice says "expects a, b or c" and a string "expects a
+ * value". `help` is one paragraph, wrapped at word boundaries to 80
+ * columns ('\n' breaks a line). */
+typedef enum {
+  VM_OPT_END = 0,
+  VM_OPT_HEADING,
+  VM_OPT_FLAG,
+  VM_OPT_INT,
+  VM_OPT_DOUBLE,
+  VM_OPT_STRING,
+  VM_OPT_CHOICE,
+  VM_OPT_CALL
+} vm_opt_kind;
+
+typedef struct vm_opt vm_opt;
+/* Returns VM_EXIT_OK, or an exit code after printing why (vm_cli_usage_error). */
+typedef int (*vm_opt_fn)(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+
+struct vm_opt {
+  const char *name;    /* "--theta" */
+  const char *alias;   /* "-q", or NULL */
+  vm_opt_kind kind;
+  size_t offset;       /* offsetof(program's args, field) */
+  const char *metavar; /* "T" in "--theta T"; NULL for flags */
+  const char *help;
+  double lo, hi;       /* INT, DOUBLE: the accepted range */
+  int ival;            /* FLAG: the value stored */
+  const char *const *choices;
+  vm_opt_fn fn;
+  const char *error;
+};
+
+typedef struct vm_cli_spec {
+  const char *usage;   /* --help's text before the options: usage, description */
+  const vm_opt *opts;
+  const char *epilog;  /* after the options ("exit: ...") */
+  size_t operand[3];   /* offsets of the operands (const char *) in args, in order */
+  int noperands;
+  const char *missing; /* the usage error when an operand is missing; NULL: the
+                          program checks */
+} vm_cli_spec;
+
+/* Returned by vm_cli_parse when the program should go on. */
+enum { VM_CLI_RUN = -1 };
+
+/* Parse argv[0..argc) (the program name not included) in order: options
+ * by the table (--help, --version and the hidden --list-options, which
+ * prints every option's long name on a line, are always there), other
+ * arguments into the operands. Returns VM_CLI_RUN, or the code to exit
+ * with: VM_EXIT_OK after --help/--version/--list-options, VM_EXIT_USAGE
+ * (or a callback's code) after one usage error on stderr. */
+int vm_cli_parse(vm_cli *cli, const vm_cli_spec *spec, void *args, int argc, char **argv);
+/* --help's text, as vm_cli_parse prints it. */
+void vm_cli_print_help(const vm_cli_spec *spec, FILE *f);
+
+/* Callbacks for the options most programs share:
+ *   -q, --quiet       cli->quiet = 1
+ *   --threads N       vm_ctx_set_threads, N in [0, 1e8]
+ *   --format F        int at offset = vm_cli_format(F); a missing value is
+ *                     `error` if the option has one */
+int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+#define VM_CLI_OPT_QUIET(help) {"--quiet", "-q", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_quiet}
+#define VM_CLI_OPT_THREADS                                                                      \
+  {"--threads", NULL, VM_OPT_CALL, 0, "N", "OpenMP threads (results do not depend on it)",      \
+   .fn = vm_cli_opt_threads}
 
 /* Strict parsing of an option value: the whole string must be a number in
  * range. Return 0 on success, nonzero (after a usage message) otherwise. */

@@ -10,29 +10,6 @@
 #include "varmesh/io.h"
 #include "varmesh/quality.h"
 
-static const char usage[] =
-    "usage: vm-quality [options] MESH\n"
-    "Quality of every element of the mesh's top dimension (docs/cli.md):\n"
-    "M = inverted quadrature simplices, phi = det C/(tr C^T C/d)^(d/2),\n"
-    "psi = 2 det C/(1 + det C^2) (needs a target size), scaled Jacobian.\n"
-    "  --rule corner|geometric   quadrature simplices to measure (default corner)\n"
-    "  --target-size H           ideal element edge length for psi\n"
-    "  --format F                input format (default: from the extension)\n"
-    "  --json                    machine-readable summary on stdout\n"
-    "  --require-valid           exit 3 if any quadrature simplex is inverted (M > 0)\n"
-    "  --min-sj X                exit 3 if the minimum scaled Jacobian is below X\n"
-    "  --verify                  exact checks (CGAL predicates), exit 3 on failure: every\n"
-    "                            quadrature simplex of --rule positively oriented; if there\n"
-    "                            are prisms, their outer (top) faces neither intersect\n"
-    "                            each other nor cross the wall (bottom faces)\n"
-    "  --report DIR              write DIR/index.html with pictures: quality histograms, a\n"
-    "                            slice if 3D, a rendered surface if triangles/quads in 3D\n"
-    "  --report-field NAME       field colouring the surface picture (default\n"
-    "                            mean_curvature if present, else the scaled Jacobian)\n"
-    "  -q, --quiet               no warnings\n"
-    "  --help, --version\n"
-    "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n";
-
 static void print_text(const char *path, const vm_mesh *m, const vm_quality *q) {
   printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path,
          (long long)m->nv, (long long)q->measured, q->top_dim);
@@ -103,103 +80,88 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q) 
   printf("]}\n");
 }
 
+typedef struct {
+  const char *path, *report, *report_field;
+  int json, require_valid, verify, fin;
+  double min_sj;
+  vm_quality_opts qo;
+} args;
+
+#define A(f) offsetof(args, f)
+static const char *const rules[] = {"corner", "geometric", NULL};
+static const vm_opt opts[] = {
+    {"--rule", NULL, VM_OPT_CHOICE, A(qo.rule), NULL,
+     "quadrature simplices to measure (default corner)", .choices = rules},
+    {"--target-size", NULL, VM_OPT_DOUBLE, A(qo.target_size), "H",
+     "ideal element edge length for psi", .lo = 1e-300, .hi = 1e300},
+    {"--format", NULL, VM_OPT_CALL, A(fin), "F", "input format (default: from the extension)",
+     .fn = vm_cli_opt_format},
+    {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "machine-readable summary on stdout", .ival = 1},
+    {"--require-valid", NULL, VM_OPT_FLAG, A(require_valid), NULL,
+     "exit 3 if any quadrature simplex is inverted (M > 0)", .ival = 1},
+    {"--min-sj", NULL, VM_OPT_DOUBLE, A(min_sj), "X",
+     "exit 3 if the minimum scaled Jacobian is below X", .lo = -1, .hi = 1},
+    {"--verify", NULL, VM_OPT_FLAG, A(verify), NULL,
+     "exact checks (CGAL predicates), exit 3 on failure: every quadrature simplex of --rule "
+     "positively oriented; if there are prisms, their outer (top) faces neither intersect each "
+     "other nor cross the wall (bottom faces)",
+     .ival = 1},
+    {"--report", NULL, VM_OPT_STRING, A(report), "DIR",
+     "write DIR/index.html with pictures: quality histograms, a slice if 3D, a rendered "
+     "surface if triangles/quads in 3D",
+     .error = "expects a value"},
+    {"--report-field", NULL, VM_OPT_STRING, A(report_field), "NAME",
+     "field colouring the surface picture (default mean_curvature if present, else the scaled "
+     "Jacobian)",
+     .error = "expects a value"},
+    VM_CLI_OPT_QUIET("no warnings"),
+    {0}};
+
+static const vm_cli_spec spec = {
+    "usage: vm-quality [options] MESH\n"
+    "Quality of every element of the mesh's top dimension (docs/cli.md):\n"
+    "M = inverted quadrature simplices, phi = det C/(tr C^T C/d)^(d/2),\n"
+    "psi = 2 det C/(1 + det C^2) (needs a target size), scaled Jacobian.\n",
+    opts, "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n", {A(path)}, 1,
+    "need a MESH file"};
+
 int main(int argc, char **argv) {
   vm_cli cli;
   vm_cli_init(&cli, "vm-quality");
-  const char *path = NULL, *report = NULL, *report_field = NULL;
-  int json = 0, require_valid = 0, verify = 0, fin = VM_FMT_AUTO;
-  double min_sj = -INFINITY;
-  vm_quality_opts qo = {VM_RULE_CORNER, 0};
-  int rc = VM_EXIT_OK;
-  for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
-    const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-    if (vm_cli_info_option(&cli, a, usage)) {
-      goto done;
-    } else if (!strcmp(a, "--json")) {
-      json = 1;
-    } else if (!strcmp(a, "--require-valid")) {
-      require_valid = 1;
-    } else if (!strcmp(a, "--verify")) {
-      verify = 1;
-    } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-      cli.quiet = 1;
-    } else if (!strcmp(a, "--rule")) {
-      i++;
-      if (val && !strcmp(val, "corner"))
-        qo.rule = VM_RULE_CORNER;
-      else if (val && !strcmp(val, "geometric"))
-        qo.rule = VM_RULE_GEOMETRIC;
-      else {
-        rc = vm_cli_usage_error(&cli, "--rule expects corner or geometric");
-        goto done;
-      }
-    } else if (!strcmp(a, "--target-size")) {
-      i++;
-      if (vm_cli_double(&cli, a, val, 1e-300, 1e300, &qo.target_size)) {
-        rc = VM_EXIT_USAGE;
-        goto done;
-      }
-    } else if (!strcmp(a, "--min-sj")) {
-      i++;
-      if (vm_cli_double(&cli, a, val, -1, 1, &min_sj)) {
-        rc = VM_EXIT_USAGE;
-        goto done;
-      }
-    } else if (!strcmp(a, "--report") || !strcmp(a, "--report-field")) {
-      i++;
-      if (!val) {
-        rc = vm_cli_usage_error(&cli, "%s expects a value", a);
-        goto done;
-      }
-      *(!strcmp(a, "--report") ? &report : &report_field) = val;
-    } else if (!strcmp(a, "--format")) {
-      i++;
-      if ((rc = vm_cli_format(&cli, val, &fin)) != VM_EXIT_OK) goto done;
-    } else if ((rc = vm_cli_operand(&cli, a, (const char **const[]){&path}, 1)) != VM_EXIT_OK) {
-      goto done;
-    }
-  }
-  if (!path) {
-    rc = vm_cli_usage_error(&cli, "need a MESH file");
-    goto done;
-  }
+  args a = {.fin = VM_FMT_AUTO, .min_sj = -INFINITY, .qo = {VM_RULE_CORNER, 0}};
   vm_mesh *m = NULL;
-  if (vm_mesh_read(cli.ctx, path, fin, &m) < 0) {
-    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
-    rc = VM_EXIT_INPUT;
+  vm_quality q;
+  int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
+  if (rc != VM_CLI_RUN) goto done;
+  rc = VM_EXIT_OK;
+  if (vm_mesh_read(cli.ctx, a.path, a.fin, &m) < 0 || vm_mesh_quality(m, &a.qo, &q) < 0) {
+    rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
-  vm_quality q;
-  if (vm_mesh_quality(m, &qo, &q) < 0) {
-    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
-    rc = VM_EXIT_INPUT;
-  } else {
-    if (json)
-      print_json(path, m, &q);
-    else
-      print_text(path, m, &q);
-    if (require_valid && q.all.inverted_nodes > 0) {
-      vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", path,
-                   (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);
-      rc = VM_EXIT_CHECK;
-    }
-    if (q.measured && q.all.sj_min < min_sj) {
-      vm_cli_error(&cli, "%s: minimum scaled Jacobian %.4f is below %.4f", path, q.all.sj_min,
-                   min_sj);
-      rc = VM_EXIT_CHECK;
-    }
-    if (verify) {
-      int vrc = vm_cli_verify(&cli, path, m, qo.rule, !json, stdout);
-      if (vrc != VM_EXIT_OK) rc = vrc;
-    }
-    if (report) {
-      int rrc = vm_cli_report_quality(&cli, report, path, m, &qo, report_field);
-      if (rrc != VM_EXIT_OK) rc = rrc;
-    }
+  if (a.json)
+    print_json(a.path, m, &q);
+  else
+    print_text(a.path, m, &q);
+  if (a.require_valid && q.all.inverted_nodes > 0) {
+    vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", a.path,
+                 (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);
+    rc = VM_EXIT_CHECK;
   }
-  vm_mesh_destroy(&m);
+  if (q.measured && q.all.sj_min < a.min_sj) {
+    vm_cli_error(&cli, "%s: minimum scaled Jacobian %.4f is below %.4f", a.path, q.all.sj_min,
+                 a.min_sj);
+    rc = VM_EXIT_CHECK;
+  }
+  if (a.verify) {
+    int vrc = vm_cli_verify(&cli, a.path, m, a.qo.rule, !a.json, stdout);
+    if (vrc != VM_EXIT_OK) rc = vrc;
+  }
+  if (a.report) {
+    int rrc = vm_cli_report_quality(&cli, a.report, a.path, m, &a.qo, a.report_field);
+    if (rrc != VM_EXIT_OK) rc = rrc;
+  }
 done:
+  vm_mesh_destroy(&m);
   vm_cli_finish(&cli);
   return rc;
 }

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # test/cli/test_docs_cli.sh: the docs keep up with the programs: every
-# option a program's --help lists appears on its page docs/cli/PROG.md
-# (--help and --version are documented once, in docs/cli.md), and
-# docs/cli.md links every page.
+# option of a program appears on its page docs/cli/PROG.md (--help and
+# --version are documented once, in docs/cli.md), and docs/cli.md links
+# every page. The options come from the program's option table (the hidden
+# --list-options); a program without one has them read off its --help.
 set -u
 root=$1
 shift
@@ -13,14 +14,25 @@ for prog in "$@"; do
   page="$root/docs/cli/$name.md"
   check '[ -f "$page" ]' "$name has a page"
   [ -f "$page" ] || continue
+  if opts=$("$prog" --list-options 2>/dev/null); then
+    check '[ -n "$opts" ]' "$name --list-options lists options"
+    help=$("$prog" --help)
+    missing=
+    for o in $opts; do
+      grep -q -- "$o\b" <<<"$help" || missing="$missing $o"
+    done
+    check '[ -z "$missing" ]' "$name: every option of its table in --help (missing:${missing:- none})"
+  else
+    # the option column of each help line that starts with a dash: up to
+    # the first gap of two spaces
+    opts=$("$prog" --help | grep -E '^ +-' | sed -E 's/^ +//; s/  .*//' | grep -oE -- '--[a-z0-9-]+' | sort -u)
+  fi
   missing=
-  # the option column of each help line that starts with a dash: up to the
-  # first gap of two spaces
-  for o in $("$prog" --help | grep -E '^ +-' | sed -E 's/^ +//; s/  .*//' | grep -oE -- '--[a-z0-9-]+' | sort -u); do
+  for o in $opts; do
     case $o in --help|--version) continue ;; esac
     grep -q -- "$o\b" "$page" || missing="$missing $o"
   done
-  check '[ -z "$missing" ]' "$name: every option of --help on its page (missing:${missing:- none})"
+  check '[ -z "$missing" ]' "$name: every option on its page (missing:${missing:- none})"
   check 'grep -q "(cli/$name.md)" "$root/docs/cli.md"' "docs/cli.md links $name's page"
 done
 check 'grep -q -- "--help" "$root/docs/cli.md" && grep -q -- "--version" "$root/docs/cli.md"' "docs/cli.md documents --help and --version"
