@@ -8,9 +8,11 @@
 #include "cli_report.h"
 #include "cli_verify.h"
 #include "varmesh/io.h"
+#include "varmesh/jacobian.h"
 #include "varmesh/quality.h"
 
-static void print_text(const char *path, const vm_mesh *m, const vm_quality *q) {
+static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
+                       const vm_jac_report *jr) {
   printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path,
          (long long)m->nv, (long long)q->measured, q->top_dim);
   if (q->skipped) printf(", %lld lower-dimensional elements not measured", (long long)q->skipped);
@@ -24,6 +26,11 @@ static void print_text(const char *path, const vm_mesh *m, const vm_quality *q) 
            (long long)tq->inverted_nodes, (long long)tq->inverted_elems, tq->phi_min,
            tq->psi_min, tq->sj_min);
   }
+  if (jr->cells)
+    printf("certified (det J > 0 everywhere in the cell): %lld of %lld cells; %lld invalid, "
+           "%lld undecided\n",
+           (long long)(jr->cells - jr->invalid - jr->undecided), (long long)jr->cells,
+           (long long)jr->invalid, (long long)jr->undecided);
   if (!q->measured) return;
   printf("scaled Jacobian: min %.4f  p1 %.4f  p5 %.4f  p25 %.4f  median %.4f\n", q->all.sj_min,
          q->sj_p01, q->sj_p05, q->sj_p25, q->sj_p50);
@@ -52,7 +59,8 @@ static void json_tq(const vm_type_quality *tq) {
   printf("}");
 }
 
-static void print_json(const char *path, const vm_mesh *m, const vm_quality *q) {
+static void print_json(const char *path, const vm_mesh *m, const vm_quality *q,
+                       const vm_jac_report *jr) {
   printf("{\"file\": ");
   vm_json_string(stdout, path);
   printf(", \"vertices\": %lld, \"dimension\": %d, \"skipped\": %lld, \"types\": {",
@@ -74,7 +82,11 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q) 
   vm_json_double(stdout, q->sj_p25);
   printf(", \"p50\": ");
   vm_json_double(stdout, q->sj_p50);
-  printf("}, \"sj_histogram\": [");
+  printf("}, \"certified\": {\"cells\": %lld, \"invalid\": %lld, \"undecided\": %lld, "
+         "\"first_bad\": %lld}",
+         (long long)jr->cells, (long long)jr->invalid, (long long)jr->undecided,
+         (long long)jr->first_bad);
+  printf(", \"sj_histogram\": [");
   for (int b = 0; b < VM_QUALITY_NBINS; b++)
     printf("%s%lld", b ? ", " : "", (long long)q->sj_hist[b]);
   printf("]}\n");
@@ -131,17 +143,19 @@ int main(int argc, char **argv) {
   args a = {.fin = VM_FMT_AUTO, .min_sj = -INFINITY, .qo = {VM_RULE_CORNER, 0}};
   vm_mesh *m = NULL;
   vm_quality q;
+  vm_jac_report jr;
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
   if (rc != VM_CLI_RUN) goto done;
   rc = VM_EXIT_OK;
-  if (vm_mesh_read(cli.ctx, a.path, a.fin, &m) < 0 || vm_mesh_quality(m, &a.qo, &q) < 0) {
+  if (vm_mesh_read(cli.ctx, a.path, a.fin, &m) < 0 || vm_mesh_quality(m, &a.qo, &q) < 0 ||
+      vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
   if (a.json)
-    print_json(a.path, m, &q);
+    print_json(a.path, m, &q, &jr);
   else
-    print_text(a.path, m, &q);
+    print_text(a.path, m, &q, &jr);
   if (a.require_valid && q.all.inverted_nodes > 0) {
     vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", a.path,
                  (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);
