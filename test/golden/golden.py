@@ -5,7 +5,7 @@
 # and strings exactly, floats within a tolerance) or, with --regen, rewrites it.
 """Golden-figure regression runner (standard library only).
 
-    golden.py [--regen] [--keep] CASE.case...
+    golden.py [--regen] [--exact] [--threads N] [--keep] CASE.case...
 
 A case file (INI syntax) has two sections:
 
@@ -24,7 +24,10 @@ A case file (INI syntax) has two sections:
 Every step's exit code is a figure (STEP:exit, exact) without being listed.
 The golden file is CASE.out beside the case: "STEP.FIELD JSON-VALUE" lines.
 --regen (or VM_GOLDEN_REGEN=1 in the environment) rewrites it from this run
-and prints what changed. Exit 0 all figures match, 1 a figure differs or a
+and prints what changed. --exact compares every figure bit for bit (is a
+change "bit-identical"?); --threads N runs every step with N threads
+(--threads arguments and OMP_NUM_THREADS) to check that the figures do not
+depend on it; --keep leaves the temporary directory. Exit 0 all figures match, 1 a figure differs or a
 step failed to give one, 2 usage or a malformed case, 77 skipped.
 """
 import configparser
@@ -192,11 +195,13 @@ def expand(arg, tmp, src, missing):
     return out
 
 
-def run_case(case_path, regen, keep):
+def run_case(case_path, regen, keep, exact=False, threads=None):
     src = os.environ.get("VM_SOURCE_ROOT") or os.path.normpath(
         os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
     build = os.environ.get("VM_BUILD_ROOT") or os.path.join(src, "build")
+    case_path = os.path.abspath(case_path)
     name = os.path.splitext(os.path.basename(case_path))[0]
+    shown = os.path.relpath(case_path, src) if case_path.startswith(os.path.abspath(src) + os.sep) else case_path
     golden_path = os.path.splitext(case_path)[0] + ".out"
     steps, wanted = read_case(case_path)
     golden = read_golden(golden_path)
@@ -212,9 +217,15 @@ def run_case(case_path, regen, keep):
                 return 77
             if argv[0].startswith("vm-"):
                 argv[0] = os.path.join(build, "apps", argv[0])
+            env = None
+            if threads:
+                argv = [threads if i > 0 and argv[i - 1] == "--threads" else a
+                        for i, a in enumerate(argv)]
+                env = dict(os.environ, OMP_NUM_THREADS=threads)
             print(f"== {name}.{step}: {' '.join(shlex.quote(a) for a in argv)}", flush=True)
             t0 = time.monotonic()
-            p = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp)
+            p = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp,
+                               env=env)
             dt = time.monotonic() - t0
             err = p.stderr.decode("utf-8", "replace")
             print(f"   exit {p.returncode} after {dt:.1f} s (not compared)")
@@ -241,7 +252,7 @@ def run_case(case_path, regen, keep):
             shutil.rmtree(tmp, ignore_errors=True)
 
     order = [f"{s}:exit" for s, _ in steps] + [k for k, _ in wanted]
-    tols = dict(wanted)
+    tols = {k: "exact" for k, _ in wanted} if exact else dict(wanted)
     if regen:
         if failures:
             print(f"FAIL: {name}: not regenerated, a figure could not be read:")
@@ -267,35 +278,32 @@ def run_case(case_path, regen, keep):
         print(f"FAIL: {name}: no golden file {golden_path}; write it with golden.py --regen "
               f"(or VM_GOLDEN_REGEN=1 meson test --suite golden)")
         return 1
-    rows = []
-    nbad = 0
+    rows = []  # the matching figures first, the failures last
+    bad = []
     for k in order:
-        if k not in golden:
-            rows.append(f"FAIL {k}: not in the golden file (the case lists it): run --regen")
-            nbad += 1
-            continue
         if k not in got:
-            rows.append(f"FAIL {k}: expected {fmt(golden[k])}, got nothing (see below)")
-            nbad += 1
+            bad.append(f"FAIL {k}: expected {fmt(golden.get(k))}, got nothing (see 'why' below)")
+            continue
+        if k not in golden:
+            bad.append(f"FAIL {k}: not in the golden file (the case lists it): run --regen")
             continue
         ok, tdesc, note = compare(golden[k], got[k], tols.get(k))
         if ok:
             rows.append(f"ok   {k} = {fmt(got[k])}" + (f" ({tdesc}: {note})" if note and golden[k] != got[k] else ""))
         else:
-            rows.append(f"FAIL {k}: expected {fmt(golden[k])}, got {fmt(got[k])} (tolerance {tdesc}"
-                        + (f"; {note}" if note else "") + ")")
-            nbad += 1
+            bad.append(f"FAIL {k}: expected {fmt(golden[k])}, got {fmt(got[k])} (tolerance {tdesc}"
+                       + (f"; {note}" if note else "") + ")")
     for k in golden:
         if k not in tols and k not in order:
-            rows.append(f"FAIL {k}: in the golden file but no longer in the case: run --regen")
-            nbad += 1
-    for r in rows:
+            bad.append(f"FAIL {k}: in the golden file but no longer in the case: run --regen")
+    for r in rows + bad:
         print(f"  {r}")
     for f in failures:
-        print(f"  FAIL {f}")
-    if nbad:
-        print(f"FAIL: {name}: {nbad} of {len(order)} figures differ from {golden_path}\n"
-              f"  (if the change is intended: golden.py --regen {case_path}, and say why in the commit)")
+        print(f"  why: {f}")
+    if bad:
+        print(f"FAIL: {name}: {len(bad)} of {len(order)} figures differ from {os.path.basename(golden_path)}\n"
+              f"  (if the change is intended: VM_BUILD_ROOT=build python3 test/golden/golden.py --regen {shown}\n"
+              f"  from the source root, and say in the commit what changed and why)")
         return 1
     print(f"ok: {name}: {len(order)} figures as in {os.path.basename(golden_path)}")
     return 0
@@ -303,10 +311,19 @@ def run_case(case_path, regen, keep):
 
 def main(argv):
     regen = os.environ.get("VM_GOLDEN_REGEN", "") not in ("", "0")
-    keep = False
+    keep = exact = False
+    threads = None
     cases = []
-    for a in argv:
-        if a == "--regen":
+    args = iter(argv)
+    for a in args:
+        if a == "--threads":
+            threads = next(args, "")
+            if not threads.isdigit() or int(threads) < 1:
+                print("golden.py: --threads expects a positive integer", file=sys.stderr)
+                return 2
+        elif a == "--exact":
+            exact = True
+        elif a == "--regen":
             regen = True
         elif a == "--keep":
             keep = True
@@ -319,12 +336,12 @@ def main(argv):
         else:
             cases.append(a)
     if not cases:
-        print("usage: golden.py [--regen] [--keep] CASE.case...", file=sys.stderr)
+        print("usage: golden.py [--regen] [--exact] [--threads N] [--keep] CASE.case...", file=sys.stderr)
         return 2
     codes = []
     for c in cases:
         try:
-            codes.append(run_case(c, regen, keep))
+            codes.append(run_case(c, regen, keep, exact, threads))
         except CaseError as e:
             print(f"golden.py: {e}", file=sys.stderr)
             codes.append(2)
