@@ -230,14 +230,18 @@ def run_case(case_path, regen, keep, exact=False, threads=None):
             err = p.stderr.decode("utf-8", "replace")
             print(f"   exit {p.returncode} after {dt:.1f} s (not compared)")
             got[f"{step}:exit"] = p.returncode
+            tail = "stderr ends:\n      " + "\n      ".join(err.strip().splitlines()[-8:])
+            if golden and golden.get(f"{step}:exit", p.returncode) != p.returncode:
+                why = f"killed by signal {-p.returncode}" if p.returncode < 0 else f"exit {p.returncode}"
+                failures.append(f"{step}:exit: {why}; {tail}")
+                tail = "stderr above"
             fields = [k for k, _ in wanted if k.split(".", 1)[0] == step]
             if not fields:
                 continue
             try:
                 summary = json.loads(p.stdout.decode("utf-8", "replace"))
             except ValueError:
-                failures.append(f"{step}: stdout is not one JSON summary (exit {p.returncode}); "
-                                f"stderr ends:\n      " + "\n      ".join(err.strip().splitlines()[-8:]))
+                failures.append(f"{step}: stdout is not one JSON summary (exit {p.returncode}); {tail}")
                 continue
             for key in fields:
                 try:
