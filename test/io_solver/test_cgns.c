@@ -67,6 +67,24 @@ static void test_round_trip(void) {
         "memory: %s", vm_ctx_error(ctx));
   diff = r5 ? mesh_diff(r, r5) : "not read";
   CHECK(!diff, "memory read: %s", diff);
+  /* an allocation failing at every allocation of the read: a clean error
+   * each time, nothing leaked */
+  long before = vm_ctx_alloc_count(ctx);
+  vm_mesh *r6 = NULL;
+  vm_mesh_read_memory(ctx, "mem.cgns", (const uint8_t *)bytes, len, VM_FMT_AUTO, &r6);
+  vm_mesh_destroy(&r6);
+  long nalloc = vm_ctx_alloc_count(ctx) - before, leaks = 0, silent = 0;
+  for (long k = 1; k <= nalloc; k++) {
+    long live = vm_ctx_alloc_live(ctx);
+    vm_ctx_set_alloc_fail(ctx, k);
+    int s2 = vm_mesh_read_memory(ctx, "mem.cgns", (const uint8_t *)bytes, len, VM_FMT_AUTO, &r6);
+    vm_ctx_set_alloc_fail(ctx, 0);
+    silent += s2 >= 0;
+    vm_mesh_destroy(&r6);
+    leaks += vm_ctx_alloc_live(ctx) != live;
+  }
+  CHECK(nalloc > 5 && !leaks && !silent, "alloc-failure sweep over %ld allocations: %ld leaks, "
+        "%ld failures not reported", nalloc, leaks, silent);
   free(bytes);
   vm_mesh *mm[] = {r, r2, r3, r4, r5, m};
   for (int i = 0; i < 6; i++) vm_mesh_destroy(&mm[i]);
