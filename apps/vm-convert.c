@@ -9,8 +9,9 @@
 static const char usage[] =
     "usage: vm-convert [options] IN OUT\n"
     "Convert a mesh; formats from the extensions (.vmsh .vmsht .vtk .vtu .msh .mesh\n"
-    ".stl .obj .off .ply) unless forced.\n"
-    "  --format F      output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply)\n"
+    ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS need volume cells.\n"
+    "  --format F      output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply,\n"
+    "                  su2, cgns)\n"
     "  --in-format F   input format\n"
     "  --binary        binary output where the format has both (vtk, msh, stl)\n"
     "  --msh22         write Gmsh 2.2 instead of 4.1\n"

@@ -40,7 +40,8 @@ static void test_round_trip(void) {
   CHECK(!strcmp(vm_mesh_get_attr(r, "gmsh:physical_name:2:3") ? vm_mesh_get_attr(r, "gmsh:physical_name:2:3") : "", "boundary_7"),
         "third marker's name");
   /* written again: the same file but for the header; and through .vmsh */
-  CHECK(vm_mesh_write(ctx, r, b, VM_FMT_AUTO, NULL) >= 0, "rewrite: %s", vm_ctx_error(ctx));
+  /* the families are all it has: written again without loss */
+  CHECK(vm_mesh_write(ctx, r, b, VM_FMT_AUTO, NULL) == VM_OK, "rewrite: %s", vm_ctx_error(ctx));
   CHECK(same_but_header(a, b), "su2 -> su2 differs");
   CHECK(vm_mesh_write(ctx, r, c, VM_FMT_AUTO, NULL) == VM_OK, "vmsh: %s", vm_ctx_error(ctx));
   CHECK(vm_mesh_read(ctx, c, VM_FMT_AUTO, &r2) == VM_OK, "vmsh read: %s", vm_ctx_error(ctx));
@@ -67,6 +68,22 @@ static void test_round_trip(void) {
   remove(b);
   remove(c);
   remove(d);
+}
+
+/* A surface mesh cannot be exported: a clear refusal naming the file, no file. */
+static void test_surface_refused(void) {
+  char a[256];
+  path_in(a, sizeof a, "surface.su2");
+  vm_mesh *m;
+  vm_mesh_create(ctx, &m);
+  static const int32_t t[3] = {0, 1, 2};
+  for (int i = 0; i < 3; i++) vm_mesh_add_vertex(m, i == 1, i == 2, 0, NULL);
+  vm_mesh_add_element(m, VM_TRI, t);
+  int st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_ERR_ARG && strstr(vm_ctx_error(ctx), "surface.su2: SU2 needs volume cells") &&
+            access(a, F_OK) != 0,
+        "surface: status %d, '%s'", st, vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
 }
 
 /* A mesh without faces: its extracted boundary is one marker "boundary". */
@@ -243,6 +260,7 @@ int main(void) {
   if (!mkdtemp(dir)) return 1;
   test_round_trip();
   test_no_faces();
+  test_surface_refused();
   test_general();
   test_bad();
   rmdir(dir);

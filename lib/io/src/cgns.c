@@ -35,7 +35,7 @@ static CGNS_ENUMT(ElementType_t) cg_type(int t) {
 }
 
 static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const char *tmp,
-                      const char *path, int *lossy) {
+                      const char *path) {
   int fn, B, Z, st = VM_OK;
   if (cg_open(tmp, CG_MODE_WRITE, &fn)) return cg_fail(ctx, path, "open");
   cgsize_t size[3] = {(cgsize_t)m->nv, (cgsize_t)g->ncell, 0};
@@ -43,7 +43,8 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   int32_t *order = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *order);
   cgsize_t *conn = vm_alloc_array(ctx, (size_t)(8 * (g->ncell > g->nface ? g->ncell : g->nface) + 1),
                                   sizeof *conn);
-  if (!c || !order || !conn) {
+  double *cellval = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *cellval);
+  if (!c || !order || !conn || !cellval) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -126,22 +127,15 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   int S = 0;
   for (int i = 0; i < m->nfield; i++) {
     const vm_field *fl = &m->fields[i];
-    if (fl->location != VM_FIELD_ELEMENT) {
-      *lossy = 1;
-      continue;
-    }
-    if (fl->ncomp != 1 || !strncmp(fl->name, "gmsh:", 5)) continue;
+    if (fl->location != VM_FIELD_ELEMENT || fl->ncomp != 1 || !strncmp(fl->name, "gmsh:", 5))
+      continue; /* reported by ex_groups_lossy */
     if (!S && cg_sol_write(fn, B, Z, "CellData", CGNS_ENUMV(CellCenter), &S)) {
       st = cg_fail(ctx, path, "solution");
       goto done;
     }
     int F, r;
     if (fl->type == VM_FIELD_F64) {
-      double *v = (double *)c;
-      if (g->ncell > m->nv) {
-        *lossy = 1;
-        continue;
-      }
+      double *v = cellval;
       for (int64_t k = 0; k < g->ncell; k++) v[k] = ((const double *)fl->data)[order[k]];
       r = cg_field_write(fn, B, Z, S, CGNS_ENUMV(RealDouble), fl->name, v, &F);
     } else {
@@ -156,6 +150,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   }
 done:
   vm_free(ctx, c);
+  vm_free(ctx, cellval);
   vm_free(ctx, order);
   vm_free(ctx, conn);
   if (cg_close(fn) && st == VM_OK) st = cg_fail(ctx, path, "close");
@@ -165,10 +160,11 @@ done:
 int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o) {
   (void)o;
   if (!m || !path) return vm_error(ctx, VM_ERR_ARG, "vm_write_cgns: NULL argument");
-  if (m->dim != 3) return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: CGNS export needs a 3D mesh", path);
+  int st = ex_groups_check(ctx, m, path, "CGNS");
+  if (st) return st;
   if (m->nv > 2147483647 / 8) return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: mesh too large", path);
   ex_groups g;
-  int st = ex_groups_build(ctx, m, &g);
+  st = ex_groups_build(ctx, m, &g);
   if (st) {
     ex_groups_free(ctx, &g);
     return st < 0 ? st : VM_ERR_ARG;
@@ -178,8 +174,7 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
     ex_groups_free(ctx, &g);
     return vm_error(ctx, VM_ERR_ARG, "%s: path too long", path);
   }
-  int lossy = m->nattr > 0;
-  st = write_file(ctx, m, &g, tmp, path, &lossy);
+  st = write_file(ctx, m, &g, tmp, path);
   ex_groups_free(ctx, &g);
   if (st) {
     remove(tmp);
@@ -189,11 +184,7 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
     remove(tmp);
     return vm_error(ctx, VM_ERR_IO, "%s: cannot rename the temporary file", path);
   }
-  if (lossy) {
-    vm_log(ctx, VM_LOG_WARN, "%s: vertex fields and attributes are not stored in CGNS", path);
-    return VM_WARN_LOSSY;
-  }
-  return VM_OK;
+  return ex_groups_lossy(ctx, m, path, "CGNS", 1) ? VM_WARN_LOSSY : VM_OK;
 }
 
 

@@ -15,9 +15,10 @@
 int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o) {
   (void)o;
   if (!m || !path) return vm_error(ctx, VM_ERR_ARG, "vm_write_su2: NULL argument");
-  if (m->dim != 3) return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: SU2 export needs a 3D mesh", path);
+  int st = ex_groups_check(ctx, m, path, "SU2");
+  if (st) return st;
   ex_groups g;
-  int st = ex_groups_build(ctx, m, &g);
+  st = ex_groups_build(ctx, m, &g);
   if (st) {
     ex_groups_free(ctx, &g);
     return st < 0 ? st : VM_ERR_ARG;
@@ -57,11 +58,7 @@ int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
     return vm_error(ctx, VM_ERR_IO, "%s: write failed", path);
   }
   if ((st = vm_outfile_commit(&of))) return st;
-  if (m->nfield || m->nattr) {
-    vm_log(ctx, VM_LOG_WARN, "%s: SU2 cannot store fields or attributes; dropped", path);
-    return VM_WARN_LOSSY;
-  }
-  return VM_OK;
+  return ex_groups_lossy(ctx, m, path, "SU2", 0) ? VM_WARN_LOSSY : VM_OK;
 }
 
 /* Reading. The file is parsed line by line: "KEY= value" lines, then the
