@@ -147,8 +147,10 @@ void vm_outfile_abort(vm_outfile **f);
  *
  * SU2 native mesh (.su2, ASCII): NDIME=3, NELEM with VTK type ids and
  * 0-based indices, NPOIN with coordinates printed with 17 significant
- * digits, NMARK with one MARKER_TAG per family. Fields cannot be stored
- * (VM_WARN_LOSSY after writing, one VM_LOG_WARN). Atomic.
+ * digits, NMARK with one MARKER_TAG per family. Fields other than
+ * "gmsh:physical", attributes other than the family names and vertex flags
+ * cannot be stored (VM_WARN_LOSSY after writing, one VM_LOG_WARN each).
+ * Atomic.
  * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no volume elements: a surface
  * mesh such as an STL is refused, nothing written), VM_ERR_UNSUPPORTED
  * (2D meshes), VM_ERR_IO, VM_ERR_NOMEM.
@@ -194,8 +196,10 @@ void vm_outfile_abort(vm_outfile **f);
  * else BCTypeUserDefined) and a BC_t per family referring to it by
  * FamilyName with its element range at FaceCenter; cell fields as a
  * cell-centred FlowSolution_t. Atomic (temporary file + rename).
- * Returns VM_OK, VM_WARN_LOSSY (vertex fields, flags and attributes are
- * not written), VM_ERR_UNSUPPORTED (built without libcgns), VM_ERR_ARG,
+ * Returns VM_OK, VM_WARN_LOSSY (vertex fields, element fields of several
+ * components, vertex flags and attributes other than the family names are
+ * not written; one VM_LOG_WARN each), VM_ERR_UNSUPPORTED (built without
+ * libcgns; 2D meshes), VM_ERR_ARG (no volume cells),
  * VM_ERR_IO, VM_ERR_BACKEND (libcgns failed; its message on ctx),
  * VM_ERR_NOMEM.
  *
