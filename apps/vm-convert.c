@@ -15,7 +15,7 @@ typedef struct {
 #define A(f) offsetof(args, f)
 static const vm_opt opts[] = {
     {"--format", NULL, VM_OPT_CALL, A(fout), "F",
-     "output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply)",
+     "output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply, su2, cgns)",
      .fn = vm_cli_opt_format, .error = "needs a value"},
     {"--in-format", NULL, VM_OPT_CALL, A(fin), "F", "input format", .fn = vm_cli_opt_format,
      .error = "needs a value"},
@@ -31,7 +31,7 @@ static const vm_opt opts[] = {
 static const vm_cli_spec spec = {
     "usage: vm-convert [options] IN OUT\n"
     "Convert a mesh; formats from the extensions (.vmsh .vmsht .vtk .vtu .msh .mesh\n"
-    ".stl .obj .off .ply) unless forced.\n",
+    ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS need volume cells.\n",
     opts, "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
     {A(in), A(out)}, 2, "need IN and OUT"};
 

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # test/fuzz/build.sh [OUTDIR]: build the libFuzzer reader harnesses
 # (fuzz-<reader>), the sanitized corpus replay (replay) and the seed
-# generator (gen_corpus) with clang, compiling the reader sources of lib/ and
-# surface/ directly (the meson build is not touched). Default OUTDIR:
+# generator (gen_corpus) with clang, compiling the sources of lib/io and the
+# context, mesh and topology of lib/core directly (the meson build is not
+# touched). Default OUTDIR:
 # build-fuzz/ at the top of the tree. Needs clang and libclang-rt-dev.
 # Options: --regen-corpus also rewrites test/fuzz/corpus/*/gen-* with gen_corpus.
 # Environment: CC (default clang); FUZZ_CFLAGS, extra flags for everything
@@ -14,20 +15,21 @@ regen=0
 if [ "${1:-}" = "--regen-corpus" ]; then regen=1; shift; fi
 out=${1:-$root/build-fuzz}
 CC=${CC:-clang}
-readers="vmsh vmsht vtk vtu msh medit stl obj off ply"
+readers="vmsh vmsht vtk vtu msh medit stl obj off ply su2"
 
-# the foundation sources of lib/ (context, mesh, I/O, every format), taken
-# from lib/meson.build so a new reader is fuzzed without editing this script
-lib_srcs=$(awk '/^lib_base_sources = files\(/{f=1; next} f && /\)/{f=0} f' \
-  "$root/lib/meson.build" | grep -o "src/[A-Za-z0-9_]*\.c" | sed "s|^|$root/lib/|")
-[ -n "$lib_srcs" ] || { echo "build.sh: no lib_base_sources in lib/meson.build" >&2; exit 1; }
-lib_srcs="$lib_srcs $root/lib/src/quadrature.c"
-surf_srcs="$root/surface/src/surface_io.c"
-for f in "$root"/surface/src/io_*.c; do surf_srcs="$surf_srcs $f"; done
+# the sources of lib/io (every format; CGNS without libcgns), taken from its
+# meson.build so a new reader is fuzzed without editing this script, and the
+# parts of lib/core they use (context, mesh, topology; the rest of the core
+# needs OpenMP and nothing of it is reached from a reader)
+io_srcs=$(awk '/^io_sources = files\(/ {f=1; next} f && /^\)/ {f=0} f' "$root/lib/io/meson.build" |
+  grep -o "src/[A-Za-z0-9_]*\.c" | sed "s|^|$root/lib/io/|")
+[ -n "$io_srcs" ] || { echo "build.sh: no io_sources in lib/io/meson.build" >&2; exit 1; }
+lib_srcs="$root/lib/core/src/ctx.c $root/lib/core/src/mesh.c $root/lib/core/src/topology.c $io_srcs"
 
 common=(-std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -fno-omit-frame-pointer
         -Wall -Wextra -Wpedantic -Wno-unknown-pragmas
-        -I"$root/lib/include" -I"$root/lib/src" -I"$root/surface/include")
+        -I"$root/lib/core/include" -I"$root/lib/io/include" -I"$root/lib/internal"
+        -I"$root/lib/core/src" -I"$root/lib/io/src")
 san=(-fsanitize=address,undefined -fno-sanitize-recover=all)
 read -r -a extra <<<"${FUZZ_CFLAGS:-}"
 san+=("${extra[@]}") # last, so that they can turn sanitizer checks off
@@ -36,9 +38,8 @@ mkdir -p "$out/obj-fuzz" "$out/obj-san"
 # library objects twice: with fuzzer coverage (for the harnesses) and without
 # (for replay, which has its own main)
 objs_fuzz=() objs_san=()
-for s in $lib_srcs $surf_srcs; do
+for s in $lib_srcs; do
   b=$(basename "$s" .c)
-  case "$s" in */surface/*) b="surface_$b" ;; esac
   "$CC" "${common[@]}" "${san[@]}" -fsanitize=fuzzer-no-link -c "$s" -o "$out/obj-fuzz/$b.o"
   "$CC" "${common[@]}" "${san[@]}" -c "$s" -o "$out/obj-san/$b.o"
   objs_fuzz+=("$out/obj-fuzz/$b.o")

@@ -29,6 +29,7 @@ static const vm_fuzz_reader vm_fuzz_readers[] = {
     {"msh", "fuzz.msh", VM_FMT_MSH},       {"medit", "fuzz.mesh", VM_FMT_MEDIT},
     {"stl", "fuzz.stl", VM_FMT_STL},       {"obj", "fuzz.obj", VM_FMT_OBJ},
     {"off", "fuzz.off", VM_FMT_OFF},       {"ply", "fuzz.ply", VM_FMT_PLY},
+    {"su2", "fuzz.su2", VM_FMT_SU2},
 };
 enum { VM_FUZZ_NREADERS = (int)(sizeof vm_fuzz_readers / sizeof vm_fuzz_readers[0]) };
 

@@ -384,7 +384,18 @@ put("off", "comments", OFF_COMMENTS)
 put("off", "coff", COFF)
 put("ply", "big-endian", ply_be())
 put("ply", "ascii-extra", PLY_ASCII)
-for r in ("vmsh", "vmsht", "vtk", "vtu", "msh", "medit", "stl", "obj", "off", "ply"):
+put("su2", "general", "% comment\r\nNDIME=3\r\nNPOIN= 7 7\r\n0 0 0 0\r\n1 0 0 1\r\n"
+    "0 1 0 2\r\n0 0 1\r\n1 0 1\r\n0 1 1 5\r\n0.25 0.25 2 6\r\n\r\nNELEM= 2\r\n"
+    "13 0 2 1 3 5 4 0\r\n10 3 4 5 6\r\nNMARK= 2\r\nMARKER_TAG= bottom wall\r\n"
+    "MARKER_ELEMS= 2\r\n5 0 2 1\r\n3 0 1 1\r\nMARKER_TAG=top\r\nMARKER_ELEMS=1\r\n"
+    "5 3 4 6\r\n")
+put("su2", "planar", "NDIME= 2\nNELEM= 2\n5 0 1 2 0\n9 1 3 4 2 1\nNPOIN= 5\n0 0\n1 0\n"
+    "0 1\n2 0 3\n2 1 4\nNMARK= 1\nMARKER_TAG= far\nMARKER_ELEMS= 2\n3 0 1\n3 1 3\n")
+put("su2", "zone-ffd", "NZONE= 1\nIZONE= 1\nNDIME= 3\nNELEM= 1\n12 0 1 2 3 4 5 6 7\n"
+    "NPOIN= 8\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+    "NMARK= 1\nMARKER_TAG= box\nMARKER_ELEMS= 2\n9 0 3 2 1\n9 4 5 6 7\nFFD_NBOX= 0\n"
+    "FFD_NLEVEL= 0\n")
+for r in ("vmsh", "vmsht", "vtk", "vtu", "msh", "medit", "stl", "obj", "off", "ply", "su2"):
     put(r, "empty", b"")
 put("vmsht", "header-only", "vmsht 1 0\ndim 3\nvertices 0\nelements 0\nfields 0\n")
 put("vtk", "header-only", "# vtk DataFile Version 3.0\n\nASCII\nDATASET UNSTRUCTURED_GRID\n")

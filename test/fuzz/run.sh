@@ -14,7 +14,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 secs=${1:-60}
 [ $# -gt 0 ] && shift
-readers=${*:-vmsh vmsht vtk vtu msh medit stl obj off ply}
+readers=${*:-vmsh vmsht vtk vtu msh medit stl obj off ply su2}
 bin=${FUZZ_DIR:-$root/build-fuzz}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}

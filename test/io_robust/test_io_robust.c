@@ -17,7 +17,7 @@ typedef struct {
 } fmt_case;
 
 static const fmt_case cases[] = {{"vmsh", 0}, {"vmsht", 0}, {"vtk", 0}, {"vtk", 1}, {"vtu", 0},
-                                 {"msh", 0},  {"msh", 1},   {"mesh", 0}};
+                                 {"msh", 0},  {"msh", 1},   {"mesh", 0}, {"su2", 0}};
 
 /* A small mixed mesh: one element of each 3D type sharing vertices. */
 static vm_mesh *small_mesh(vm_ctx *ctx) {
@@ -122,6 +122,12 @@ static void test_huge_claims(vm_ctx *ctx, const char *dir) {
       {"claim-v2.msh",
        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
        "4 0 0 1\n$EndNodes\n$Elements\n1000000000\n1 4 2 0 1 1 2 3 4\n$EndElements\n"},
+      {"claim.su2",
+       "NDIME= 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNELEM= 1000000000\n10 0 1 2 3\n"},
+      {"claim-points.su2", "NDIME= 3\nNPOIN= 1000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"},
+      {"claim-markers.su2",
+       "NDIME= 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNELEM= 1\n10 0 1 2 3\n"
+       "NMARK= 1\nMARKER_TAG= wall\nMARKER_ELEMS= 1000000000\n5 0 1 2\n"},
       {"claim.mesh",
        "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n"
        "0 0 1 0\nTetrahedra\n1000000000\n1 2 3 4 0\nEnd\n"},

@@ -7,6 +7,50 @@
 #include "families_private.h"
 #include "varmesh/topology.h"
 
+int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt,
+                    int cell_fields) {
+  int lossy = 0;
+  for (int i = 0; i < m->nfield; i++) {
+    const vm_field *f = &m->fields[i];
+    if (f->location == VM_FIELD_ELEMENT && !strcmp(f->name, "gmsh:physical") &&
+        f->type == VM_FIELD_I32 && f->ncomp == 1)
+      continue;
+    if (cell_fields && f->location == VM_FIELD_ELEMENT && f->ncomp == 1 &&
+        strncmp(f->name, "gmsh:", 5))
+      continue;
+    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store the %s field '%s'; dropped", path, fmt,
+           f->location == VM_FIELD_VERTEX ? "vertex" : "element", f->name);
+    lossy = 1;
+  }
+  for (int i = 0; i < m->nattr; i++) {
+    if (!strncmp(m->attrs[i].key, "gmsh:physical_name:2:", 21)) continue;
+    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store the attribute '%s'; dropped", path, fmt,
+           m->attrs[i].key);
+    lossy = 1;
+  }
+  int64_t nflag = 0;
+  for (int64_t v = 0; v < m->nv; v++) nflag += m->vflag[v] != VM_VERTEX_FREE;
+  if (nflag) {
+    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store vertex flags (%lld fixed or slip); dropped",
+           path, fmt, (long long)nflag);
+    lossy = 1;
+  }
+  return lossy;
+}
+
+int ex_groups_check(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt) {
+  int64_t counts[VM_NTYPES];
+  int top = vm_mesh_count_types(m, counts);
+  if (m->dim != 3)
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: %s export needs a 3D mesh", path, fmt);
+  if (top != 3)
+    return vm_error(ctx, VM_ERR_ARG,
+                    "%s: %s needs volume cells (tetrahedra, pyramids, prisms, hexahedra); the "
+                    "mesh has %s (vm-prism builds a prism layer on a surface)",
+                    path, fmt, top == 2 ? "only surface elements" : "no elements");
+  return VM_OK;
+}
+
 void ex_groups_free(vm_ctx *ctx, ex_groups *g) {
   for (int f = 0; f < g->nfam; f++) vm_free(ctx, g->name[f]);
   vm_free(ctx, g->name);

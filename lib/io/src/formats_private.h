@@ -30,7 +30,10 @@ int vm_read_off(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
 int vm_write_off(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 int vm_read_ply(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out);
 int vm_write_ply(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
+int vm_read_su2(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out);
 int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
+int vm_read_cgns(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
+                 vm_mesh **out);
 int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 
 #endif

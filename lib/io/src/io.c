@@ -32,8 +32,8 @@ static const struct vm_format_entry {
     {VM_FMT_OBJ, {"obj"}, vm_read_obj, vm_write_obj},
     {VM_FMT_OFF, {"off"}, vm_read_off, vm_write_off},
     {VM_FMT_PLY, {"ply"}, vm_read_ply, vm_write_ply},
-    {VM_FMT_SU2, {"su2"}, NULL, vm_write_su2},
-    {VM_FMT_CGNS, {"cgns"}, NULL, vm_write_cgns},
+    {VM_FMT_SU2, {"su2"}, vm_read_su2, vm_write_su2},
+    {VM_FMT_CGNS, {"cgns"}, vm_read_cgns, vm_write_cgns},
 };
 #define NFORMATS (sizeof format_tab / sizeof format_tab[0])
 

@@ -147,11 +147,46 @@ void vm_outfile_abort(vm_outfile **f);
  *
  * SU2 native mesh (.su2, ASCII): NDIME=3, NELEM with VTK type ids and
  * 0-based indices, NPOIN with coordinates printed with 17 significant
- * digits, NMARK with one MARKER_TAG per family. Fields cannot be stored
- * (VM_WARN_LOSSY after writing, one VM_LOG_WARN). Atomic.
- * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no volume elements),
- * VM_ERR_UNSUPPORTED (pyramids mixed with others are fine; 2D meshes are
- * not), VM_ERR_IO, VM_ERR_NOMEM.
+ * digits, NMARK with one MARKER_TAG per family. Fields other than
+ * "gmsh:physical", attributes other than the family names and vertex flags
+ * cannot be stored (VM_WARN_LOSSY after writing, one VM_LOG_WARN each).
+ * Atomic.
+ * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no volume elements: a surface
+ * mesh such as an STL is refused, nothing written), VM_ERR_UNSUPPORTED
+ * (2D meshes), VM_ERR_IO, VM_ERR_NOMEM.
+ *
+ * SU2 reading: a single-zone ASCII file of "KEY= value" lines (also
+ * "KEY=value"; keys case-insensitive), each count followed by its records,
+ * one per line; '%' starts a comment line; blank lines and CRLF are fine.
+ *  - NDIME= 2 or 3 first (mesh dim 2 has z = 0); then NELEM=, NPOIN= (with
+ *    an optional second count, as partitioned files have) and NMARK= in any
+ *    order, each once (NMARK= optional). Indices used before NPOIN= are
+ *    checked when it comes.
+ *  - NELEM records: VTK type id, vertex indices (0-based, VTK order:
+ *    prisms are renumbered by vm_elem_vtk_node), an optional trailing
+ *    element index (ignored). Cells are 5 triangle and 9 quadrilateral in
+ *    2D, 10 tetrahedron, 12 hexahedron, 13 prism and 14 pyramid in 3D; any
+ *    other type is refused. Elements keep the file's order.
+ *  - NPOIN records: NDIME coordinates (parsed to the nearest double: the
+ *    writer's %.17g reads back bit for bit), then up to two integers
+ *    (ignored). Non-finite coordinates are refused.
+ *  - Each marker: MARKER_TAG= name (the rest of the line, 1 to 200
+ *    characters, blanks kept), MARKER_ELEMS= n, n records: 5 triangle or 9
+ *    quadrilateral in 3D, 3 line in 2D and 3D. Triangles and quads are
+ *    appended after the cells, marker by marker in file order, with the
+ *    element field "gmsh:physical" = marker number (1, 2, ...; cells 0) and
+ *    the attribute "gmsh:physical_name:2:<number>" = the name. Lines are
+ *    dropped (there is no edge element) with one VM_LOG_WARN; a marker
+ *    with no faces keeps only its name. Writing what was read gives the
+ *    same file but for the header comment.
+ *  - NZONE= / IZONE= other than 1 (multi-zone): VM_ERR_UNSUPPORTED.
+ *    FFD_NBOX= / FFD_NLEVEL= 0 are accepted; a nonzero one ends the mesh
+ *    (the free-form deformation boxes after it are ignored with a warning).
+ *  Errors are VM_ERR_FORMAT with one line "name: line N: what": unknown
+ *  keywords and element types, truncated input, counts that cannot fit in
+ *  the bytes left (checked before anything is allocated), too few or too
+ *  many numbers on a record line, indices out of range, non-finite or
+ *  unparsable numbers. Time and memory are linear in the file size.
  *
  * CGNS (.cgns, through libcgns): one base (cell dimension 3), one
  * unstructured zone, coordinates in double, one element section per cell
@@ -161,10 +196,44 @@ void vm_outfile_abort(vm_outfile **f);
  * else BCTypeUserDefined) and a BC_t per family referring to it by
  * FamilyName with its element range at FaceCenter; cell fields as a
  * cell-centred FlowSolution_t. Atomic (temporary file + rename).
- * Returns VM_OK, VM_WARN_LOSSY (vertex fields, flags and attributes are
- * not written), VM_ERR_UNSUPPORTED (built without libcgns), VM_ERR_ARG,
+ * Returns VM_OK, VM_WARN_LOSSY (vertex fields, element fields of several
+ * components, vertex flags and attributes other than the family names are
+ * not written; one VM_LOG_WARN each), VM_ERR_UNSUPPORTED (built without
+ * libcgns; 2D meshes), VM_ERR_ARG (no volume cells),
  * VM_ERR_IO, VM_ERR_BACKEND (libcgns failed; its message on ctx),
- * VM_ERR_NOMEM. */
+ * VM_ERR_NOMEM.
+ *
+ * CGNS reading: libcgns opens files by path only, so the buffer is copied
+ * to a private temporary file (mkstemp in $TMPDIR, else /tmp) that is
+ * unlinked as soon as libcgns has opened it: nothing is left behind on any
+ * path, and vm_mesh_read and vm_mesh_read_memory behave alike (a file is
+ * read into memory first, so it is copied once more). Accepted: one base
+ * of cell and physical dimension 3 with one unstructured zone (other
+ * layouts: VM_ERR_UNSUPPORTED); coordinates CoordinateX/Y/Z in single or
+ * double (widened exactly); element sections TRI_3, QUAD_4, TETRA_4,
+ * PYRA_5, PENTA_6, HEXA_8 and MIXED of these (NODE and BAR_2 are dropped
+ * with a warning; other types, higher order or polyhedra,
+ * VM_ERR_UNSUPPORTED). Elements become vm elements in element-id order
+ * (the writer's file: cells grouped by type, then the families' faces).
+ * Face families: each BC_t on elements (ElementRange/List, or
+ * PointRange/List at a location other than Vertex) names its faces after
+ * its FamilyName, else its own name; names become "gmsh:physical" tags
+ * 1, 2, ... in order of first appearance with their
+ * "gmsh:physical_name:2:<tag>" attributes; faces in no BC get one family
+ * per section, named after the section. BCs given on vertices are ignored
+ * with a warning. Solutions: FlowSolution_t at CellCenter (values in
+ * cell-element-id order) become element fields (0 on faces), at Vertex
+ * vertex fields; Integer as int, RealSingle / RealDouble as f64; others
+ * (rind, other locations or types, names starting "gmsh:") are ignored
+ * with one warning. Writing what was read gives the same mesh again.
+ * Errors: VM_ERR_FORMAT, one line "name: what[: libcgns: message]", for
+ * files libcgns cannot open or read, arrays claiming more entries than the
+ * file has bytes (checked before allocating), overlapping sections, node
+ * indices out of range, non-finite coordinates; VM_ERR_IO if the temporary
+ * file cannot be written. libcgns itself is not hardened against hostile
+ * files (it reads the whole node tree at open), is not thread-safe, and
+ * its warnings are silenced by a global handler (cg_configure) so that the
+ * library prints nothing; do not feed it untrusted input. */
 
 #ifdef __cplusplus
 }
