@@ -16,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "shapes.h"
+#include "support/check_prism.h"
 #include "varmesh/aircraft.h"
 #include "varmesh/prism.h"
 #include "vmtest.h"
@@ -56,7 +56,7 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
   if (res) {
     CHECK(res->ne == 20 * r.wall_triangles + 2 * r.wall_triangles, "%lld elements",
           (long long)res->ne);
-    CHECK(sh_corner_inverted(res) == 0, "T = %g L: the result has inverted corner tets", frac);
+    CHECK(chk_corner_inverted(res) == 0, "T = %g L: the result has inverted corner tets", frac);
     CHECK(!memcmp(res->xyz, w->xyz, sizeof(double) * 3 * (size_t)w->nv),
           "T = %g L: the wall moved", frac);
     vm_mesh_destroy(&res);

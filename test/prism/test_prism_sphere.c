@@ -6,8 +6,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "shapes.h"
+#include "support/check_prism.h"
 #include "varmesh/prism.h"
+#include "varmesh/shapes.h"
 #include "vmtest.h"
 
 
@@ -25,7 +26,7 @@ static int64_t layer_faces_intersections(const vm_mesh *L, int64_t nw) {
     grp[nt + t] = 0;
   }
   (void)nw;
-  int64_t n = sh_count_intersections(L->xyz, 2 * nt, tri, grp, 1e-6);
+  int64_t n = chk_count_intersections(L->xyz, 2 * nt, tri, grp, 1e-6);
   free(tri);
   free(grp);
   return n;
@@ -37,7 +38,7 @@ int main(void) {
   vm_mesh *w = NULL;
   vm_mesh_create(ctx, &w);
   const double c0[3] = {0, 0, 0};
-  sh_icosphere(w, c0, 1.0, 3);
+  CHECK(vm_gen_icosphere(w, c0, 1.0, 3, 0, NULL) == 0, "icosphere");
   double *w0 = malloc(sizeof(double) * 3 * (size_t)w->nv);
   memcpy(w0, w->xyz, sizeof(double) * 3 * (size_t)w->nv);
 
@@ -53,22 +54,22 @@ int main(void) {
   st = vm_prism_thin(p);
   CHECK(st == 0, "thin: %d %s", st, vm_ctx_error(ctx));
   const vm_mesh *L = vm_prism_layer(p);
-  CHECK(sh_corner_inverted(L) == 0, "thin layer inverted");
+  CHECK(chk_corner_inverted(L) == 0, "thin layer inverted");
   int64_t nw = L->nv / 2;
   CHECK(nw == w->nv, "wall vertices %lld", (long long)nw);
 
   st = vm_prism_springback(p);
   CHECK(st == 0, "springback: %d %s", st, vm_ctx_error(ctx));
   L = vm_prism_layer(p);
-  CHECK(sh_corner_inverted(L) == 0, "springback inverted");
+  CHECK(chk_corner_inverted(L) == 0, "springback inverted");
   double dev = 0, ang = 0;
   for (int64_t v = 0; v < nw; v++) {
     const double *a = L->xyz + 3 * v, *b = L->xyz + 3 * (v + nw);
     double e[3];
-    sh_sub(b, a, e);
-    double l = sqrt(sh_dot(e, e));
+    chk_sub(b, a, e);
+    double l = sqrt(chk_dot(e, e));
     dev = fmax(dev, fabs(l / o.thickness - 1));
-    double cs = sh_dot(e, a) / (l * sqrt(sh_dot(a, a)));
+    double cs = chk_dot(e, a) / (l * sqrt(chk_dot(a, a)));
     ang = fmax(ang, acos(fmin(1, cs)) * 180 / 3.14159265358979323846);
   }
   fprintf(stderr, "springback: max |len/T - 1| = %.3g, max angle %.3g deg\n", dev, ang);
@@ -85,7 +86,7 @@ int main(void) {
 
   st = vm_prism_restore(p);
   CHECK(st == 0, "restore: %d %s", st, vm_ctx_error(ctx));
-  CHECK(sh_corner_inverted(vm_prism_layer(p)) == 0, "restore inverted");
+  CHECK(chk_corner_inverted(vm_prism_layer(p)) == 0, "restore inverted");
 
   st = vm_prism_march(p);
   CHECK(st == 0, "march: %d %s", st, vm_ctx_error(ctx));
@@ -109,7 +110,7 @@ int main(void) {
   CHECK(st == 0 && res, "result: %d", st);
   if (res) {
     CHECK(vm_mesh_check(res) == 0, "result check: %s", vm_ctx_error(ctx));
-    CHECK(sh_corner_inverted(res) == 0, "result inverted");
+    CHECK(chk_corner_inverted(res) == 0, "result inverted");
     CHECK(!memcmp(res->xyz, w0, sizeof(double) * 3 * (size_t)nw), "wall moved");
     /* concentric shells: level k at radius 1 + sum of the first k heights */
     double rad = 1, werr = 0, aerr = 0, h = r.first_height;
@@ -118,10 +119,10 @@ int main(void) {
       h *= 1.3;
       for (int64_t v = 0; v < nw; v++) {
         const double *x = res->xyz + 3 * (k * nw + v), *y = res->xyz + 3 * ((k - 1) * nw + v);
-        werr = fmax(werr, fabs(sqrt(sh_dot(x, x)) - rad) / o.thickness);
+        werr = fmax(werr, fabs(sqrt(chk_dot(x, x)) - rad) / o.thickness);
         double e[3];
-        sh_sub(x, y, e);
-        double cs = sh_dot(e, x) / sqrt(sh_dot(e, e) * sh_dot(x, x));
+        chk_sub(x, y, e);
+        double cs = chk_dot(e, x) / sqrt(chk_dot(e, e) * chk_dot(x, x));
         aerr = fmax(aerr, acos(fmin(1, cs)) * 180 / 3.14159265358979323846);
       }
     }

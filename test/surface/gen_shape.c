@@ -1,11 +1,11 @@
-/* test/surface/gen_shape.c: writes the generated test surfaces of shapes.h
+/* test/surface/gen_shape.c: writes the generated test surfaces of varmesh/shapes.h
  * (and broken variants) to a file, for the vm-surface CLI tests.
  * usage: gen_shape lens|sphere|cube|open|fin|flipped|needle OUT */
 #include <stdio.h>
 #include <string.h>
 
-#include "shapes.h"
 #include "varmesh/io.h"
+#include "varmesh/shapes.h"
 
 int main(int argc, char **argv) {
   if (argc != 3) {
@@ -14,13 +14,16 @@ int main(int argc, char **argv) {
   }
   vm_ctx *ctx = NULL;
   vm_mesh *m = NULL;
-  if (vm_ctx_create(&ctx)) return 1;
+  if (vm_ctx_create(&ctx) || vm_mesh_create(ctx, &m)) {
+    vm_ctx_destroy(&ctx);
+    return 1;
+  }
   const char *k = argv[1];
   int st = 0;
   if (!strcmp(k, "lens")) {
-    st = shp_lens(ctx, 1.0, 0.5, 0.1, &m);
+    st = vm_gen_lens(m, 1.0, 0.5, 0.1);
   } else if (!strcmp(k, "cube") || !strcmp(k, "fin")) {
-    st = shp_cube(ctx, 3, &m);
+    st = vm_gen_cube(m, 3);
     if (!st && !strcmp(k, "fin")) { /* a third face on the edge of face 0 */
       int64_t v;
       vm_mesh_add_vertex(m, 0.5, -1, 0.5, &v);
@@ -28,7 +31,7 @@ int main(int argc, char **argv) {
       st = vm_mesh_add_element(m, VM_TRI, t);
     }
   } else {
-    st = shp_icosphere(ctx, 1.0, 3, 0, 0, &m);
+    st = vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
     if (!st && !strcmp(k, "open")) m->ne -= 2;
     if (!st && !strcmp(k, "flipped"))
       for (int64_t e = 10; e < 13; e++) {

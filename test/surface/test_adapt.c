@@ -7,13 +7,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "shapes.h"
 #include "varmesh/adapt.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
 #include "varmesh/project.h"
 #include "varmesh/repair.h"
+#include "varmesh/shapes.h"
 #include "vmtest.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 /* Lens R = 1, d = 0.5: the ridge is the circle z = 0, r = sqrt(3)/2. */
 static double ridge_distance(const double *p) {
@@ -54,7 +58,8 @@ static ridge_stats measure(const vm_mesh *m) {
 
 static void test_lens(vm_ctx *ctx) {
   vm_mesh *m = NULL, *in = NULL;
-  CHECK(shp_lens(ctx, 1.0, 0.5, 0.08, &m) == 0, "lens");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_lens(m, 1.0, 0.5, 0.08) == 0, "lens");
   vm_repair_report rr;
   CHECK(vm_surface_repair(m, NULL, &rr) == 0 && rr.border_edges == 0 && rr.reoriented == 0,
         "the lens is closed and outward: %s", vm_ctx_error(ctx));
@@ -144,7 +149,8 @@ static void test_lens(vm_ctx *ctx) {
 
 static void test_open_cylinder(vm_ctx *ctx) {
   vm_mesh *m = NULL;
-  shp_cylinder(ctx, 0.5, 1.0, 32, 12, 0.2, 9, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_cylinder(m, 0.5, 1.0, 32, 12, &(vm_gen_jitter){0.2, 9});
   vm_adapt_opts o = vm_adapt_opts_default();
   o.max_iter = 30;
   vm_adapt_result r;
@@ -176,8 +182,10 @@ static void test_bad(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
   /* non-manifold: two cubes sharing a corner */
   vm_mesh *a = NULL, *b = NULL;
-  shp_cube(ctx, 2, &a);
-  shp_cube(ctx, 2, &b);
+  vm_mesh_create(ctx, &a);
+  vm_gen_cube(a, 2);
+  vm_mesh_create(ctx, &b);
+  vm_gen_cube(b, 2);
   int64_t base = a->nv;
   for (int64_t v = 0; v < b->nv; v++)
     vm_mesh_add_vertex(a, b->xyz[3 * v] + 1, b->xyz[3 * v + 1] + 1, b->xyz[3 * v + 2] + 1, NULL);
@@ -208,7 +216,8 @@ static void test_bad(vm_ctx *ctx) {
   vm_mesh_destroy(&a);
   vm_mesh_destroy(&b);
   /* a zero-area triangle: refused up front, naming it, mesh unchanged */
-  shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 1, 0, NULL);
   int32_t *c = m->conn + 3 * 7;
   for (int r3 = 0; r3 < 3; r3++) /* vertex c[2] onto the midpoint of c[0]-c[1] */
     m->xyz[3 * c[2] + r3] = 0.5 * (m->xyz[3 * c[0] + r3] + m->xyz[3 * c[1] + r3]);
@@ -222,7 +231,8 @@ static void test_bad(vm_ctx *ctx) {
   free(x0);
   vm_mesh_destroy(&m);
   /* bad options */
-  shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 1, 0, NULL);
   o.rounds = 0;
   CHECK(vm_surface_adapt(m, NULL, &o, &r) == VM_ERR_ARG, "rounds 0 refused");
   o = vm_adapt_opts_default();
@@ -238,7 +248,8 @@ static void test_bad(vm_ctx *ctx) {
  * the mesh as it was. */
 static void test_alloc_failures(vm_ctx *ctx) {
   vm_mesh *m = NULL, *m0 = NULL;
-  shp_lens(ctx, 1.0, 0.5, 0.3, &m0);
+  vm_mesh_create(ctx, &m0);
+  vm_gen_lens(m0, 1.0, 0.5, 0.3);
   vm_adapt_opts o = vm_adapt_opts_default();
   o.max_iter = 4;
   o.rounds = 2;

@@ -4,8 +4,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "shapes.h"
 #include "varmesh/curvature.h"
+#include "varmesh/shapes.h"
 #include "vmtest.h"
 
 typedef struct {
@@ -23,16 +23,18 @@ static err_t rel_err(const double *H, const double *Hex, int64_t n) {
   return e;
 }
 
-enum { TORUS_TRI = 0, TORUS_ALT = 1, TORUS_QUAD = 2 };
-
 static err_t torus_err(vm_ctx *ctx, int nu, int kind, double jit, int smooth) {
   vm_mesh *m = NULL;
-  double *Hex = NULL;
+  double *Hex = malloc(sizeof *Hex * (size_t)nu * (size_t)(nu / 2));
   err_t e = {INFINITY, INFINITY};
-  int st = shp_torus(ctx, 1.0, 0.4, nu, nu / 2, kind == TORUS_QUAD, kind == TORUS_ALT, jit, 7,
-                     &m, &Hex);
+  int st = vm_mesh_create(ctx, &m);
+  if (!st) st = vm_gen_torus(m, NULL, 1.0, 0.4, nu, nu / 2, kind, &(vm_gen_jitter){jit, 7}, Hex);
   CHECK(st == 0, "torus: %d", st);
-  if (st) return e;
+  if (st) {
+    free(Hex);
+    vm_mesh_destroy(&m);
+    return e;
+  }
   double *H = malloc(sizeof *H * (size_t)m->nv);
   st = vm_surface_mean_curvature(m, H, NULL, NULL, NULL);
   CHECK(st == 0, "curvature: %d", st);
@@ -49,7 +51,10 @@ static err_t torus_err(vm_ctx *ctx, int nu, int kind, double jit, int smooth) {
 static err_t sphere_err(vm_ctx *ctx, int level, double jit, int smooth) {
   vm_mesh *m = NULL;
   err_t e = {INFINITY, INFINITY};
-  if (shp_icosphere(ctx, 1.0, level, jit, 3, &m)) return e;
+  if (vm_mesh_create(ctx, &m) || vm_gen_icosphere(m, NULL, 1.0, level, 0, &(vm_gen_jitter){jit, 3})) {
+    vm_mesh_destroy(&m);
+    return e;
+  }
   double *H = malloc(sizeof *H * (size_t)m->nv), *Hex = malloc(sizeof *H * (size_t)m->nv);
   for (int64_t i = 0; i < m->nv; i++) Hex[i] = 1.0;
   CHECK(vm_surface_mean_curvature(m, H, NULL, NULL, NULL) == 0, "icosphere curvature");
@@ -83,14 +88,14 @@ static void accuracy_table(vm_ctx *ctx) {
           snprintf(size, sizeof size, "%dx%d", nu, nu / 2);
           printf("%-16s %6.1f %4d %-10s %10.3e %10.3e %6.2f\n", kname[kind], jit, smooth, size,
                  e.rms, e.max, order);
-          if (ij == 0 && kind != TORUS_ALT) {
+          if (ij == 0 && kind != VM_GEN_TORUS_TRI_ALT) {
             if (nu == 128) {
               CHECK(e.rms <= 1e-3, "%s 128x64: rms %g > 1e-3", kname[kind], e.rms);
               CHECK(e.max <= 3e-3, "%s 128x64: max %g", kname[kind], e.max);
             }
             if (prev.rms > 0) CHECK(order >= 1.9, "%s %s: order %.2f", kname[kind], size, order);
           }
-          if (ij == 0 && kind == TORUS_ALT && prev.rms > 0)
+          if (ij == 0 && kind == VM_GEN_TORUS_TRI_ALT && prev.rms > 0)
             CHECK(order >= 0.9, "tri-alt %s: order %.2f", size, order);
           if (ij == 1 && smooth == 0)
             CHECK(e.rms <= 0.1, "jittered %s %s: rms %g", kname[kind], size, e.rms);
@@ -121,7 +126,8 @@ static void accuracy_table(vm_ctx *ctx) {
 static void test_cylinder_plane_sign(vm_ctx *ctx) {
   /* open cylinder r = 0.5: H = 1/(2r) = 1 inside, boundary rows extrapolated */
   vm_mesh *m = NULL;
-  CHECK(shp_cylinder(ctx, 0.5, 2.0, 64, 33, 0, 1, &m) == 0, "cylinder");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_cylinder(m, 0.5, 2.0, 64, 33, NULL) == 0, "cylinder");
   double *H = malloc(sizeof *H * (size_t)m->nv);
   vm_curvature_stats cs;
   CHECK(vm_surface_mean_curvature(m, H, NULL, NULL, &cs) == 0, "cylinder H");
@@ -157,7 +163,8 @@ static void test_cylinder_plane_sign(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 
   /* icosphere oriented inward: H = -1/R */
-  CHECK(shp_icosphere(ctx, 2.0, 4, 0, 0, &m) == 0, "icosphere");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_icosphere(m, NULL, 2.0, 4, 0, NULL) == 0, "icosphere");
   for (int64_t e = 0; e < m->ne; e++) {
     int32_t *c = m->conn + m->eoff[e];
     int32_t s = c[0];
@@ -175,7 +182,8 @@ static void test_cylinder_plane_sign(vm_ctx *ctx) {
 
 static void test_filter_fields(vm_ctx *ctx) {
   vm_mesh *m = NULL;
-  CHECK(shp_icosphere(ctx, 1.0, 2, 0, 0, &m) == 0, "icosphere");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_icosphere(m, NULL, 1.0, 2, 0, NULL) == 0, "icosphere");
   double H[4] = {0.05, -0.5, 3.0, -7.0};
   vm_mesh m4 = *m;
   m4.nv = 4; /* the filter without smoothing touches values only */
@@ -235,7 +243,8 @@ static void test_bad_input(vm_ctx *ctx) {
 
 static void test_alloc_failures(vm_ctx *ctx) {
   vm_mesh *m = NULL;
-  shp_icosphere(ctx, 1.0, 1, 0, 0, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 1, 0, NULL);
   int failures = 0;
   for (long n = 1; n < 200; n++) {
     long live = vm_ctx_alloc_live(ctx);

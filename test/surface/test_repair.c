@@ -6,11 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "shapes.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
 #include "varmesh/project.h"
 #include "varmesh/repair.h"
+#include "varmesh/shapes.h"
 #include "vmtest.h"
 
 /* Every edge used once in each direction: closed and consistently oriented. */
@@ -47,7 +47,8 @@ static void flip(vm_mesh *m, int64_t e) {
 static void test_good_and_reoriented(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_repair_report r;
-  CHECK(shp_icosphere(ctx, 1.0, 2, 0, 0, &m) == 0, "icosphere");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_icosphere(m, NULL, 1.0, 2, 0, NULL) == 0, "icosphere");
   CHECK(vm_surface_repair(m, NULL, &r) == 0, "repair of a good sphere: %s", vm_ctx_error(ctx));
   CHECK(r.nv == 162 && r.nf == 320 && r.border_edges == 0 && r.components == 1 &&
             r.self_intersections == 0 && r.reoriented == 0,
@@ -79,7 +80,8 @@ static void test_soup_cleanup(vm_ctx *ctx) {
    * duplicated in triangle 5, with an unused vertex */
   vm_mesh *m = NULL;
   vm_repair_report r;
-  CHECK(shp_cube(ctx, 1, &m) == 0, "cube");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_cube(m, 1) == 0, "cube");
   int32_t dup[3] = {m->conn[0], m->conn[2], m->conn[1]};
   vm_mesh_add_element(m, VM_TRI, dup);
   int64_t nv0 = m->nv, extra;
@@ -102,7 +104,8 @@ static void test_refusals(vm_ctx *ctx) {
   vm_repair_report r;
   vm_repair_opts o = vm_repair_opts_default();
   /* open: one face removed */
-  CHECK(shp_icosphere(ctx, 1.0, 1, 0, 0, &m) == 0, "icosphere");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_icosphere(m, NULL, 1.0, 1, 0, NULL) == 0, "icosphere");
   m->ne--;
   int64_t nv = m->nv, ne = m->ne;
   double x0 = m->xyz[0];
@@ -118,7 +121,8 @@ static void test_refusals(vm_ctx *ctx) {
   o.require_closed = 1;
 
   /* non-manifold edge: a fin on a cube edge */
-  CHECK(shp_cube(ctx, 1, &m) == 0, "cube");
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_cube(m, 1) == 0, "cube");
   int64_t fin;
   vm_mesh_add_vertex(m, 0.5, -1, 0.5, &fin);
   int32_t t[3] = {m->conn[0], m->conn[1], (int32_t)fin};
@@ -129,8 +133,10 @@ static void test_refusals(vm_ctx *ctx) {
 
   /* non-manifold vertex: two cubes touching at a corner */
   vm_mesh *a = NULL, *b = NULL;
-  shp_cube(ctx, 1, &a);
-  shp_cube(ctx, 1, &b);
+  vm_mesh_create(ctx, &a);
+  vm_gen_cube(a, 1);
+  vm_mesh_create(ctx, &b);
+  vm_gen_cube(b, 1);
   int64_t base = a->nv;
   for (int64_t v = 0; v < b->nv; v++)
     vm_mesh_add_vertex(a, b->xyz[3 * v] + 1, b->xyz[3 * v + 1] + 1, b->xyz[3 * v + 2] + 1, NULL);
@@ -146,8 +152,10 @@ static void test_refusals(vm_ctx *ctx) {
   vm_mesh_destroy(&b);
 
   /* self-intersecting: two overlapping spheres */
-  shp_icosphere(ctx, 1.0, 2, 0, 0, &a);
-  shp_icosphere(ctx, 1.0, 2, 0, 0, &b);
+  vm_mesh_create(ctx, &a);
+  vm_gen_icosphere(a, NULL, 1.0, 2, 0, NULL);
+  vm_mesh_create(ctx, &b);
+  vm_gen_icosphere(b, NULL, 1.0, 2, 0, NULL);
   base = a->nv;
   for (int64_t v = 0; v < b->nv; v++)
     vm_mesh_add_vertex(a, b->xyz[3 * v] + 0.5, b->xyz[3 * v + 1], b->xyz[3 * v + 2], NULL);
@@ -199,7 +207,8 @@ static void test_zero_area(vm_ctx *ctx) {
    * edge (a, b): the neighbour (a, b, c) is split at m */
   vm_mesh *m = NULL;
   vm_repair_report r;
-  shp_icosphere(ctx, 1.0, 2, 0, 0, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 2, 0, NULL);
   int32_t *f = m->conn; /* face 0 = (a, b, c) */
   int32_t a = f[0], b = f[1], c = f[2];
   int64_t mid;
@@ -230,7 +239,8 @@ static void test_zero_area(vm_ctx *ctx) {
 static void test_features(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_surface_features f;
-  shp_cube(ctx, 4, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_cube(m, 4);
   CHECK(vm_surface_detect_features(m, 20, 50, &f) == 0, "cube features");
   CHECK(f.nedge == 48 && f.nline == 12 && f.ncorner == 8 && f.nline_vertices == 36 &&
             f.nboundary == 0,
@@ -265,7 +275,8 @@ static void test_features(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 
   /* open cylinder: two boundary loops, no corners */
-  shp_cylinder(ctx, 0.5, 1.0, 24, 6, 0, 1, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_cylinder(m, 0.5, 1.0, 24, 6, NULL);
   CHECK(vm_surface_detect_features(m, 20, 50, &f) == 0, "cylinder features");
   CHECK(f.nline == 2 && f.ncorner == 0 && f.nboundary == 48 && f.nline_vertices == 48,
         "cylinder: %d lines %lld corners %lld boundary", f.nline, (long long)f.ncorner,
@@ -280,7 +291,8 @@ static void test_features(vm_ctx *ctx) {
 
 static void test_remesh(vm_ctx *ctx) {
   vm_mesh *m = NULL, *in = NULL;
-  shp_icosphere(ctx, 1.0, 3, 0, 0, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
   vm_mesh_clone(m, &in);
   vm_remesh_opts o = vm_remesh_opts_default();
   o.target_edge_length = 0.2;
@@ -303,7 +315,8 @@ static void test_remesh(vm_ctx *ctx) {
   vm_mesh_destroy(&in);
 
   /* cube with features: corners and edges stay exact */
-  shp_cube(ctx, 3, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_cube(m, 3);
   vm_surface_features f;
   vm_surface_detect_features(m, 20, 50, &f);
   o.target_edge_length = 0.1;
@@ -332,7 +345,8 @@ static void test_projector(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_surface_features f;
   vm_surface_projector *p = NULL;
-  shp_cube(ctx, 2, &m);
+  vm_mesh_create(ctx, &m);
+  vm_gen_cube(m, 2);
   vm_surface_detect_features(m, 20, 50, &f);
   CHECK(vm_surface_projector_create(ctx, m, &f, &p) == 0, "projector");
   CHECK(vm_surface_projector_nlines(p) == 12, "12 lines");
@@ -386,8 +400,10 @@ static void test_projector(vm_ctx *ctx) {
 
   /* Hausdorff between concentric spheres */
   vm_mesh *a = NULL, *b = NULL;
-  shp_icosphere(ctx, 1.0, 3, 0, 0, &a);
-  shp_icosphere(ctx, 1.1, 3, 0, 0, &b);
+  vm_mesh_create(ctx, &a);
+  vm_gen_icosphere(a, NULL, 1.0, 3, 0, NULL);
+  vm_mesh_create(ctx, &b);
+  vm_gen_icosphere(b, NULL, 1.1, 3, 0, NULL);
   double ab, ba;
   CHECK(vm_surface_hausdorff(a, b, 0.05, &ab, &ba) == 0, "hausdorff");
   CHECK(ab > 0.09 && ab < 0.101 && ba > 0.09 && ba < 0.101, "spheres 0.1 apart: %g %g", ab, ba);
