@@ -106,8 +106,7 @@ int vm_cli_double(const vm_cli *cli, const char *opt, const char *s, double lo, 
   errno = 0;
   double x = s ? strtod(s, &e) : NAN;
   if (!s || !*s || *e || errno || !(x >= lo && x <= hi)) {
-    vm_cli_usage_error(cli, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi,
-                       s ? s : "");
+    vm_cli_usage_error(cli, "%s expects a number in [%g, %g], got '%s'", opt, lo, hi, s ? s : "");
     return 1;
   }
   *out = x;
@@ -225,7 +224,10 @@ static int choice_error(const vm_cli *cli, const vm_opt *o) {
   while (o->choices[n]) n++;
   for (int i = 0; i < n && len < (int)sizeof list; i++)
     len += snprintf(list + len, sizeof list - (size_t)len, "%s%s",
-                    i == 0 ? "" : i == n - 1 ? " or " : ", ", o->choices[i]);
+                    i == 0       ? ""
+                    : i == n - 1 ? " or "
+                                 : ", ",
+                    o->choices[i]);
   return vm_cli_usage_error(cli, "%s expects %s", o->name, list);
 }
 
@@ -234,9 +236,7 @@ static int apply(vm_cli *cli, const vm_opt *o, const char *val, void *args) {
   long lv;
   int k;
   switch (o->kind) {
-  case VM_OPT_FLAG:
-    *(int *)at = o->ival;
-    return VM_EXIT_OK;
+  case VM_OPT_FLAG: *(int *)at = o->ival; return VM_EXIT_OK;
   case VM_OPT_INT:
     if (vm_cli_int(cli, o->name, val, (long)o->lo, (long)o->hi, &lv)) return VM_EXIT_USAGE;
     *(int *)at = (int)lv;
@@ -253,10 +253,8 @@ static int apply(vm_cli *cli, const vm_opt *o, const char *val, void *args) {
     if ((k = pick(val, o->choices)) < 0) return choice_error(cli, o);
     *(int *)at = k;
     return VM_EXIT_OK;
-  case VM_OPT_CALL:
-    return o->fn(cli, o, val, args);
-  default:
-    return VM_EXIT_OK;
+  case VM_OPT_CALL: return o->fn(cli, o, val, args);
+  default: return VM_EXIT_OK;
   }
 }
 
@@ -264,8 +262,8 @@ int vm_cli_parse(vm_cli *cli, const vm_cli_spec *spec, void *args, int argc, cha
   for (int i = 0; i < argc; i++) {
     const char *a = argv[i];
     const vm_opt *o = spec->opts;
-    while (o->kind && (o->kind == VM_OPT_HEADING || (strcmp(a, o->name) &&
-                                                     !(o->alias && !strcmp(a, o->alias)))))
+    while (o->kind && (o->kind == VM_OPT_HEADING ||
+                       (strcmp(a, o->name) && !(o->alias && !strcmp(a, o->alias)))))
       o++;
     if (o->kind) {
       const char *val = NULL;

@@ -11,15 +11,15 @@
 /* Exit codes shared by every vm-* program (docs/cli.md). */
 enum {
   VM_EXIT_OK = 0,
-  VM_EXIT_INPUT = 1,   /* bad input file or failed I/O */
-  VM_EXIT_USAGE = 2,   /* bad command line */
-  VM_EXIT_CHECK = 3,   /* a requested check failed / result not valid */
+  VM_EXIT_INPUT = 1, /* bad input file or failed I/O */
+  VM_EXIT_USAGE = 2, /* bad command line */
+  VM_EXIT_CHECK = 3, /* a requested check failed / result not valid */
   VM_EXIT_INTERRUPTED = 4
 };
 
 typedef struct vm_cli {
   const char *prog;
-  int quiet;   /* suppress info/progress on stderr */
+  int quiet; /* suppress info/progress on stderr */
   int verbose;
   vm_ctx *ctx;
 } vm_cli;
@@ -101,24 +101,24 @@ typedef struct vm_opt vm_opt;
 typedef int (*vm_opt_fn)(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 
 struct vm_opt {
-  const char *name;    /* "--theta" */
-  const char *alias;   /* "-q", or NULL */
+  const char *name;  /* "--theta" */
+  const char *alias; /* "-q", or NULL */
   vm_opt_kind kind;
   size_t offset;       /* offsetof(program's args, field) */
   const char *metavar; /* "T" in "--theta T"; NULL for flags */
   const char *help;
-  double lo, hi;       /* INT, DOUBLE: the accepted range */
-  int ival;            /* FLAG: the value stored */
+  double lo, hi; /* INT, DOUBLE: the accepted range */
+  int ival;      /* FLAG: the value stored */
   const char *const *choices;
   vm_opt_fn fn;
   const char *error;
 };
 
 typedef struct vm_cli_spec {
-  const char *usage;   /* --help's text before the options: usage, description */
+  const char *usage; /* --help's text before the options: usage, description */
   const vm_opt *opts;
-  const char *epilog;  /* after the options ("exit: ...") */
-  size_t operand[3];   /* offsets of the operands (const char *) in args, in order */
+  const char *epilog; /* after the options ("exit: ...") */
+  size_t operand[3];  /* offsets of the operands (const char *) in args, in order */
   int noperands;
   const char *missing; /* the usage error when an operand is missing; NULL: the
                           program checks */
@@ -145,10 +145,13 @@ void vm_cli_print_help(const vm_cli_spec *spec, FILE *f);
 int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
-#define VM_CLI_OPT_QUIET(help) {"--quiet", "-q", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_quiet}
-#define VM_CLI_OPT_THREADS                                                                      \
-  {"--threads", NULL, VM_OPT_CALL, 0, "N", "OpenMP threads (results do not depend on it)",      \
-   .fn = vm_cli_opt_threads}
+#define VM_CLI_OPT_QUIET(help)                                                                     \
+  { "--quiet", "-q", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_quiet }
+#define VM_CLI_OPT_THREADS                                                                         \
+  {                                                                                                \
+    "--threads", NULL, VM_OPT_CALL, 0, "N", "OpenMP threads (results do not depend on it)",        \
+        .fn = vm_cli_opt_threads                                                                   \
+  }
 
 /* Strict parsing of an option value: the whole string must be a number in
  * range. Return 0 on success, nonzero (after a usage message) otherwise. */

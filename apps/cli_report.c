@@ -26,8 +26,8 @@ int vm_cli_report_finish(const vm_cli *cli, vm_report **r, const char *dir, int 
   return VM_EXIT_OK;
 }
 
-int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
-                          const vm_mesh *m, const vm_quality_opts *qo, const char *field) {
+int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path, const vm_mesh *m,
+                          const vm_quality_opts *qo, const char *field) {
   vm_report *r;
   char title[512];
   snprintf(title, sizeof title, "vm-quality: %s", path);
@@ -36,8 +36,7 @@ int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
   int st = vm_report_heading(r, "input");
   if (st >= 0) st = vm_report_row(r, "file", "%s", path);
   if (st >= 0)
-    st = vm_report_row(r, "vertices, elements", "%lld, %lld", (long long)m->nv,
-                       (long long)m->ne);
+    st = vm_report_row(r, "vertices, elements", "%lld, %lld", (long long)m->nv, (long long)m->ne);
   if (st >= 0) st = vm_report_mesh(r, "", "quality", m, qo, field);
   return vm_cli_report_finish(cli, &r, dir, st);
 }

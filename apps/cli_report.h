@@ -18,8 +18,8 @@ int vm_cli_report_open(const vm_cli *cli, const char *dir, const char *title, vm
  * (vm_report_mesh) and DIR/index.html. field: colours a surface picture
  * (NULL: default). Returns an exit code; "wrote DIR/index.html" on stderr
  * unless quiet. */
-int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path,
-                          const vm_mesh *m, const vm_quality_opts *qo, const char *field);
+int vm_cli_report_quality(const vm_cli *cli, const char *dir, const char *path, const vm_mesh *m,
+                          const vm_quality_opts *qo, const char *field);
 
 /* vm-volume --report, after the run: the run's numbers, the convergence
  * plot of `hist`, quality pictures of the mesh before and after, and

@@ -14,8 +14,7 @@ int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, cons
     st = vm_report_row(rp, "vertices, elements, quadrature simplices", "%lld, %lld, %lld",
                        (long long)after->nv, (long long)after->ne, (long long)rep->nodes);
   if (st >= 0)
-    st = vm_report_row(rp, "untangling method, rule", "%s, %s",
-                       vm_untangle_method_name(o->method),
+    st = vm_report_row(rp, "untangling method, rule", "%s, %s", vm_untangle_method_name(o->method),
                        o->rule == VM_RULE_GEOMETRIC ? "geometric" : "corner");
   if (st >= 0)
     st = vm_report_row(rp, "M: start, max, end", "%lld, %lld, %lld", (long long)rep->M_init,
@@ -26,8 +25,7 @@ int vm_cli_report_volume(const vm_cli *cli, vm_report **r, const char *dir, cons
   if (st >= 0)
     st = vm_report_row(rp, "time: untangled after, total", "%.2f s, %.2f s", rep->time_untangle,
                        rep->time_total);
-  if (st >= 0)
-    st = vm_report_row(rp, "valid (M = 0)", "%s", rep->valid ? "yes" : "no");
+  if (st >= 0) st = vm_report_row(rp, "valid (M = 0)", "%s", rep->valid ? "yes" : "no");
   if (st >= 0)
     st = vm_report_convergence(rp, "convergence",
                                "Convergence of the run: M (inverted quadrature simplices, log "

@@ -38,10 +38,9 @@ int vm_cli_verify(const vm_cli *cli, const char *path, const vm_mesh *m, int rul
     }
   }
   if (text)
-    fprintf(out, "verify: every quadrature simplex (%s rule) positively oriented%s (exact)\n",
-            rname,
-            counts[VM_PRISM]
-                ? "; prism layer: outer faces intersect neither each other nor the wall"
-                : "");
+    fprintf(
+        out, "verify: every quadrature simplex (%s rule) positively oriented%s (exact)\n", rname,
+        counts[VM_PRISM] ? "; prism layer: outer faces intersect neither each other nor the wall"
+                         : "");
   return VM_EXIT_OK;
 }

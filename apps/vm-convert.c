@@ -32,8 +32,11 @@ static const vm_cli_spec spec = {
     "usage: vm-convert [options] IN OUT\n"
     "Convert a mesh; formats from the extensions (.vmsh .vmsht .vtk .vtu .msh .mesh\n"
     ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS need volume cells.\n",
-    opts, "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
-    {A(in), A(out)}, 2, "need IN and OUT"};
+    opts,
+    "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
+    {A(in), A(out)},
+    2,
+    "need IN and OUT"};
 
 int main(int argc, char **argv) {
   vm_cli cli;

@@ -57,8 +57,7 @@ static int opt_axis(vm_cli *cli, const vm_opt *opt, const char *val, void *a) {
 
 #define A(f) offsetof(args, f)
 static const vm_opt opts[] = {
-    {"--n", NULL, VM_OPT_INT, A(o.n), "N", "cells per direction (default 8)", .lo = 2,
-     .hi = 1000},
+    {"--n", NULL, VM_OPT_INT, A(o.n), "N", "cells per direction (default 8)", .lo = 2, .hi = 1000},
     {"--angle", NULL, VM_OPT_CALL, 0, "A",
      "rotation angle in radians, or a multiple of pi: 'pi/2', '7pi/8'", .fn = opt_angle},
     {"--axis", NULL, VM_OPT_CALL, 0, "X,Y,Z", "rotation axis (default 0,0,1)", .fn = opt_axis},
@@ -70,18 +69,19 @@ static const vm_opt opts[] = {
      "leave the outer boundary free (for vm-volume --slip-boundary)", .ival = 1},
     {"--mixed", NULL, VM_OPT_FLAG, A(o.cells), NULL,
      "hexes, prisms, pyramids and tets by (i+j+k) mod 4", .ival = VM_GEN_MIXED},
-    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL,
-     "binary output where the format has both", .ival = 1},
+    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
+     .ival = 1},
     {.kind = VM_OPT_HEADING,
-     .help = "\n"
-     "usage: vm-gen aircraft [options] OUT\n"
-     "A closed, outward-oriented triangulated aircraft (fuselage, swept wings with\n"
-     "NACA sections and sharp trailing edges, stabilizers, fin), nose at x = 0, z up;\n"
-     "the project's example model. OUT in any surface or mesh format (.stl, .vmsh, .vtu).\n"},
+     .help =
+         "\n"
+         "usage: vm-gen aircraft [options] OUT\n"
+         "A closed, outward-oriented triangulated aircraft (fuselage, swept wings with\n"
+         "NACA sections and sharp trailing edges, stabilizers, fin), nose at x = 0, z up;\n"
+         "the project's example model. OUT in any surface or mesh format (.stl, .vmsh, .vtu).\n"},
     {"--resolution", NULL, VM_OPT_INT, A(ao.resolution), "R",
      "1..32, scales every direction (default 4: about 15k triangles)", .lo = 1, .hi = 32},
-    {"--length", NULL, VM_OPT_DOUBLE, A(ao.length), "L", "nose to tail (default 15)",
-     .lo = 1e-6, .hi = 1e6},
+    {"--length", NULL, VM_OPT_DOUBLE, A(ao.length), "L", "nose to tail (default 15)", .lo = 1e-6,
+     .hi = 1e6},
     {"--span", NULL, VM_OPT_DOUBLE, A(ao.span), "S",
      "wing span, 0.35..2.5 times the length (default 0.9 L)", .lo = 1e-6, .hi = 1e6},
     {"--sweep", NULL, VM_OPT_DOUBLE, A(ao.sweep_deg), "D",
@@ -97,12 +97,17 @@ static const vm_cli_spec spec = {
     "with the outer boundary (Section 6.1); every other vertex is left Cartesian,\n"
     "so the mesh is tangled for large angles. Fixed vertices carry the int point\n"
     "field 'fixed' = 1.\n",
-    opts, "exit: 0 ok, 1 I/O failure, 2 usage\n", {A(what), A(out)}, 2, NULL};
+    opts,
+    "exit: 0 ok, 1 I/O failure, 2 usage\n",
+    {A(what), A(out)},
+    2,
+    NULL};
 
 int main(int argc, char **argv) {
   vm_cli cli;
   vm_cli_init(&cli, "vm-gen");
-  args a = {.o = vm_rotcube_opts_default(), .ao = vm_aircraft_opts_default(),
+  args a = {.o = vm_rotcube_opts_default(),
+            .ao = vm_aircraft_opts_default(),
             .wo = vm_write_opts_default()};
   a.ao.span = NAN; /* not given: the default proportions, below */
   vm_mesh *m = NULL;
@@ -119,8 +124,8 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "--span must be 0.35 to 2.5 times the length");
     goto done;
   }
-  int grc = plane ? vm_gen_aircraft(cli.ctx, &a.ao, &m)
-                  : vm_gen_rotated_cube(cli.ctx, &a.o, &m, NULL);
+  int grc =
+      plane ? vm_gen_aircraft(cli.ctx, &a.ao, &m) : vm_gen_rotated_cube(cli.ctx, &a.o, &m, NULL);
   if (grc < 0 || vm_mesh_write(cli.ctx, m, a.out, VM_FMT_AUTO, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
   }

@@ -13,8 +13,8 @@
 
 static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
                        const vm_jac_report *jr) {
-  printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path,
-         (long long)m->nv, (long long)q->measured, q->top_dim);
+  printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path, (long long)m->nv,
+         (long long)q->measured, q->top_dim);
   if (q->skipped) printf(", %lld lower-dimensional elements not measured", (long long)q->skipped);
   printf("\n%-8s %10s %10s %10s %10s %12s %12s %10s\n", "type", "elements", "simplices", "M",
          "inv.elems", "phi_min", "psi_min", "sj_min");
@@ -23,8 +23,8 @@ static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
     if (t < VM_NTYPES && !tq->count) continue;
     printf("%-8s %10lld %10lld %10lld %10lld %12.4e %12.4e %10.4f\n",
            t < VM_NTYPES ? vm_elem_name(t) : "all", (long long)tq->count, (long long)tq->nodes,
-           (long long)tq->inverted_nodes, (long long)tq->inverted_elems, tq->phi_min,
-           tq->psi_min, tq->sj_min);
+           (long long)tq->inverted_nodes, (long long)tq->inverted_elems, tq->phi_min, tq->psi_min,
+           tq->sj_min);
   }
   if (jr->cells)
     printf("certified (det J > 0 everywhere in the cell): %lld of %lld cells; %lld invalid, "
@@ -134,7 +134,10 @@ static const vm_cli_spec spec = {
     "Quality of every element of the mesh's top dimension (docs/cli.md):\n"
     "M = inverted quadrature simplices, phi = det C/(tr C^T C/d)^(d/2),\n"
     "psi = 2 det C/(1 + det C^2) (needs a target size), scaled Jacobian.\n",
-    opts, "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n", {A(path)}, 1,
+    opts,
+    "exit: 0 ok, 1 bad input, 2 usage, 3 a requested check failed\n",
+    {A(path)},
+    1,
     "need a MESH file"};
 
 int main(int argc, char **argv) {

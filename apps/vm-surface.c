@@ -55,13 +55,13 @@ static const vm_opt opts[] = {
      .choices = tri},
     {"--open-ok", NULL, VM_OPT_FLAG, A(so.repair_opts.require_closed), NULL,
      "accept an open surface (borders become feature lines)", .ival = 0},
-    {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections),
-     NULL, "skip the self-intersection check of the repair", .ival = 0},
+    {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections), NULL,
+     "skip the self-intersection check of the repair", .ival = 0},
     {"--remesh", NULL, VM_OPT_CHOICE, A(so.remesh), NULL,
      "uniform remeshing in 'all' (auto: if the smallest angle is below --sliver-angle)",
      .choices = tri},
-    {"--sliver-angle", NULL, VM_OPT_DOUBLE, A(so.sliver_angle), "DEG", "(default 15)",
-     .lo = 1e-6, .hi = 180},
+    {"--sliver-angle", NULL, VM_OPT_DOUBLE, A(so.sliver_angle), "DEG", "(default 15)", .lo = 1e-6,
+     .hi = 180},
     {"--target-edge-length", NULL, VM_OPT_CALL, 0, "L",
      "remeshing edge length (default: the mean edge length)", .fn = opt_edge_length},
     {"--remesh-iter", NULL, VM_OPT_INT, A(so.remesh_opts.iterations), "N",
@@ -88,12 +88,12 @@ static const vm_opt opts[] = {
      "balanced measure weight (default 0.8)", .lo = 0, .hi = 1},
     {"--implicit", NULL, VM_OPT_FLAG, A(so.adapt.implicit), NULL,
      "implicit minimizer instead of the explicit one", .ival = 1},
-    {"--time-limit", NULL, VM_OPT_DOUBLE, A(so.adapt.time_limit), "S",
-     "seconds for the adaptation", .lo = 0, .hi = 1e300},
+    {"--time-limit", NULL, VM_OPT_DOUBLE, A(so.adapt.time_limit), "S", "seconds for the adaptation",
+     .lo = 0, .hi = 1e300},
     VM_CLI_OPT_THREADS,
     {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format", .fn = vm_cli_opt_format},
-    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL,
-     "binary output where the format has both", .ival = 1},
+    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
+     .ival = 1},
     {"--progress-every", NULL, VM_OPT_INT, A(every), "N",
      "a progress line every N iterations (default 20)", .lo = 1, .hi = 1e8},
     {"--report", NULL, VM_OPT_STRING, A(report_dir), "DIR",
@@ -117,7 +117,9 @@ static const vm_cli_spec spec = {
     opts,
     "exit: 0 done; 1 bad input (what is wrong and where is printed) or I/O; 2 usage;\n"
     "3 the adapted mesh has flipped elements; 4 interrupted (last iterate written)\n",
-    {A(in), A(out)}, 2, "need IN and OUT"};
+    {A(in), A(out)},
+    2,
+    "need IN and OUT"};
 
 static double wall_seconds(void) {
   struct timespec ts;
@@ -181,8 +183,8 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     vm_json_double(stdout, ar->cap);
     printf(", \"smooth_vertices\": %lld, \"line_vertices\": %lld, \"fixed_vertices\": %lld, "
            "\"lines\": %d, \"corners\": %lld, \"flipped\": %lld, \"min_angle_before\": ",
-           (long long)ar->nsmooth, (long long)ar->nline_vertices, (long long)ar->nfixed,
-           ar->nline, (long long)ar->ncorner, (long long)ar->flipped);
+           (long long)ar->nsmooth, (long long)ar->nline_vertices, (long long)ar->nfixed, ar->nline,
+           (long long)ar->ncorner, (long long)ar->flipped);
     vm_json_double(stdout, ar->min_angle_before);
     printf(", \"min_angle_after\": ");
     vm_json_double(stdout, ar->min_angle_after);
@@ -241,8 +243,12 @@ int main(int argc, char **argv) {
   double t0 = wall_seconds();
   vm_cli cli;
   vm_cli_init(&cli, "vm-surface");
-  args a = {.so = vm_surface_opts_default(), .wo = vm_write_opts_default(), .fout = VM_FMT_AUTO,
-            .every = 20, .c_abs = -1, .c_rel = -1};
+  args a = {.so = vm_surface_opts_default(),
+            .wo = vm_write_opts_default(),
+            .fout = VM_FMT_AUTO,
+            .every = 20,
+            .c_abs = -1,
+            .c_rel = -1};
   vm_mesh *m = NULL;
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
@@ -270,8 +276,10 @@ int main(int argc, char **argv) {
   }
   int64_t counts[VM_NTYPES];
   if (vm_mesh_count_types(m, counts) != 2 || m->dim != 3) {
-    vm_cli_error(&cli, "%s: not a surface mesh in 3D (it needs triangles or quads and "
-                 "nothing else)", a.in);
+    vm_cli_error(&cli,
+                 "%s: not a surface mesh in 3D (it needs triangles or quads and "
+                 "nothing else)",
+                 a.in);
     rc = VM_EXIT_INPUT;
     goto done;
   }
@@ -300,8 +308,10 @@ int main(int argc, char **argv) {
     goto done;
   }
   if (!cli.quiet)
-    fprintf(stderr, "vm-surface: wrote %s: %lld vertices, %lld faces, smallest angle %.2f deg; "
-            "%.2f s\n", a.out, (long long)m->nv, (long long)m->ne, vm_surface_min_angle(m),
+    fprintf(stderr,
+            "vm-surface: wrote %s: %lld vertices, %lld faces, smallest angle %.2f deg; "
+            "%.2f s\n",
+            a.out, (long long)m->nv, (long long)m->ne, vm_surface_min_angle(m),
             wall_seconds() - t0);
   if (a.json) print_json(&a, m, &s, rc, t0);
   if (report) {

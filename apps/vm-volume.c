@@ -24,16 +24,15 @@ typedef struct {
 
 static void progress(void *user, const vm_volume_progress *p) {
   progress_state *ps = user;
-  if (ps->hist)
-    vm_report_history_add(ps->hist, p->phase, p->total_iter, p->F, p->inverted, p->eps);
+  if (ps->hist) vm_report_history_add(ps->hist, p->phase, p->total_iter, p->F, p->inverted, p->eps);
   if (ps->cli->quiet) return;
   int first = !ps->last_phase || strcmp(ps->last_phase, p->phase);
   ps->last_phase = p->phase;
   if (!first && p->iter % ps->every) return;
-  fprintf(stderr, "%-9s it %6d  F %.6e  M %8lld  min det %+.3e  %s %.2e  tau %.2e  pcg %4d  %7.2fs\n",
+  fprintf(stderr,
+          "%-9s it %6d  F %.6e  M %8lld  min det %+.3e  %s %.2e  tau %.2e  pcg %4d  %7.2fs\n",
           p->phase, p->iter, p->F, (long long)p->inverted, p->min_det,
-          strcmp(p->phase, "quasi-iso") ? "eps" : "t  ", p->eps, p->tau, p->pcg_iters,
-          p->elapsed);
+          strcmp(p->phase, "quasi-iso") ? "eps" : "t  ", p->eps, p->tau, p->pcg_iters, p->elapsed);
 }
 
 typedef struct {
@@ -104,8 +103,8 @@ static const vm_opt opts[] = {
     {"--corner-angle", NULL, VM_OPT_DOUBLE, A(corner_deg), "D",
      "turn of a sharp edge making a corner (default 60)", .lo = 1e-3, .hi = 180},
     {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format", .fn = vm_cli_opt_format},
-    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL,
-     "binary output where the format has both", .ival = 1},
+    {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
+     .ival = 1},
     {"--progress-every", NULL, VM_OPT_INT, A(every), "N",
      "a progress line every N iterations (default 10)", .lo = 1, .hi = 1e8},
     {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "JSON summary on stdout", .ival = 1},
@@ -126,14 +125,16 @@ static const vm_cli_spec spec = {
     "1 bad input or I/O; 2 usage; 3 inverted elements remain or the exact check failed\n"
     "(the best mesh is still written); 4 interrupted or --time-limit reached (the best\n"
     "state so far written; a second interrupt exits at once without writing)\n",
-    {A(in), A(out)}, 2, "need IN and OUT"};
+    {A(in), A(out)},
+    2,
+    "need IN and OUT"};
 
 /* What the stage did and what the independent check found. */
 typedef struct {
   int st; /* of vm_volume_run */
   vm_volume_report rep;
-  vm_quality q;    /* corner rule */
-  int64_t bad;     /* inverted nodes of the rule used, as vm_mesh_quality counts them */
+  vm_quality q; /* corner rule */
+  int64_t bad;  /* inverted nodes of the rule used, as vm_mesh_quality counts them */
   double slip_dist;
   int verified;
 } outcome;
@@ -152,7 +153,8 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
       return vm_cli_input_error(cli, a->in);
     nbnd = si.nboundary;
     if (!cli->quiet)
-      fprintf(stderr, "vm-volume: slip boundary: %lld boundary vertices: %lld slide on the "
+      fprintf(stderr,
+              "vm-volume: slip boundary: %lld boundary vertices: %lld slide on the "
               "surface, %lld along %d sharp edge lines, %lld corners and %lld fixed ones stay\n",
               (long long)si.nboundary, (long long)si.nsurface, (long long)si.nline, si.lines,
               (long long)si.ncorner, (long long)si.nkept_fixed);
@@ -165,9 +167,11 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
     nslip += m->vflag[v] == VM_VERTEX_SLIP;
   }
   if (!cli->quiet)
-    fprintf(stderr, "vm-volume: %s: %lld vertices (%lld free, %lld sliding; %lld fixed by field, "
-            "%lld on the boundary), %lld elements\n", a->in, (long long)m->nv, (long long)nfree,
-            (long long)nslip, (long long)nfixed, (long long)nbnd, (long long)m->ne);
+    fprintf(stderr,
+            "vm-volume: %s: %lld vertices (%lld free, %lld sliding; %lld fixed by field, "
+            "%lld on the boundary), %lld elements\n",
+            a->in, (long long)m->nv, (long long)nfree, (long long)nslip, (long long)nfixed,
+            (long long)nbnd, (long long)m->ne);
   return VM_EXIT_OK;
 }
 
@@ -184,23 +188,28 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
       fprintf(stderr, "vm-volume: staged: the 6-tet split's M %lld (max %lld) %s after %.2f s\n",
               (long long)rep->split_M_init, (long long)rep->split_M_max,
               rep->split_valid ? "untangled" : "NOT untangled", rep->time_split);
-    fprintf(stderr, "vm-volume: %s: M %lld -> %lld (max %lld), %d untangling + %d local + %d "
-            "optimization iterations, %.2f s (untangled after %.2f s)\n", a->out,
-            (long long)rep->M_init, (long long)rep->M_final, (long long)rep->M_max,
+    fprintf(stderr,
+            "vm-volume: %s: M %lld -> %lld (max %lld), %d untangling + %d local + %d "
+            "optimization iterations, %.2f s (untangled after %.2f s)\n",
+            a->out, (long long)rep->M_init, (long long)rep->M_final, (long long)rep->M_max,
             rep->iter_untangle, rep->iter_local, rep->iter_opt, rep->time_total,
             rep->time_untangle);
-    fprintf(stderr, "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
-            "corner tets %lld in %lld elements%s\n", rep->phi_min, rep->psi_min, r->q.all.sj_min,
-            (long long)r->q.all.inverted_nodes, (long long)r->q.all.inverted_elems,
+    fprintf(stderr,
+            "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
+            "corner tets %lld in %lld elements%s\n",
+            rep->phi_min, rep->psi_min, r->q.all.sj_min, (long long)r->q.all.inverted_nodes,
+            (long long)r->q.all.inverted_elems,
             rc == VM_EXIT_CHECK ? "  -- NOT VALID"
-            : rc == VM_EXIT_INTERRUPTED ? (rep->timed_out && r->st != VM_ERR_INTERRUPTED
-                                               ? "  -- time limit reached"
-                                               : "  -- interrupted")
-                                        : "");
+            : rc == VM_EXIT_INTERRUPTED
+                ? (rep->timed_out && r->st != VM_ERR_INTERRUPTED ? "  -- time limit reached"
+                                                                 : "  -- interrupted")
+                : "");
   }
   if (a->slip_boundary && !cli->quiet)
-    fprintf(stderr, "vm-volume: slip boundary: largest distance of a boundary vertex from the "
-            "input's boundary surface %.3e\n", r->slip_dist);
+    fprintf(stderr,
+            "vm-volume: slip boundary: largest distance of a boundary vertex from the "
+            "input's boundary surface %.3e\n",
+            r->slip_dist);
 }
 
 static void print_json(const args *a, const outcome *r, int rc) {
@@ -209,7 +218,8 @@ static void print_json(const args *a, const outcome *r, int rc) {
   vm_json_string(stdout, a->in);
   printf(", \"output\": ");
   vm_json_string(stdout, a->out);
-  printf(", \"valid\": %s, \"interrupted\": %s, \"timed_out\": %s, \"method\": \"%s\", \"rule\": \"%s\", "
+  printf(", \"valid\": %s, \"interrupted\": %s, \"timed_out\": %s, \"method\": \"%s\", \"rule\": "
+         "\"%s\", "
          "\"nodes\": %lld, \"M_init\": %lld, \"M_max\": %lld, \"M_final\": %lld, "
          "\"inverted_corner_tets\": %lld, \"inverted_elements\": %lld, \"iter_untangle\": %d, "
          "\"iter_local\": %d, \"iter_opt\": %d, \"time_untangle\": %.3f, \"time_total\": %.3f, "
@@ -218,8 +228,8 @@ static void print_json(const args *a, const outcome *r, int rc) {
          r->st == VM_ERR_INTERRUPTED ? "true" : "false", rep->timed_out ? "true" : "false",
          vm_untangle_method_name(a->o.method), rules[a->o.rule], (long long)rep->nodes,
          (long long)rep->M_init, (long long)rep->M_max, (long long)rep->M_final,
-         (long long)r->q.all.inverted_nodes, (long long)r->q.all.inverted_elems,
-         rep->iter_untangle, rep->iter_local, rep->iter_opt, rep->time_untangle, rep->time_total);
+         (long long)r->q.all.inverted_nodes, (long long)r->q.all.inverted_elems, rep->iter_untangle,
+         rep->iter_local, rep->iter_opt, rep->time_untangle, rep->time_total);
   vm_json_double(stdout, rep->phi_min);
   printf(", \"psi_min\": ");
   vm_json_double(stdout, rep->psi_min);
@@ -305,8 +315,13 @@ int main(int argc, char **argv) {
   vm_cli cli;
   vm_cli_init(&cli, "vm-volume");
   vm_volume_opts d = vm_volume_opts_default();
-  args a = {.o = d, .wo = vm_write_opts_default(), .fout = VM_FMT_AUTO, .every = 10,
-            .method = -1, .feature_deg = 40, .corner_deg = 60};
+  args a = {.o = d,
+            .wo = vm_write_opts_default(),
+            .fout = VM_FMT_AUTO,
+            .every = 10,
+            .method = -1,
+            .feature_deg = 40,
+            .corner_deg = 60};
   a.o.eps_inner = 0; /* not given: the default, or --staged's, below */
   a.o.theta_untangle = NAN;
   stage s = {0};
@@ -353,8 +368,10 @@ int main(int argc, char **argv) {
     rc = vm_cli_verify(&cli, a.out, s.m, a.o.rule, 0, NULL);
     r.verified = rc == VM_EXIT_OK;
     if (r.verified && !cli.quiet)
-      fprintf(stderr, "vm-volume: %s: verify: every quadrature simplex (%s rule) positively "
-              "oriented (exact)\n", a.out, rules[a.o.rule]);
+      fprintf(stderr,
+              "vm-volume: %s: verify: every quadrature simplex (%s rule) positively "
+              "oriented (exact)\n",
+              a.out, rules[a.o.rule]);
   }
   print_summary(&cli, &a, &r, rc);
   if (s.report) {

@@ -19,8 +19,8 @@ static double now(void) { return clock_s(CLOCK_MONOTONIC); }
 
 /* Best wall time of at least 3 runs and at least 0.5 s in total, and the
  * process CPU time of that run (the two differ on a busy machine). */
-static double best_time(vm_problem *p, const double *x, int mode, double *g, double *hd,
-                        double *ho, int *status, double *cpu) {
+static double best_time(vm_problem *p, const double *x, int mode, double *g, double *hd, double *ho,
+                        int *status, double *cpu) {
   double best = 1e30, total = 0;
   for (int rep = 0; rep < 3 || (total < 0.5 && rep < 100); rep++) {
     double F, t0 = now(), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
@@ -74,8 +74,8 @@ static int run(vm_ctx *ctx, int n, int rule) {
       st = 0;
       double cpu = 0, t = best_time(p, m->xyz, mode, g, hd, ho, &st, &cpu);
       printf("  %-12s threads %d: %8.2f ms/pass %7.2f Mnodes/s  cpu %8.2f ms = %6.1f ns/node%s\n",
-             mode_name[mode], nt, 1e3 * t, 1e-6 * (double)nn / t, 1e3 * cpu,
-             1e9 * cpu / (double)nn, st ? "  (status != 0)" : "");
+             mode_name[mode], nt, 1e3 * t, 1e-6 * (double)nn / t, 1e3 * cpu, 1e9 * cpu / (double)nn,
+             st ? "  (status != 0)" : "");
     }
   vm_ctx_set_threads(ctx, 0);
   free(g);

@@ -15,13 +15,12 @@ static const char *angle_names[] = {"pi/8", "3pi/8", "pi/2", "7pi/8", "pi"};
 static const double angle_frac[] = {1.0 / 8, 3.0 / 8, 0.5, 7.0 / 8, 1.0};
 /* Table 1 of the paper (n = 32, implicit penalty untangling, corner rule
  * not stated; 64-node rule implied by "M_init ... tetrahedra ... (24)") */
-static const double paper[6][5] = {
-    {19264, 22400, 31192, 32032, 34157},            /* M_init */
-    {19264, 36029, 82330, 213554, 126644},          /* M_max */
-    {140, 8160, 2120, 63600, 56000},                /* niter */
-    {164, 8243, 2983, 84562, 67928},                /* t_u, s */
-    {4.34e-2, 1.72e-3, 1.97e-3, 1.02e-4, 2.65e-4},  /* phi_min */
-    {1.06e-1, 7.0e-3, 1.48e-2, 3.05e-4, 1.87e-3}};  /* psi_min */
+static const double paper[6][5] = {{19264, 22400, 31192, 32032, 34157},           /* M_init */
+                                   {19264, 36029, 82330, 213554, 126644},         /* M_max */
+                                   {140, 8160, 2120, 63600, 56000},               /* niter */
+                                   {164, 8243, 2983, 84562, 67928},               /* t_u, s */
+                                   {4.34e-2, 1.72e-3, 1.97e-3, 1.02e-4, 2.65e-4}, /* phi_min */
+                                   {1.06e-1, 7.0e-3, 1.48e-2, 3.05e-4, 1.87e-3}}; /* psi_min */
 
 static void usage(void) {
   fprintf(stderr,
@@ -30,7 +29,8 @@ static void usage(void) {
           "penalty|oneway|barrier|adaptive|foldover]\n"
           "                     [--eps-inner N] [--local-threshold N] [--theta T]\n"
           "                     [--theta-untangle T]\n"
-          "                     [--explicit | --newton] [--staged] [--qi-steps N] [--threads N] [--verbose] [--where]\n"
+          "                     [--explicit | --newton] [--staged] [--qi-steps N] [--threads N] "
+          "[--verbose] [--where]\n"
           "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all)\n");
 }
 
@@ -43,8 +43,8 @@ static void progress(void *user, const vm_volume_progress *p) {
   const prog *g = user;
   if (!g->verbose || p->iter % g->every) return;
   fprintf(stderr, "  %-9s it %6d F %.4e M %7lld min det %+.2e eps %.1e tau %.1e cg %4d %6.1fs\n",
-          p->phase, p->iter, p->F, (long long)p->inverted, p->min_det, p->eps, p->tau,
-          p->pcg_iters, p->elapsed);
+          p->phase, p->iter, p->F, (long long)p->inverted, p->min_det, p->eps, p->tau, p->pcg_iters,
+          p->elapsed);
 }
 
 int main(int argc, char **argv) {
@@ -123,17 +123,20 @@ int main(int argc, char **argv) {
   vm_ctx_create(&ctx);
   vm_ctx_set_threads(ctx, threads);
   printf("rotated cube n = %d, %s, %s rule, %s untangling, %s solver, time limit %.0f s\n", n,
-         cells == VM_GEN_HEX ? "hexahedra" : cells == VM_GEN_TETS ? "6 tets per hex" : "mixed",
+         cells == VM_GEN_HEX    ? "hexahedra"
+         : cells == VM_GEN_TETS ? "6 tets per hex"
+                                : "mixed",
          o.rule == VM_RULE_GEOMETRIC ? "geometric (64-node)" : "corner (8 tets)",
          vm_untangle_method_name(o.method),
          o.solver == VM_MINIMIZER_IMPLICIT ? "implicit"
          : o.solver == VM_MINIMIZER_NEWTON ? "newton"
-                                            : "explicit",
+                                           : "explicit",
          o.time_limit);
-  printf("%-6s %9s %9s %9s %7s %7s %7s %9s %10s %10s %8s %8s %8s   | paper: %7s %7s %6s %6s %9s %9s\n",
-         "angle", "M_init", "M_max", "M_final", "niter", "local", "opt", "t_untgl", "phi_min",
-         "psi_min", "inv.hex", "t_total", "cpu", "M_init", "M_max", "niter", "t_u", "phi_min",
-         "psi_min");
+  printf(
+      "%-6s %9s %9s %9s %7s %7s %7s %9s %10s %10s %8s %8s %8s   | paper: %7s %7s %6s %6s %9s %9s\n",
+      "angle", "M_init", "M_max", "M_final", "niter", "local", "opt", "t_untgl", "phi_min",
+      "psi_min", "inv.hex", "t_total", "cpu", "M_init", "M_max", "niter", "t_u", "phi_min",
+      "psi_min");
   int all_ok = 1;
   for (int a = 0; a < 5; a++) {
     if (!use[a]) continue;
@@ -161,12 +164,13 @@ int main(int argc, char **argv) {
      * independent check */
     if (st < 0) r.M_final = q.all.inverted_nodes;
     if (r.M_final || q.all.inverted_nodes) all_ok = 0;
-    printf("%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f %8.2f   | paper: %7.0f "
-           "%7.0f %6.0f %6.0f %9.2e %9.2e\n",
-           angle_names[a], (long long)r.M_init, (long long)r.M_max, (long long)r.M_final,
-           r.iter_untangle, r.iter_local, r.iter_opt, r.time_untangle, r.phi_min, r.psi_min,
-           (long long)q.all.inverted_elems, r.time_total, cpu, paper[0][a], paper[1][a], paper[2][a],
-           paper[3][a], paper[4][a], paper[5][a]);
+    printf(
+        "%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f %8.2f   | paper: %7.0f "
+        "%7.0f %6.0f %6.0f %9.2e %9.2e\n",
+        angle_names[a], (long long)r.M_init, (long long)r.M_max, (long long)r.M_final,
+        r.iter_untangle, r.iter_local, r.iter_opt, r.time_untangle, r.phi_min, r.psi_min,
+        (long long)q.all.inverted_elems, r.time_total, cpu, paper[0][a], paper[1][a], paper[2][a],
+        paper[3][a], paper[4][a], paper[5][a]);
     fflush(stdout);
     if (where && cells != VM_GEN_MIXED) {
       /* where the inverted nodes are: per cell, its layer outside the inner

@@ -128,8 +128,7 @@ static void monitor(void *user, const vm_iter_info *in) {
 }
 
 static void implicit_iterations(vm_ctx *ctx, vm_problem *p, vm_mesh *m, const double *x0,
-                                vm_precond_kind kind, int rebuild, int update_coarse,
-                                int iters) {
+                                vm_precond_kind kind, int rebuild, int update_coarse, int iters) {
   vm_minimizer *mn = NULL;
   vm_minimizer_create(ctx, p, VM_MINIMIZER_IMPLICIT, &mn);
   vm_minimize_options o = vm_minimize_options_default();
@@ -154,7 +153,8 @@ static void implicit_iterations(vm_ctx *ctx, vm_problem *p, vm_mesh *m, const do
   else if (rebuild == 1)
     snprintf(what, sizeof what, "AMG, new hierarchy every it.");
   else
-    snprintf(what, sizeof what, "AMG, built once, %s", update_coarse ? "Galerkin update" : "frozen coarse");
+    snprintf(what, sizeof what, "AMG, built once, %s",
+             update_coarse ? "Galerkin update" : "frozen coarse");
   printf("  %-40s iter 1 %.3f s (%3d CG)", what, L.t_first, L.pcg_first);
   if (L.n)
     printf(", iters 2-%d %.3f s/it (%5.1f CG/it)", L.n + 1, L.t_rest / L.n,
@@ -220,8 +220,8 @@ static void bench_mesh(vm_ctx *ctx, int n, double jitter, double zscale, int ite
   else
     snprintf(name, sizeof name, "%d^3", n);
   printf("%-9s %6.2f %7.3f %9lld %7.3f | %6d / %-6d | %6d / %-6d | %7.3f %7.3f %7.3f %3d %5.2f\n",
-         name, jitter, ns.min_det, (long long)A.n, teval, a2.its, a6.its, j2.its, j6.its,
-         a6.setup, a6.solve, j6.solve, info.levels, info.op_complexity);
+         name, jitter, ns.min_det, (long long)A.n, teval, a2.its, a6.its, j2.its, j6.its, a6.setup,
+         a6.solve, j6.solve, info.levels, info.op_complexity);
   fflush(stdout);
   if (iters > 0) {
     double *x0 = malloc((size_t)m->nv * 3 * sizeof *x0);
@@ -252,8 +252,8 @@ int main(int argc, char **argv) {
          "implicit iteration, PCG from 0\n",
          vm_ctx_threads(ctx) > 0 ? vm_ctx_threads(ctx) : omp_get_max_threads());
   printf("%-9s %6s %7s %9s %7s | %-15s | %-15s | %7s %7s %7s %3s %5s\n", "mesh", "jitter",
-         "min det", "unknowns", "eval s", "AMG its 1e-2/-6", "Jac. its 1e-2/-6", "AMGset",
-         "AMGsol", "Jac.sol", "lev", "opcx");
+         "min det", "unknowns", "eval s", "AMG its 1e-2/-6", "Jac. its 1e-2/-6", "AMGset", "AMGsol",
+         "Jac.sol", "lev", "opcx");
   for (int j = 1; j <= 2; j++)
     for (int n = 16; n <= max_n; n *= 2) bench_mesh(ctx, n, 0.1 * j, 1, 0);
   printf("thin slab, cells of aspect 20 (h x h x h/20), uniform slab as target:\n");

@@ -74,7 +74,8 @@ static void local_edge_length(const vm_mesh *m, double *L) {
     for (int a = 0; a < 3; a++) {
       int32_t p = m->conn[3 * e + a], q = m->conn[3 * e + (a + 1) % 3];
       double d = 0;
-      for (int r = 0; r < 3; r++) d += (m->xyz[3 * p + r] - m->xyz[3 * q + r]) * (m->xyz[3 * p + r] - m->xyz[3 * q + r]);
+      for (int r = 0; r < 3; r++)
+        d += (m->xyz[3 * p + r] - m->xyz[3 * q + r]) * (m->xyz[3 * p + r] - m->xyz[3 * q + r]);
       d = sqrt(d);
       /* each interior edge is seen twice, once from each side: fine for a mean */
       L[p] += d, L[q] += d;
@@ -149,8 +150,7 @@ typedef struct {
  * and vs the metric's filtered |H|; symmetric Hausdorff distance. */
 static figures measure(const vm_mesh *m, const vm_mesh *input, vm_surface_projector *pin,
                        const double *Hin, const double *Hin0, vm_surface_projector *pstart,
-                       const double *Hmetric,
-                       double spacing) {
+                       const double *Hmetric, double spacing) {
   figures f;
   double *L = malloc(sizeof *L * (size_t)m->nv), *H = malloc(sizeof *H * (size_t)m->nv);
   local_edge_length(m, L);
@@ -325,14 +325,12 @@ int main(int argc, char **argv) {
          (long long)ar.nsmooth, (long long)ar.nline_vertices, (long long)ar.nfixed);
   printf("\n  %-28s %12s %12s\n", "", remesh ? "remeshed" : "input", "adapted");
   printf("  %-28s %12lld %12lld\n", "vertices", (long long)start->nv, (long long)m->nv);
-  printf("  %-28s %12.4f %12.4f\n", "Spearman(edge length, |H|)", f0.spearman_raw,
-         f1.spearman_raw);
+  printf("  %-28s %12.4f %12.4f\n", "Spearman(edge length, |H|)", f0.spearman_raw, f1.spearman_raw);
   printf("  %-28s %12.4f %12.4f\n", "  ... vs the metric's |H|", f0.spearman_metric,
          f1.spearman_metric);
   printf("  %-28s %12.4f %12.4f\n", "  ... input's, unsmoothed", f0.spearman_input_unsmoothed,
          f1.spearman_input_unsmoothed);
-  printf("  %-28s %12.4f %12.4f\n", "  ... the mesh's own |H|", f0.spearman_own,
-         f1.spearman_own);
+  printf("  %-28s %12.4f %12.4f\n", "  ... the mesh's own |H|", f0.spearman_own, f1.spearman_own);
   printf("  %-28s %12.4f %12.4f\n", "  ... own, smoothed twice", f0.spearman_own_smoothed,
          f1.spearman_own_smoothed);
   printf("  %-28s %11.4f%% %11.4f%%\n", "Hausdorff / diagonal", 100 * f0.hausdorff / diag,
@@ -346,8 +344,7 @@ int main(int argc, char **argv) {
   printf("  %-28s %12s %12.2f\n", "wall time (s)", "", t_repair + t_remesh + t_adapt);
   printf("  %-28s %12s %12.2f\n", "CPU time (s)", "", cpu_total);
   int flips = reversed || ar.flipped || f1.opposing > f0.opposing;
-  int ok = f1.spearman_raw <= -0.5 && f1.hausdorff <= 1e-3 * diag && !flips &&
-           f1.min_angle >= 15;
+  int ok = f1.spearman_raw <= -0.5 && f1.hausdorff <= 1e-3 * diag && !flips && f1.min_angle >= 15;
   printf("\n  targets: Spearman <= -0.5: %s; Hausdorff <= 0.1%%: %s; no flips: %s; min angle "
          ">= 15: %s\n",
          f1.spearman_raw <= -0.5 ? "yes" : "NO", f1.hausdorff <= 1e-3 * diag ? "yes" : "NO",

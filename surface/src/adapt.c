@@ -203,9 +203,8 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   if (vm_mesh_count_types(m, counts) != 2 || counts[VM_TRI] + counts[VM_QUAD] != m->ne)
     return vm_error(ctx, VM_ERR_ARG, "adapt: the mesh must have only triangles and quads");
   if (!(o.theta >= 0 && o.theta <= 1) || o.max_iter < 0 || o.rounds < 1 ||
-      !(o.feature_angle > 0 && o.feature_angle <= 180) || !(o.corner_angle > 0) ||
-      !isfinite(o.c) || !isfinite(o.filter.threshold) || isnan(o.filter.cap) ||
-      o.filter.smooth < 0)
+      !(o.feature_angle > 0 && o.feature_angle <= 180) || !(o.corner_angle > 0) || !isfinite(o.c) ||
+      !isfinite(o.filter.threshold) || isnan(o.filter.cap) || o.filter.smooth < 0)
     return vm_error(ctx, VM_ERR_ARG, "adapt: invalid options");
   int64_t bad = first_degenerate(m);
   if (bad >= 0) {
@@ -291,7 +290,9 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   prm.theta = o.theta;
   if ((st = vm_problem_set_measure(prob, VM_MEASURE_BALANCED, &prm))) goto done;
   adapt_state as = {m, prob, hproj, Href, c, g, Hx, sqrt(3.0) / 4.0};
-  if ((st = vm_minimizer_create(ctx, prob, o.implicit ? VM_MINIMIZER_IMPLICIT : VM_MINIMIZER_EXPLICIT, &mz))) goto done;
+  if ((st = vm_minimizer_create(ctx, prob,
+                                o.implicit ? VM_MINIMIZER_IMPLICIT : VM_MINIMIZER_EXPLICIT, &mz)))
+    goto done;
   if ((st = vm_minimizer_set_surfaces(mz, &ops))) goto done;
   monitor_state ms = {&o, 0, 0};
   int per_round = (o.max_iter + o.rounds - 1) / o.rounds;

@@ -29,8 +29,7 @@ typedef struct {
 } tri_geom;
 
 static int tri_geometry(const double *xyz, const int32_t *t, tri_geom *g) {
-  const double *p[3] = {xyz + 3 * (int64_t)t[0], xyz + 3 * (int64_t)t[1],
-                        xyz + 3 * (int64_t)t[2]};
+  const double *p[3] = {xyz + 3 * (int64_t)t[0], xyz + 3 * (int64_t)t[1], xyz + 3 * (int64_t)t[2]};
   vm_sub3(p[2], p[1], g->e[0]);
   vm_sub3(p[0], p[2], g->e[1]);
   vm_sub3(p[1], p[0], g->e[2]);
@@ -266,7 +265,8 @@ int vm_surface_curvature(vm_mesh *m, const vm_curvature_filter *f, vm_curvature_
   if (!H) return VM_ERR_NOMEM;
   int rc = vm_surface_mean_curvature(m, H, NULL, NULL, st);
   vm_field *fr = NULL, *ff = NULL;
-  if (!rc) rc = vm_mesh_add_field(m, VM_FIELD_MEAN_CURVATURE, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &fr);
+  if (!rc)
+    rc = vm_mesh_add_field(m, VM_FIELD_MEAN_CURVATURE, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &fr);
   if (!rc) {
     memcpy(fr->data, H, (size_t)m->nv * sizeof *H);
     if (f) rc = vm_curvature_filter_apply(m, f, H);

@@ -152,10 +152,10 @@ static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
          "adapt: %d iterations in %d rounds (%s), F %.8e -> %.8e; c %g, threshold %g, cap %g; "
          "%lld smooth, %lld feature-line vertices on %d lines, %lld fixed; smallest angle %.2f "
          "-> %.2f deg; %lld flipped; %.2f s%s",
-         ar->iterations, ar->rounds, ar->stop, ar->F_initial, ar->F, ar->c, ar->threshold,
-         ar->cap, (long long)ar->nsmooth, (long long)ar->nline_vertices, ar->nline,
-         (long long)ar->nfixed, ar->min_angle_before, ar->min_angle_after,
-         (long long)ar->flipped, ar->elapsed, ar->flipped > 0 ? "  -- FLIPPED ELEMENTS" : "");
+         ar->iterations, ar->rounds, ar->stop, ar->F_initial, ar->F, ar->c, ar->threshold, ar->cap,
+         (long long)ar->nsmooth, (long long)ar->nline_vertices, ar->nline, (long long)ar->nfixed,
+         ar->min_angle_before, ar->min_angle_after, (long long)ar->flipped, ar->elapsed,
+         ar->flipped > 0 ? "  -- FLIPPED ELEMENTS" : "");
   return st < 0 ? st : ar->flipped > 0 ? VM_WARN_INVERTED : VM_OK;
 }
 
@@ -168,7 +168,8 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
   vm_surface_opts o = opts ? *opts : vm_surface_opts_default();
   int64_t counts[VM_NTYPES];
   if (!m || vm_mesh_count_types(m, counts) != 2 || m->dim != 3)
-    return vm_error(ctx, VM_ERR_ARG, "not a surface mesh in 3D (it needs triangles or quads "
+    return vm_error(ctx, VM_ERR_ARG,
+                    "not a surface mesh in 3D (it needs triangles or quads "
                     "and nothing else)");
   if ((unsigned)o.step > VM_SURFACE_ADAPT)
     return vm_error(ctx, VM_ERR_ARG, "vm_surface_run: unknown step %d", (int)o.step);

@@ -21,9 +21,9 @@
 #include "vmtest.h"
 
 typedef struct run_result {
-  int st;        /* first negative status, or vm_volume_run's status */
+  int st;         /* first negative status, or vm_volume_run's status */
   const char *at; /* stage that failed */
-  long allocs;   /* allocations made */
+  long allocs;    /* allocations made */
   int64_t M_final;
   int iters[3]; /* untangling, local, optimization iterations */
 } run_result;
@@ -131,8 +131,7 @@ int main(int argc, char **argv) {
     long live0 = vm_ctx_alloc_live(ctx);
     run_result ref = one_run(ctx, in, out, method, runs[k].local, 0);
     CHECK(ref.st >= 0, "reference run (%s, %s): %s failed: %d %s", runs[k].ext,
-          vm_untangle_method_name((vm_untangle_method)method), ref.at, ref.st,
-          vm_ctx_error(ctx));
+          vm_untangle_method_name((vm_untangle_method)method), ref.at, ref.st, vm_ctx_error(ctx));
     CHECK(vm_ctx_alloc_live(ctx) == live0, "reference run leaked %ld blocks",
           vm_ctx_alloc_live(ctx) - live0);
     fprintf(stderr,
@@ -146,8 +145,8 @@ int main(int argc, char **argv) {
       run_result r = one_run(ctx, in, out, method, runs[k].local, n);
       tried++;
       long leak = vm_ctx_alloc_live(ctx) - live0;
-      CHECK(leak == 0, "%s: failing allocation %ld (%s: status %d): %ld blocks leaked",
-            runs[k].ext, n, r.at, r.st, leak);
+      CHECK(leak == 0, "%s: failing allocation %ld (%s: status %d): %ld blocks leaked", runs[k].ext,
+            n, r.at, r.st, leak);
       CHECK(r.st == VM_ERR_NOMEM || r.st >= 0,
             "%s: failing allocation %ld: %s returned %d, not VM_ERR_NOMEM: %s", runs[k].ext, n,
             r.at, r.st, vm_ctx_error(ctx));
@@ -155,16 +154,17 @@ int main(int argc, char **argv) {
         nomem++;
         CHECK(access(out, F_OK) != 0, "%s: failing allocation %ld: output written anyway",
               runs[k].ext, n);
-        CHECK(vm_ctx_error(ctx)[0] != 0, "%s: failing allocation %ld: no message", runs[k].ext,
-              n);
+        CHECK(vm_ctx_error(ctx)[0] != 0, "%s: failing allocation %ld: no message", runs[k].ext, n);
       } else {
         ok++;
         CHECK(r.st == ref.st && r.M_final == ref.M_final,
               "%s: allocation %ld failed but the run went on to a different result (%d, M %lld)",
               runs[k].ext, n, r.st, (long long)r.M_final);
       }
-      CHECK(stray_files(dir, "tangled.vmsh") <= (r.st >= 0), "%s: failing allocation %ld: "
-            "files left behind", runs[k].ext, n);
+      CHECK(stray_files(dir, "tangled.vmsh") <= (r.st >= 0),
+            "%s: failing allocation %ld: "
+            "files left behind",
+            runs[k].ext, n);
       if (vmtest_failures > 20) break;
     }
     fprintf(stderr, "%s: %ld failing allocations tried: %ld clean VM_ERR_NOMEM, %ld tolerated\n",

@@ -26,8 +26,7 @@ static inline double mg_tet_vol(const double *x, const int32_t *v) {
  * then a bumpy surface z = 0.3 h sin(x/h) cos(y/h) in 3D. Hexes and their
  * splits: tets (6 Kuhn tets per cube), pyramids (6 per cube around an added
  * centre vertex), prisms (2 per cube). Returns NULL on failure. */
-static inline vm_mesh *mg_build(vm_ctx *ctx, int type, int surf, int nx, int ny, int nz,
-                                double h) {
+static inline vm_mesh *mg_build(vm_ctx *ctx, int type, int surf, int nx, int ny, int nz, double h) {
   vm_mesh *m = NULL;
   if (vm_mesh_create(ctx, &m)) return NULL;
   int two = vm_elem_dim(type) == 2;
@@ -43,16 +42,18 @@ static inline vm_mesh *mg_build(vm_ctx *ctx, int type, int surf, int nx, int ny,
   for (int k = 0; k < (two ? 1 : nz); k++)
     for (int j = 0; j < ny; j++)
       for (int i = 0; i < nx; i++) {
-        int32_t c[8] = {mg_vid(i, j, k, nx, ny),         mg_vid(i + 1, j, k, nx, ny),
-                        mg_vid(i + 1, j + 1, k, nx, ny), mg_vid(i, j + 1, k, nx, ny),
-                        mg_vid(i, j, k + 1, nx, ny),     mg_vid(i + 1, j, k + 1, nx, ny),
-                        mg_vid(i + 1, j + 1, k + 1, nx, ny), mg_vid(i, j + 1, k + 1, nx, ny)};
+        int32_t c[8] = {mg_vid(i, j, k, nx, ny),
+                        mg_vid(i + 1, j, k, nx, ny),
+                        mg_vid(i + 1, j + 1, k, nx, ny),
+                        mg_vid(i, j + 1, k, nx, ny),
+                        mg_vid(i, j, k + 1, nx, ny),
+                        mg_vid(i + 1, j, k + 1, nx, ny),
+                        mg_vid(i + 1, j + 1, k + 1, nx, ny),
+                        mg_vid(i, j + 1, k + 1, nx, ny)};
         int st = 0;
         switch (type) {
         case VM_QUAD:
-        case VM_HEX:
-          st = vm_mesh_add_element(m, type, c);
-          break;
+        case VM_HEX: st = vm_mesh_add_element(m, type, c); break;
         case VM_TRI: {
           int32_t t0[3] = {c[0], c[1], c[2]}, t1[3] = {c[0], c[2], c[3]};
           st = vm_mesh_add_element(m, VM_TRI, t0) || vm_mesh_add_element(m, VM_TRI, t1);
@@ -98,8 +99,7 @@ static inline vm_mesh *mg_build(vm_ctx *ctx, int type, int surf, int nx, int ny,
           }
           break;
         }
-        default:
-          st = 1;
+        default: st = 1;
         }
         if (st) goto fail;
       }

@@ -22,8 +22,8 @@ enum {
   MS_BAR_NEG,
   MS_COUNT
 };
-static const char *ms_name[MS_COUNT] = {"balanced",  "shape",    "shape-alt", "quasi-iso",
-                                        "barrier",   "penalty+", "penalty-",  "barrier-"};
+static const char *ms_name[MS_COUNT] = {"balanced", "shape",    "shape-alt", "quasi-iso",
+                                        "barrier",  "penalty+", "penalty-",  "barrier-"};
 
 typedef struct {
   int type, rule, surf, n[3];
@@ -31,11 +31,11 @@ typedef struct {
 } ecase;
 
 static const ecase ecases[] = {
-    {VM_TRI, 0, 0, {2, 2, 1}, "tri"},        {VM_QUAD, 0, 0, {2, 2, 1}, "quad"},
-    {VM_TRI, 0, 1, {2, 2, 1}, "tri-surf"},   {VM_QUAD, 0, 1, {2, 2, 1}, "quad-surf"},
-    {VM_TET, 0, 0, {1, 1, 1}, "tet"},        {VM_PYRAMID, 0, 0, {1, 1, 1}, "pyramid"},
-    {VM_PRISM, 0, 0, {2, 1, 1}, "prism"},    {VM_PRISM, 1, 0, {2, 1, 1}, "prism"},
-    {VM_HEX, 0, 0, {2, 1, 1}, "hex"},        {VM_HEX, 1, 0, {2, 1, 1}, "hex"},
+    {VM_TRI, 0, 0, {2, 2, 1}, "tri"},      {VM_QUAD, 0, 0, {2, 2, 1}, "quad"},
+    {VM_TRI, 0, 1, {2, 2, 1}, "tri-surf"}, {VM_QUAD, 0, 1, {2, 2, 1}, "quad-surf"},
+    {VM_TET, 0, 0, {1, 1, 1}, "tet"},      {VM_PYRAMID, 0, 0, {1, 1, 1}, "pyramid"},
+    {VM_PRISM, 0, 0, {2, 1, 1}, "prism"},  {VM_PRISM, 1, 0, {2, 1, 1}, "prism"},
+    {VM_HEX, 0, 0, {2, 1, 1}, "hex"},      {VM_HEX, 1, 0, {2, 1, 1}, "hex"},
 };
 #define NCASE ((int)(sizeof ecases / sizeof ecases[0]))
 
@@ -55,12 +55,8 @@ static int set_ms(vm_problem *p, int ms, double mindet) {
   vm_measure_params q = vm_measure_params_default();
   vm_measure_kind kind = VM_MEASURE_BALANCED;
   switch (ms) {
-  case MS_SHAPE:
-    kind = VM_MEASURE_SHAPE;
-    break;
-  case MS_SHAPE_ALT:
-    kind = VM_MEASURE_SHAPE_ALT;
-    break;
+  case MS_SHAPE: kind = VM_MEASURE_SHAPE; break;
+  case MS_SHAPE_ALT: kind = VM_MEASURE_SHAPE_ALT; break;
   case MS_QISO:
     kind = VM_MEASURE_QUASI_ISO;
     q.t = 0.1;
@@ -83,8 +79,7 @@ static int set_ms(vm_problem *p, int ms, double mindet) {
     kind = VM_MEASURE_BARRIER;
     q.eps = 1.5 * fabs(mindet);
     break;
-  default:
-    break;
+  default: break;
   }
   return vm_problem_set_measure(p, kind, &q);
 }
@@ -252,8 +247,8 @@ static void test_fd(vm_ctx *ctx) {
 /* A mixed mesh (hex, pyramid, prism, tet sharing faces) and a plane fan
  * whose centre has 260 neighbours (hoff positions by binary search). */
 static void test_fd_special(vm_ctx *ctx) {
-  static const double X[12][3] = {{0, 0, 0},      {1, 0, 0},     {1, 1, 0},    {0, 1, 0},
-                                  {0, 0, 1},      {1, 0, 1},     {1, 1, 1},    {0, 1, 1},
+  static const double X[12][3] = {{0, 0, 0},       {1, 0, 0},     {1, 1, 0},     {0, 1, 0},
+                                  {0, 0, 1},       {1, 0, 1},     {1, 1, 1},     {0, 1, 1},
                                   {0.5, 0.5, 1.7}, {1.8, 0.5, 0}, {1.8, 0.5, 1}, {-0.8, 0.5, 0.5}};
   static const int32_t hex[8] = {0, 1, 2, 3, 4, 5, 6, 7}, pyr[5] = {4, 5, 6, 7, 8},
                        pri[6] = {1, 9, 2, 5, 10, 6};
@@ -295,7 +290,8 @@ static void test_fd_special(vm_ctx *ctx) {
   const int nfan = 260;
   vm_mesh_add_vertex(m, 0, 0, 0, NULL);
   for (int k = 0; k < nfan; k++)
-    vm_mesh_add_vertex(m, cos(6.283185307179586 * k / nfan), sin(6.283185307179586 * k / nfan), 0, NULL);
+    vm_mesh_add_vertex(m, cos(6.283185307179586 * k / nfan), sin(6.283185307179586 * k / nfan), 0,
+                       NULL);
   for (int k = 0; k < nfan; k++) {
     int32_t t[3] = {0, 1 + k, 1 + (k + 1) % nfan};
     vm_mesh_add_element(m, VM_TRI, t);
@@ -338,7 +334,8 @@ static void test_invariance(vm_ctx *ctx) {
         z[1] = s * y[0] + c * y[1] - 1.25;
         z[2] = 0;
       } else {
-        for (int i = 0; i < 3; i++) z[i] = R[3 * i] * y[0] + R[3 * i + 1] * y[1] + R[3 * i + 2] * y[2];
+        for (int i = 0; i < 3; i++)
+          z[i] = R[3 * i] * y[0] + R[3 * i + 1] * y[1] + R[3 * i + 2] * y[2];
         z[0] += 3.5, z[1] -= 1.25, z[2] += 10;
       }
       memcpy(y, z, sizeof z);
@@ -448,8 +445,7 @@ static void test_threads(vm_ctx *ctx) {
       vm_problem_node_stats(p, m->xyz, &ns[t]);
     }
     CHECK(same_bits(F, F + 1, 1), "F %.17g vs %.17g", F[0], F[1]);
-    CHECK(same_bits(Fv, F, 1) && same_bits(Fv + 1, F, 1), "value %.17g vs eval %.17g", Fv[0],
-          F[0]);
+    CHECK(same_bits(Fv, F, 1) && same_bits(Fv + 1, F, 1), "value %.17g vs eval %.17g", Fv[0], F[0]);
     CHECK(same_bits(g[0], g[1], 3 * nv), "gradient differs between 1 and 2 threads");
     CHECK(same_bits(hd[0], hd[1], 9 * nv), "hdiag differs between 1 and 2 threads");
     CHECK(same_bits(ho[0], ho[1], 3 * nnz), "hoff differs between 1 and 2 threads");
@@ -499,8 +495,7 @@ static void test_node_stats(vm_ctx *ctx) {
     }
     CHECK(cnt == want && wrong == 0, "node dets: %lld inverted, %lld elsewhere", (long long)cnt,
           (long long)wrong);
-    CHECK(mn == ns.min_det && ns.phi_min < 0 && ns.psi_min < 0, "min det %g vs %g", mn,
-          ns.min_det);
+    CHECK(mn == ns.min_det && ns.phi_min < 0 && ns.psi_min < 0, "min det %g vs %g", mn, ns.min_det);
     double F = 0;
     CHECK(vm_problem_value(p, m->xyz, &F) == VM_WARN_INVERTED && F == INFINITY, "value %g", F);
     double *g = malloc(3 * m->nv * sizeof *g);

@@ -64,8 +64,8 @@ static double prism_det(const double *x, double u, double v, double w) {
   for (int r = 0; r < 3; r++) {
     xu[r] = (1 - w) * (x[3 + r] - x[r]) + w * (x[12 + r] - x[9 + r]);
     xv[r] = (1 - w) * (x[6 + r] - x[r]) + w * (x[15 + r] - x[9 + r]);
-    xw[r] = (1 - u - v) * (x[9 + r] - x[r]) + u * (x[12 + r] - x[3 + r]) +
-            v * (x[15 + r] - x[6 + r]);
+    xw[r] =
+        (1 - u - v) * (x[9 + r] - x[r]) + u * (x[12 + r] - x[3 + r]) + v * (x[15 + r] - x[6 + r]);
   }
   return det3(xu, xv, xw);
 }
@@ -150,7 +150,8 @@ static void perturbed_hexes(void) {
     } else {
       nund++;
     }
-    if (g < -1e-9) CHECK(v == VM_JAC_INVALID, "trial %d: det J %g on the grid, verdict %d", trial, g, v);
+    if (g < -1e-9)
+      CHECK(v == VM_JAC_INVALID, "trial %d: det J %g on the grid, verdict %d", trial, g, v);
     /* corner dets positive, negative inside: the case the corner rule misses */
     int corners_ok = 1;
     for (int c = 0; c < 8; c++)

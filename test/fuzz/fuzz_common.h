@@ -24,11 +24,11 @@ typedef struct vm_fuzz_reader {
 } vm_fuzz_reader;
 
 static const vm_fuzz_reader vm_fuzz_readers[] = {
-    {"vmsh", "fuzz.vmsh", VM_FMT_VMSH},    {"vmsht", "fuzz.vmsht", VM_FMT_VMSH_TEXT},
-    {"vtk", "fuzz.vtk", VM_FMT_VTK},       {"vtu", "fuzz.vtu", VM_FMT_VTU},
-    {"msh", "fuzz.msh", VM_FMT_MSH},       {"medit", "fuzz.mesh", VM_FMT_MEDIT},
-    {"stl", "fuzz.stl", VM_FMT_STL},       {"obj", "fuzz.obj", VM_FMT_OBJ},
-    {"off", "fuzz.off", VM_FMT_OFF},       {"ply", "fuzz.ply", VM_FMT_PLY},
+    {"vmsh", "fuzz.vmsh", VM_FMT_VMSH}, {"vmsht", "fuzz.vmsht", VM_FMT_VMSH_TEXT},
+    {"vtk", "fuzz.vtk", VM_FMT_VTK},    {"vtu", "fuzz.vtu", VM_FMT_VTU},
+    {"msh", "fuzz.msh", VM_FMT_MSH},    {"medit", "fuzz.mesh", VM_FMT_MEDIT},
+    {"stl", "fuzz.stl", VM_FMT_STL},    {"obj", "fuzz.obj", VM_FMT_OBJ},
+    {"off", "fuzz.off", VM_FMT_OFF},    {"ply", "fuzz.ply", VM_FMT_PLY},
     {"su2", "fuzz.su2", VM_FMT_SU2},
 };
 enum { VM_FUZZ_NREADERS = (int)(sizeof vm_fuzz_readers / sizeof vm_fuzz_readers[0]) };
@@ -38,13 +38,12 @@ static int vm_fuzz_verbose; /* replay -v: status and message of every file */
 #endif
 
 /* A broken contract is a crash, so that libFuzzer keeps the input. */
-#define VM_FUZZ_REQUIRE(cond, what)                                                  \
-  do {                                                                               \
-    if (!(cond)) {                                                                   \
-      fprintf(stderr, "fuzz: %s:%d: contract broken: %s (%s)\n", __FILE__, __LINE__, \
-              what, #cond);                                                          \
-      abort();                                                                       \
-    }                                                                                \
+#define VM_FUZZ_REQUIRE(cond, what)                                                                \
+  do {                                                                                             \
+    if (!(cond)) {                                                                                 \
+      fprintf(stderr, "fuzz: %s:%d: contract broken: %s (%s)\n", __FILE__, __LINE__, what, #cond); \
+      abort();                                                                                     \
+    }                                                                                              \
   } while (0)
 
 static inline void vm_fuzz_discard_log(void *user, int level, const char *msg) {

@@ -11,11 +11,11 @@
 #include "varmesh/io.h"
 #include "varmesh/mesh.h"
 
-#define DIE(...)                    \
-  do {                              \
-    fprintf(stderr, __VA_ARGS__);   \
-    fputc('\n', stderr);            \
-    exit(1);                        \
+#define DIE(...)                                                                                   \
+  do {                                                                                             \
+    fprintf(stderr, __VA_ARGS__);                                                                  \
+    fputc('\n', stderr);                                                                           \
+    exit(1);                                                                                       \
   } while (0)
 
 static void ok(vm_ctx *ctx, int st, const char *what) {
@@ -24,8 +24,8 @@ static void ok(vm_ctx *ctx, int st, const char *what) {
 
 /* hex + prism on top + pyramid and tet below, a boundary tri and quad */
 static vm_mesh *volume_mesh(vm_ctx *ctx) {
-  static const double x[][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0},   {0, 1, 0},   {0, 0, 1},
-                                {1, 0, 1}, {1, 1, 1}, {0, 1, 1},   {0, 0, 2},   {1, 0, 2},
+  static const double x[][3] = {{0, 0, 0}, {1, 0, 0},    {1, 1, 0},   {0, 1, 0}, {0, 0, 1},
+                                {1, 0, 1}, {1, 1, 1},    {0, 1, 1},   {0, 0, 2}, {1, 0, 2},
                                 {1, 1, 2}, {.5, .5, -1}, {-1, .5, .5}};
   static const int32_t hex[] = {0, 1, 2, 3, 4, 5, 6, 7}, prism[] = {4, 5, 6, 8, 9, 10},
                        pyr[] = {0, 3, 2, 1, 11}, tet[] = {0, 4, 3, 12}, tri[] = {8, 9, 10},
@@ -81,8 +81,8 @@ static vm_mesh *surface_mesh(vm_ctx *ctx) {
   return m;
 }
 
-static void put(vm_ctx *ctx, const char *out, const char *dir, const char *file,
-                const vm_mesh *m, int fmt, int binary, int mshver) {
+static void put(vm_ctx *ctx, const char *out, const char *dir, const char *file, const vm_mesh *m,
+                int fmt, int binary, int mshver) {
   char path[1024];
   snprintf(path, sizeof path, "%s/%s", out, dir);
   mkdir(path, 0777);

@@ -75,8 +75,10 @@ static long run_dir(const vm_fuzz_reader *r, const char *dir) {
     char *path = malloc(pl);
     if (!path) abort();
     snprintf(path, pl, "%s/%s", dir, names[i]);
-    if (run_file(r, path)) ran = -1;
-    else if (ran >= 0) ran++;
+    if (run_file(r, path))
+      ran = -1;
+    else if (ran >= 0)
+      ran++;
     free(path);
     free(names[i]);
   }
@@ -98,7 +100,8 @@ int main(int argc, char **argv) {
     argc--;
   }
   if (argc < 2) {
-    fprintf(stderr, "usage: replay [-v] FUZZDIR [READER...] | replay [-v] --files READER FILE...\n");
+    fprintf(stderr,
+            "usage: replay [-v] FUZZDIR [READER...] | replay [-v] --files READER FILE...\n");
     return 2;
   }
   if (!strcmp(argv[1], "--files")) {

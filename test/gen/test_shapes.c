@@ -71,8 +71,8 @@ static void test_sizes_and_closure(vm_ctx *ctx) {
   CHECK(vm_gen_cube(m, 3) == 0 && vm_gen_lens(m, 1.0, 0.5, 0.2) == 0, "cube, lens");
   /* a box whose face coordinates do not round alike: still conforming */
   int64_t nv3 = m->nv;
-  CHECK(vm_gen_box(m, (double[3]){0.1, -0.7, 2.3}, (double[3]){0.4, 0.33, 2.9}, (int[3]){3, 4, 5}) ==
-            0,
+  CHECK(vm_gen_box(m, (double[3]){0.1, -0.7, 2.3}, (double[3]){0.4, 0.33, 2.9},
+                   (int[3]){3, 4, 5}) == 0,
         "box");
   CHECK(m->nv - nv3 == 4 * 5 * 6 - 2 * 3 * 4, "box vertices %lld", (long long)(m->nv - nv3));
   CHECK(vm_mesh_check(m) == 0, "check: %s", vm_ctx_error(ctx));
@@ -121,8 +121,7 @@ static void test_alloc_failures(vm_ctx *ctx) {
     }
     points++;
     /* the failing call rolled back: the mesh is valid and no shorter */
-    if (st != VM_ERR_NOMEM || vm_mesh_check(m) || m->nv < nv || m->ne < ne ||
-        unpaired_edges(m, 0))
+    if (st != VM_ERR_NOMEM || vm_mesh_check(m) || m->nv < nv || m->ne < ne || unpaired_edges(m, 0))
       clean = 0;
     vm_mesh_destroy(&m);
   }

@@ -16,15 +16,15 @@ typedef struct {
   int binary;
 } fmt_case;
 
-static const fmt_case cases[] = {{"vmsh", 0}, {"vmsht", 0}, {"vtk", 0}, {"vtk", 1}, {"vtu", 0},
+static const fmt_case cases[] = {{"vmsh", 0}, {"vmsht", 0}, {"vtk", 0},  {"vtk", 1}, {"vtu", 0},
                                  {"msh", 0},  {"msh", 1},   {"mesh", 0}, {"su2", 0}};
 
 /* A small mixed mesh: one element of each 3D type sharing vertices. */
 static vm_mesh *small_mesh(vm_ctx *ctx) {
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
-  static const double p[][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
-                                {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {2, 0, 0}, {2, 1, 0},
+  static const double p[][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0},      {0, 1, 0},    {0, 0, 1},
+                                {1, 0, 1}, {1, 1, 1}, {0, 1, 1},      {2, 0, 0},    {2, 1, 0},
                                 {2, 0, 1}, {2, 1, 1}, {0.5, 0.5, -1}, {1.5, 0.5, 2}};
   int n = (int)(sizeof p / sizeof p[0]);
   for (int i = 0; i < n; i++) vm_mesh_add_vertex(m, p[i][0], p[i][1], p[i][2], NULL);
@@ -45,8 +45,7 @@ static vm_mesh *small_mesh(vm_ctx *ctx) {
   return m;
 }
 
-static int try_read(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                    int *bad_msg) {
+static int try_read(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, int *bad_msg) {
   long live = vm_ctx_alloc_live(ctx);
   vm_mesh *m = NULL;
   vm_ctx_clear_error(ctx);
@@ -103,9 +102,8 @@ static void test_huge_claims(vm_ctx *ctx, const char *dir) {
        "# vtk DataFile Version 3.0\nclaim\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
        "POINTS 1 double\n\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\\0\n"
        "CELLS 1000000000 5000000000\n"},
-      {"claim-points.vtk",
-       "# vtk DataFile Version 3.0\nclaim\nASCII\nDATASET UNSTRUCTURED_GRID\n"
-       "POINTS 1000000000 double\n0 0 0 1 0 0 0 1 0 0 0 1\n"},
+      {"claim-points.vtk", "# vtk DataFile Version 3.0\nclaim\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                           "POINTS 1000000000 double\n0 0 0 1 0 0 0 1 0 0 0 1\n"},
       {"claim.vtu",
        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
        "<UnstructuredGrid><Piece NumberOfPoints=\"4\" NumberOfCells=\"1000000000\">\n"
@@ -115,22 +113,19 @@ static void test_huge_claims(vm_ctx *ctx, const char *dir) {
        "<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">4</DataArray>\n"
        "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">10</DataArray>\n"
        "</Cells></Piece></UnstructuredGrid></VTKFile>\n"},
-      {"claim.msh",
-       "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n%s"
-       "$EndNodes\n$Elements\n1 1000000000 1 1000000000\n3 1 4 1000000000\n1 1 2 3 4\n"
-       "$EndElements\n"},
+      {"claim.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n%s"
+                    "$EndNodes\n$Elements\n1 1000000000 1 1000000000\n3 1 4 1000000000\n1 1 2 3 4\n"
+                    "$EndElements\n"},
       {"claim-v2.msh",
        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
        "4 0 0 1\n$EndNodes\n$Elements\n1000000000\n1 4 2 0 1 1 2 3 4\n$EndElements\n"},
       {"claim.su2",
        "NDIME= 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNELEM= 1000000000\n10 0 1 2 3\n"},
       {"claim-points.su2", "NDIME= 3\nNPOIN= 1000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"},
-      {"claim-markers.su2",
-       "NDIME= 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNELEM= 1\n10 0 1 2 3\n"
-       "NMARK= 1\nMARKER_TAG= wall\nMARKER_ELEMS= 1000000000\n5 0 1 2\n"},
-      {"claim.mesh",
-       "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n"
-       "0 0 1 0\nTetrahedra\n1000000000\n1 2 3 4 0\nEnd\n"},
+      {"claim-markers.su2", "NDIME= 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNELEM= 1\n10 0 1 2 3\n"
+                            "NMARK= 1\nMARKER_TAG= wall\nMARKER_ELEMS= 1000000000\n5 0 1 2\n"},
+      {"claim.mesh", "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n"
+                     "0 0 1 0\nTetrahedra\n1000000000\n1 2 3 4 0\nEnd\n"},
   };
   char buf[4096];
   for (size_t c = 0; c < sizeof claims / sizeof claims[0]; c++) {
@@ -185,10 +180,10 @@ static void test_huge_claims(vm_ctx *ctx, const char *dir) {
       double t0 = now_ms();
       int st = try_read(ctx, name, cp, vlen, &bad);
       double ms = now_ms() - t0;
-      CHECK(st == VM_ERR_FORMAT && !bad, "%s: status %d (want %d), message '%s' (%d)", name,
-            st, VM_ERR_FORMAT, vm_ctx_error(ctx), bad);
-      fprintf(stderr, "huge claim %-17s refused in %.3f ms after %ld allocations: %s\n", name,
-              ms, vm_ctx_alloc_count(ctx) - n0, vm_ctx_error(ctx));
+      CHECK(st == VM_ERR_FORMAT && !bad, "%s: status %d (want %d), message '%s' (%d)", name, st,
+            VM_ERR_FORMAT, vm_ctx_error(ctx), bad);
+      fprintf(stderr, "huge claim %-17s refused in %.3f ms after %ld allocations: %s\n", name, ms,
+              vm_ctx_alloc_count(ctx) - n0, vm_ctx_error(ctx));
       free(cp);
     }
   }
@@ -227,8 +222,8 @@ int main(void) {
     }
     CHECK(!bad, "%s: truncation: bad message or leak (%d)", name, bad);
     /* seeded mutations: byte flips, digits, huge numbers spliced in */
-    static const char *splice[] = {"99999999999", "-1", "nan", "1e308", "4294967296", "0",
-                                   "\xff\xff\xff\x7f", "2147483647"};
+    static const char *splice[] = {
+        "99999999999", "-1", "nan", "1e308", "4294967296", "0", "\xff\xff\xff\x7f", "2147483647"};
     int nmut = 3000;
     for (int it = 0; it < nmut; it++) {
       memcpy(copy, buf, len);
@@ -264,11 +259,14 @@ int main(void) {
       vm_mesh_destroy(&mm);
       if (vm_ctx_alloc_live(ctx) != live) leaks++;
     }
-    CHECK(leaks == 0 && silent == 0, "%s: alloc-failure sweep over %ld allocations: %d leaks, %d "
-          "failures not reported", name, nalloc, leaks, silent);
-    fprintf(stderr, "%-8s %s: %zu bytes, %zu truncations (%d read fine), %d mutations, %ld "
-            "allocation failures tried\n", cases[c].ext, cases[c].binary ? "binary" : "text",
-            len, len, ok_reads, nmut, nalloc);
+    CHECK(leaks == 0 && silent == 0,
+          "%s: alloc-failure sweep over %ld allocations: %d leaks, %d "
+          "failures not reported",
+          name, nalloc, leaks, silent);
+    fprintf(stderr,
+            "%-8s %s: %zu bytes, %zu truncations (%d read fine), %d mutations, %ld "
+            "allocation failures tried\n",
+            cases[c].ext, cases[c].binary ? "binary" : "text", len, len, ok_reads, nmut, nalloc);
     free(copy);
     vm_free(ctx, buf);
     remove(path);

@@ -34,18 +34,18 @@ static vm_mesh *layered_mesh(vm_ctx *ctx, int n) {
         double z = 0.05 * sin(3.0 * x + 1.0) * cos(2.0 * y) + h[k] * (1.0 + 0.1 * x * y);
         vm_mesh_add_vertex(m, x + 1e-3 * sin(7.0 * z), y, z, NULL);
       }
-#define VID(i, j, k) ((int32_t)((k) * np * np + (j) * np + (i)))
+#define VID(i, j, k) ((int32_t)((k)*np * np + (j)*np + (i)))
   int64_t apex, tip;
   vm_mesh_add_vertex(m, 0.5 / n, 0.5 / n, 1.0, &apex);
   vm_mesh_add_vertex(m, 0.5 / n, 0.5 / n, 1.5, &tip);
   int32_t *tag = malloc(sizeof *tag * (size_t)(64 * n * n + 64));
   int32_t *lay = malloc(sizeof *lay * (size_t)(64 * n * n + 64));
   int64_t ne = 0;
-#define ADD(t, v, tg, ly)              \
-  do {                                 \
-    vm_mesh_add_element(m, (t), (v));  \
-    tag[ne] = (tg);                    \
-    lay[ne++] = (ly);                  \
+#define ADD(t, v, tg, ly)                                                                          \
+  do {                                                                                             \
+    vm_mesh_add_element(m, (t), (v));                                                              \
+    tag[ne] = (tg);                                                                                \
+    lay[ne++] = (ly);                                                                              \
   } while (0)
   for (int k = 0; k < 3; k++)
     for (int j = 0; j < n; j++)

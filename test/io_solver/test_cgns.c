@@ -24,8 +24,7 @@ static int files_in(const char *d) {
   DIR *h = opendir(d);
   int n = 0;
   struct dirent *e;
-  while (h && (e = readdir(h)))
-    n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+  while (h && (e = readdir(h))) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
   if (h) closedir(h);
   return n;
 }
@@ -55,7 +54,8 @@ static void test_round_trip(void) {
   CHECK(!diff, "cgns -> cgns: %s", diff);
   CHECK(vm_mesh_write(ctx, r, c, VM_FMT_AUTO, NULL) == VM_OK, "vmsh: %s", vm_ctx_error(ctx));
   CHECK(vm_mesh_read(ctx, c, VM_FMT_AUTO, &r3) == VM_OK, "vmsh read: %s", vm_ctx_error(ctx));
-  if (r3) CHECK(vm_mesh_write(ctx, r3, d, VM_FMT_AUTO, NULL) >= 0, "to cgns: %s", vm_ctx_error(ctx));
+  if (r3)
+    CHECK(vm_mesh_write(ctx, r3, d, VM_FMT_AUTO, NULL) >= 0, "to cgns: %s", vm_ctx_error(ctx));
   CHECK(vm_mesh_read(ctx, d, VM_FMT_AUTO, &r4) == VM_OK, "read d: %s", vm_ctx_error(ctx));
   diff = r4 ? mesh_diff(r, r4) : "not read";
   CHECK(!diff, "cgns -> vmsh -> cgns: %s", diff);
@@ -84,8 +84,10 @@ static void test_round_trip(void) {
     vm_mesh_destroy(&r6);
     leaks += vm_ctx_alloc_live(ctx) != live;
   }
-  CHECK(nalloc > 5 && !leaks && !silent, "alloc-failure sweep over %ld allocations: %ld leaks, "
-        "%ld failures not reported", nalloc, leaks, silent);
+  CHECK(nalloc > 5 && !leaks && !silent,
+        "alloc-failure sweep over %ld allocations: %ld leaks, "
+        "%ld failures not reported",
+        nalloc, leaks, silent);
   free(bytes);
   vm_mesh *mm[] = {r, r2, r3, r4, r5, m};
   for (int i = 0; i < 6; i++) vm_mesh_destroy(&mm[i]);
@@ -104,8 +106,22 @@ static void test_foreign(void) {
   cgsize_t size[3] = {6, 3, 0};
   double x[6] = {0, 1, 0, 0, 1, 0.5}, y[6] = {0, 0, 1, 0, 1, 0.5}, z[6] = {0, 0, 0, 1, 0, -1};
   /* MIXED: tet, tet, pyramid (elements 1..3); TRI_3 4..5 (no BC); QUAD_4 6 (BC "inlet") */
-  cgsize_t mixed[] = {CGNS_ENUMV(TETRA_4), 1, 2, 3, 4, CGNS_ENUMV(TETRA_4), 2, 5, 3, 4,
-                      CGNS_ENUMV(PYRA_5), 1, 2, 5, 3, 6};
+  cgsize_t mixed[] = {CGNS_ENUMV(TETRA_4),
+                      1,
+                      2,
+                      3,
+                      4,
+                      CGNS_ENUMV(TETRA_4),
+                      2,
+                      5,
+                      3,
+                      4,
+                      CGNS_ENUMV(PYRA_5),
+                      1,
+                      2,
+                      5,
+                      3,
+                      6};
   cgsize_t moff[4] = {0, 5, 10, 16};
   cgsize_t tris[] = {1, 3, 4, 2, 5, 4}, quad[] = {1, 3, 5, 2};
   cgsize_t list[1] = {6};
@@ -116,8 +132,7 @@ static void test_foreign(void) {
            !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateX", x, &C) &&
            !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateY", y, &C) &&
            !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateZ", z, &C) &&
-           !cg_poly_section_write(fn, B, Z, "cells", CGNS_ENUMV(MIXED), 1, 3, 0, mixed, moff,
-                                  &S) &&
+           !cg_poly_section_write(fn, B, Z, "cells", CGNS_ENUMV(MIXED), 1, 3, 0, mixed, moff, &S) &&
            !cg_section_write(fn, B, Z, "quads", CGNS_ENUMV(QUAD_4), 6, 6, 0, quad, &S) &&
            !cg_section_write(fn, B, Z, "sym", CGNS_ENUMV(TRI_3), 4, 5, 0, tris, &S) &&
            !cg_boco_write(fn, B, Z, "inlet", CGNS_ENUMV(BCInflow), CGNS_ENUMV(PointList), 1, list,
@@ -188,7 +203,8 @@ static void test_bad(void) {
     long live0 = vm_ctx_alloc_live(ctx);
     int st = vm_mesh_read_memory(ctx, "cut.cgns", (const uint8_t *)bytes, n, VM_FMT_CGNS, &r);
     const char *e = vm_ctx_error(ctx);
-    if (st >= 0) nread++;
+    if (st >= 0)
+      nread++;
     else
       CHECK(!strncmp(e, "cut.cgns: ", 10) && !strchr(e, '\n'), "cut at %zu: message '%s'", n, e);
     vm_mesh_destroy(&r);

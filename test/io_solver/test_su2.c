@@ -37,7 +37,10 @@ static void test_round_trip(void) {
   }
   CHECK(r->dim == 3, "dim %d", r->dim);
   compare_read_back("su2", m, r, 0, NULL);
-  CHECK(!strcmp(vm_mesh_get_attr(r, "gmsh:physical_name:2:3") ? vm_mesh_get_attr(r, "gmsh:physical_name:2:3") : "", "boundary_7"),
+  CHECK(!strcmp(vm_mesh_get_attr(r, "gmsh:physical_name:2:3")
+                    ? vm_mesh_get_attr(r, "gmsh:physical_name:2:3")
+                    : "",
+                "boundary_7"),
         "third marker's name");
   /* written again: the same file but for the header; and through .vmsh */
   /* the families are all it has: written again without loss */
@@ -97,7 +100,8 @@ static void test_no_faces(void) {
   vm_mesh_set_vertices(cells, m->nv);
   memcpy(cells->xyz, m->xyz, sizeof(double) * 3 * (size_t)m->nv);
   for (int64_t e = 0; e < m->ne; e++)
-    if (vm_elem_dim(m->etype[e]) == 3) vm_mesh_add_element(cells, m->etype[e], m->conn + m->eoff[e]);
+    if (vm_elem_dim(m->etype[e]) == 3)
+      vm_mesh_add_element(cells, m->etype[e], m->conn + m->eoff[e]);
   CHECK(vm_mesh_write(ctx, cells, a, VM_FMT_AUTO, NULL) == VM_OK, "write: %s", vm_ctx_error(ctx));
   CHECK(vm_mesh_read(ctx, a, VM_FMT_AUTO, &r) == VM_OK, "read: %s", vm_ctx_error(ctx));
   if (r) {
@@ -117,25 +121,24 @@ static void test_no_faces(void) {
  * without their index, "KEY=value" without a blank, a line marker (dropped
  * with a warning), CRLF line ends. */
 static void test_general(void) {
-  static const char text[] =
-      "% a hand-written SU2 file\r\n"
-      "NDIME=3\r\n"
-      "NPOIN= 7 7\r\n"
-      "0 0 0 0\r\n1 0 0 1\r\n0 1 0 2\r\n0 0 1\r\n1 0 1\r\n0 1 1 5\r\n"
-      "0.25 0.25 2 6\r\n"
-      "\r\n"
-      "% cells\r\n"
-      "NELEM= 2\r\n"
-      "13 0 2 1 3 5 4 0\r\n"
-      "10 3 4 5 6\r\n"
-      "NMARK= 2\r\n"
-      "MARKER_TAG= bottom wall\r\n"
-      "MARKER_ELEMS= 2\r\n"
-      "5 0 2 1\r\n"
-      "3 0 1 1\r\n"
-      "MARKER_TAG=top\r\n"
-      "MARKER_ELEMS=1\r\n"
-      "5 3 4 6\r\n";
+  static const char text[] = "% a hand-written SU2 file\r\n"
+                             "NDIME=3\r\n"
+                             "NPOIN= 7 7\r\n"
+                             "0 0 0 0\r\n1 0 0 1\r\n0 1 0 2\r\n0 0 1\r\n1 0 1\r\n0 1 1 5\r\n"
+                             "0.25 0.25 2 6\r\n"
+                             "\r\n"
+                             "% cells\r\n"
+                             "NELEM= 2\r\n"
+                             "13 0 2 1 3 5 4 0\r\n"
+                             "10 3 4 5 6\r\n"
+                             "NMARK= 2\r\n"
+                             "MARKER_TAG= bottom wall\r\n"
+                             "MARKER_ELEMS= 2\r\n"
+                             "5 0 2 1\r\n"
+                             "3 0 1 1\r\n"
+                             "MARKER_TAG=top\r\n"
+                             "MARKER_ELEMS=1\r\n"
+                             "5 3 4 6\r\n";
   tlog lg = {0};
   vm_ctx_set_log(ctx, tlog_fn, &lg);
   vm_mesh *m = NULL;
@@ -167,10 +170,10 @@ static void test_general(void) {
                                "MARKER_ELEMS= 2\n3 0 1\n3 1 3\n";
   st = vm_mesh_read_memory(ctx, "plane.su2", (const uint8_t *)text2d, sizeof text2d - 1,
                            VM_FMT_AUTO, &m);
-  CHECK(st == VM_OK && m && m->dim == 2 && m->ne == 2 && m->nv == 5, "2D: %s",
-        vm_ctx_error(ctx));
-  if (m) CHECK(m->etype[1] == VM_QUAD && m->xyz[3 * 4 + 1] == 1.0 && m->xyz[3 * 4 + 2] == 0.0,
-               "2D: quad and coordinates");
+  CHECK(st == VM_OK && m && m->dim == 2 && m->ne == 2 && m->nv == 5, "2D: %s", vm_ctx_error(ctx));
+  if (m)
+    CHECK(m->etype[1] == VM_QUAD && m->xyz[3 * 4 + 1] == 1.0 && m->xyz[3 * 4 + 2] == 0.0,
+          "2D: quad and coordinates");
   vm_mesh_destroy(&m);
 }
 
@@ -204,12 +207,15 @@ static void test_bad(void) {
   expect_fail("comment.su2", "% nothing\n", F, "no NDIME=");
   /* cut short: a count whose records cannot fit is refused at once; one
    * that fits, at the cut */
-  expect_fail("truncated-count.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0\nNPOIN= 4\n0 0 0 0\n1 0 0 1\n",
-              F, "line 4: NPOIN= 4: that many records cannot fit");
+  expect_fail("truncated-count.su2",
+              "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0\nNPOIN= 4\n0 0 0 0\n1 0 0 1\n", F,
+              "line 4: NPOIN= 4: that many records cannot fit");
   expect_fail("truncated-point.su2", "NDIME= 3\nNPOIN= 2\n0.5 0.5 0.5 0\n1 0", F,
               "line 4: point 1: expected 3 coordinates");
-  expect_fail("truncated-marker.su2", HEAD "NMARK= 2\nMARKER_TAG= a\nMARKER_ELEMS= 1\n5 0 1 2\n"
-              "MARKER_TAG= b\n", F, "line 14: unexpected end of file, expected MARKER_ELEMS= of marker 'b'");
+  expect_fail("truncated-marker.su2",
+              HEAD "NMARK= 2\nMARKER_TAG= a\nMARKER_ELEMS= 1\n5 0 1 2\n"
+                   "MARKER_TAG= b\n",
+              F, "line 14: unexpected end of file, expected MARKER_ELEMS= of marker 'b'");
   expect_fail("truncated-elem.su2", "NDIME= 3\nNELEM= 2\n10 0 1 2 3 0\n10 0 1", F,
               "line 4: element of type 10: expected 4 vertex indices");
   expect_fail("lying-nelem.su2", "NDIME= 3\nNELEM= 1000000000\n10 0 1 2 3 0\n", F,
@@ -220,13 +226,16 @@ static void test_bad(void) {
               "line 9: NMARK= 100000");
   expect_fail("lying-small.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0\n10 0 1 2 3 1\nNPOIN= 4\n", F,
               "line 4: expected a KEY= line, found '10'");
-  expect_fail("bad-index.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 4 0\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n",
-              F, "line 3: vertex index 4 is not in 0..3");
+  expect_fail("bad-index.su2",
+              "NDIME= 3\nNELEM= 1\n10 0 1 2 4 0\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n", F,
+              "line 3: vertex index 4 is not in 0..3");
   expect_fail("negative-index.su2", HEAD "NMARK= 1\nMARKER_TAG= w\nMARKER_ELEMS= 1\n5 0 -1 2\n", F,
               "line 12: marker element: vertex index -1 is not in 0..3");
-  expect_fail("nan.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0\nNPOIN= 4\n0 0 0 0\n1 nan 0 1\n0 1 0 2\n0 0 1 3\n",
+  expect_fail("nan.su2",
+              "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0\nNPOIN= 4\n0 0 0 0\n1 nan 0 1\n0 1 0 2\n0 0 1 3\n",
               F, "line 6: point 1: coordinate is not finite");
-  expect_fail("inf.su2", "NDIME= 3\nNPOIN= 1\n1e999 0 0\n", F, "line 3: point 0: coordinate is not finite");
+  expect_fail("inf.su2", "NDIME= 3\nNPOIN= 1\n1e999 0 0\n", F,
+              "line 3: point 0: coordinate is not finite");
   expect_fail("unknown-type.su2", "NDIME= 3\nNELEM= 1\n11 0 1 2 3 0\n", F,
               "line 3: element type 11 is not a 3D cell");
   expect_fail("surface-cell.su2", "NDIME= 3\nNELEM= 1\n5 0 1 2 0\n", F,
@@ -235,8 +244,9 @@ static void test_bad(void) {
               "line 12: marker 'w': element type 10 is not a boundary element");
   expect_fail("garbage-number.su2", "NDIME= 3\nNPOIN= 1\n0 0x 0\n", F,
               "line 3: coordinate: '0x' is not a number");
-  expect_fail("extra-numbers.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0 7\n", F,
-              "line 3: element of type 10: expected 4 vertex indices and an optional index, found 6");
+  expect_fail(
+      "extra-numbers.su2", "NDIME= 3\nNELEM= 1\n10 0 1 2 3 0 7\n", F,
+      "line 3: element of type 10: expected 4 vertex indices and an optional index, found 6");
   expect_fail("ndime.su2", "NDIME= 4\n", F, "line 1: NDIME= 4 is not 2 or 3");
   expect_fail("no-ndime.su2", "NELEM= 0\n", F, "line 1: NELEM= before NDIME=");
   expect_fail("twice.su2", HEAD "NPOIN= 0\n", F, "line 9: a second NPOIN=");

@@ -18,8 +18,7 @@ static char warns[8192];
 
 static void on_log(void *user, int level, const char *msg) {
   (void)user;
-  if (level != VM_LOG_WARN)
-    return;
+  if (level != VM_LOG_WARN) return;
   nwarn++;
   size_t n = strlen(warns);
   snprintf(warns + n, sizeof warns - n, "%s\n", msg);
@@ -55,8 +54,7 @@ static const double (*ref_cell(int type))[3] {
 /* One reference cell of each type, own vertices, awkward coordinates. */
 static vm_mesh *mixed_mesh(vm_ctx *ctx) {
   vm_mesh *m;
-  if (vm_mesh_create(ctx, &m))
-    return NULL;
+  if (vm_mesh_create(ctx, &m)) return NULL;
   const int order[6] = {VM_HEX, VM_PRISM, VM_PYRAMID, VM_TET, VM_TRI, VM_QUAD};
   for (int c = 0; c < 6; c++) {
     int t = order[c], k = vm_elem_nverts(t);
@@ -80,30 +78,23 @@ static vm_mesh *mixed_mesh(vm_ctx *ctx) {
   m->vsurf[3] = 7;
   vm_field *f;
   vm_mesh_add_field(m, "temperature", VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f);
-  for (int64_t v = 0; v < m->nv; v++)
-    ((double *)f->data)[v] = v * 0.1 + 1.0 / 7.0;
+  for (int64_t v = 0; v < m->nv; v++) ((double *)f->data)[v] = v * 0.1 + 1.0 / 7.0;
   vm_mesh_add_field(m, "velocity", VM_FIELD_VERTEX, VM_FIELD_F64, 3, &f);
-  for (int64_t i = 0; i < 3 * m->nv; i++)
-    ((double *)f->data)[i] = sin((double)i) * 1e3;
+  for (int64_t i = 0; i < 3 * m->nv; i++) ((double *)f->data)[i] = sin((double)i) * 1e3;
   vm_mesh_add_field(m, "fixed", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &f);
   ((int32_t *)f->data)[0] = ((int32_t *)f->data)[1] = 1;
   vm_mesh_add_field(m, "label id", VM_FIELD_VERTEX, VM_FIELD_I32, 3, &f);
-  for (int64_t i = 0; i < 3 * m->nv; i++)
-    ((int32_t *)f->data)[i] = (int32_t)(i * 7919 - 1000);
+  for (int64_t i = 0; i < 3 * m->nv; i++) ((int32_t *)f->data)[i] = (int32_t)(i * 7919 - 1000);
   ((int32_t *)f->data)[0] = INT32_MIN;
   ((int32_t *)f->data)[1] = INT32_MAX;
   vm_mesh_add_field(m, "region", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
-  for (int64_t e = 0; e < m->ne; e++)
-    ((int32_t *)f->data)[e] = (int32_t)(10 + e);
+  for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = (int32_t)(10 + e);
   vm_mesh_add_field(m, "stress<&>\"", VM_FIELD_ELEMENT, VM_FIELD_F64, 3, &f);
-  for (int64_t i = 0; i < 3 * m->ne; i++)
-    ((double *)f->data)[i] = 1.0 / (i + 3.0);
+  for (int64_t i = 0; i < 3 * m->ne; i++) ((double *)f->data)[i] = 1.0 / (i + 3.0);
   vm_mesh_add_field(m, "cell ids", VM_FIELD_ELEMENT, VM_FIELD_I32, 3, &f);
-  for (int64_t i = 0; i < 3 * m->ne; i++)
-    ((int32_t *)f->data)[i] = (int32_t)(-i * 100003);
+  for (int64_t i = 0; i < 3 * m->ne; i++) ((int32_t *)f->data)[i] = (int32_t)(-i * 100003);
   vm_mesh_add_field(m, "temperature", VM_FIELD_ELEMENT, VM_FIELD_F64, 1, &f);
-  for (int64_t e = 0; e < m->ne; e++)
-    ((double *)f->data)[e] = -1.5 * e;
+  for (int64_t e = 0; e < m->ne; e++) ((double *)f->data)[e] = -1.5 * e;
   return m;
 }
 
@@ -111,8 +102,7 @@ static void same_mesh(const vm_mesh *a, const vm_mesh *b, const char *what) {
   CHECK(a->dim == b->dim, "%s: dim %d vs %d", what, a->dim, b->dim);
   CHECK(a->nv == b->nv, "%s: nv %lld vs %lld", what, (long long)a->nv, (long long)b->nv);
   CHECK(a->ne == b->ne, "%s: ne %lld vs %lld", what, (long long)a->ne, (long long)b->ne);
-  if (a->nv != b->nv || a->ne != b->ne)
-    return;
+  if (a->nv != b->nv || a->ne != b->ne) return;
   CHECK(!memcmp(a->xyz, b->xyz, (size_t)a->nv * 3 * sizeof(double)), "%s: coordinates differ",
         what);
   CHECK(!memcmp(a->vflag, b->vflag, (size_t)a->nv), "%s: flags differ", what);
@@ -124,11 +114,9 @@ static void same_mesh(const vm_mesh *a, const vm_mesh *b, const char *what) {
   for (int i = 0; i < a->nfield; i++) {
     const vm_field *f = &a->fields[i], *g = vm_mesh_find_field(b, f->name, f->location);
     CHECK(g != NULL, "%s: field '%s' lost", what, f->name);
-    if (!g)
-      continue;
+    if (!g) continue;
     CHECK(g->type == f->type && g->ncomp == f->ncomp, "%s: field '%s' type/ncomp", what, f->name);
-    if (g->type != f->type || g->ncomp != f->ncomp)
-      continue;
+    if (g->type != f->type || g->ncomp != f->ncomp) continue;
     size_t n = (size_t)vm_field_count(a, f) * (size_t)f->ncomp *
                (f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
     CHECK(!memcmp(f->data, g->data, n), "%s: field '%s' values differ", what, f->name);
@@ -138,8 +126,7 @@ static void same_mesh(const vm_mesh *a, const vm_mesh *b, const char *what) {
 /* Signed measures, computed here independently of the library. */
 
 static void sub(const double *a, const double *b, double *r) {
-  for (int i = 0; i < 3; i++)
-    r[i] = a[i] - b[i];
+  for (int i = 0; i < 3; i++) r[i] = a[i] - b[i];
 }
 static double det3(const double *a, const double *b, const double *c) {
   return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
@@ -159,8 +146,7 @@ static double signed_measure(const vm_mesh *m, int64_t e) {
   const int32_t *c = m->conn + m->eoff[e];
   int t = m->etype[e], k = vm_elem_nverts(t);
   const double *x[8];
-  for (int i = 0; i < k; i++)
-    x[i] = m->xyz + 3 * c[i];
+  for (int i = 0; i < k; i++) x[i] = m->xyz + 3 * c[i];
   if (t == VM_TRI || t == VM_QUAD) {
     double a = 0;
     for (int i = 0; i < k; i++) {
@@ -173,8 +159,7 @@ static double signed_measure(const vm_mesh *m, int64_t e) {
   int nf = t == VM_TET ? 4 : t == VM_PYRAMID ? 5 : t == VM_PRISM ? 5 : 6;
   double cen[3] = {0, 0, 0}, vol = 0;
   for (int i = 0; i < k; i++)
-    for (int d = 0; d < 3; d++)
-      cen[d] += x[i][d] / k;
+    for (int d = 0; d < 3; d++) cen[d] += x[i][d] / k;
   for (int j = 0; j < nf; j++) {
     int nv = f[j][3] < 0 ? 3 : 4;
     for (int i = 1; i + 1 < nv; i++) {
@@ -196,8 +181,7 @@ static void path_of(char *buf, size_t n, const char *file) {
 
 static char *slurp(const char *path, size_t *len) {
   FILE *f = fopen(path, "rb");
-  if (!f)
-    return NULL;
+  if (!f) return NULL;
   fseek(f, 0, SEEK_END);
   long n = ftell(f);
   fseek(f, 0, SEEK_SET);
@@ -212,8 +196,7 @@ static char *slurp(const char *path, size_t *len) {
 static int contains(const char *text, size_t len, const char *needle) {
   size_t n = strlen(needle);
   for (size_t i = 0; i + n <= len; i++)
-    if (!memcmp(text + i, needle, n))
-      return 1;
+    if (!memcmp(text + i, needle, n)) return 1;
   return 0;
 }
 
@@ -259,8 +242,7 @@ static void expect_fail(vm_ctx *ctx, const char *name, const void *buf, size_t l
         vm_ctx_alloc_live(ctx) - live);
   CHECK(strncmp(name, "lie_", 4) || vm_ctx_alloc_count(ctx) - n0 <= 16,
         "%s: %ld allocations before refusing a lying count", name, vm_ctx_alloc_count(ctx) - n0);
-  if (m)
-    vm_mesh_destroy(&m);
+  if (m) vm_mesh_destroy(&m);
 }
 
 static void expect_fail_str(vm_ctx *ctx, const char *name, const char *text, const char *needle,
@@ -274,12 +256,10 @@ static void expect_fail_str(vm_ctx *ctx, const char *name, const char *text, con
  * keyword, a prefix may be accepted. */
 static int record_boundary(const uint8_t *b, size_t len, size_t n, int text) {
   if (text && n > 0 && b[n - 1] != ' ' && b[n - 1] != '\n')
-    while (n < len && b[n] != ' ' && b[n] != '\n')
-      n++;
+    while (n < len && b[n] != ' ' && b[n] != '\n') n++;
   else if (n < len && b[n] == '\n')
     n++;
-  while (text && n < len && (b[n] == ' ' || b[n] == '\n'))
-    n++;
+  while (text && n < len && (b[n] == ' ' || b[n] == '\n')) n++;
   return n == len || (b[n] >= 'A' && b[n] <= 'Z');
 }
 
@@ -295,8 +275,7 @@ static void truncations_in(vm_ctx *ctx, const char *name, const void *buf, size_
     vm_mesh *m = NULL;
     int st = read_mem(ctx, name, buf, n, &m);
     if (st < 0) {
-      if (!strstr(vm_ctx_error(ctx), name) || m)
-        bad++;
+      if (!strstr(vm_ctx_error(ctx), name) || m) bad++;
     } else {
       accepted++;
       int ok = legacy ? record_boundary(buf, len, n, legacy == 1) : n + 1 == len;
@@ -307,8 +286,7 @@ static void truncations_in(vm_ctx *ctx, const char *name, const void *buf, size_
       }
       vm_mesh_destroy(&m);
     }
-    if (vm_ctx_alloc_live(ctx) != live)
-      bad++;
+    if (vm_ctx_alloc_live(ctx) != live) bad++;
   }
   CHECK(bad == 0, "%s: %d truncations misbehaved", name, bad);
   CHECK(accepted < (int)len / 8, "%s: %d of %zu prefixes accepted", name, accepted, len);
@@ -331,10 +309,8 @@ static void alloc_failures(vm_ctx *ctx, const char *name, const void *buf, size_
       vm_mesh_destroy(&m);
       break;
     }
-    if (st != VM_ERR_NOMEM || m)
-      bad++;
-    if (vm_ctx_alloc_live(ctx) != live)
-      bad++;
+    if (st != VM_ERR_NOMEM || m) bad++;
+    if (vm_ctx_alloc_live(ctx) != live) bad++;
   }
   CHECK(bad == 0 && n > 1 && n < 10000, "%s: %d allocation failures misbehaved (n=%d)", name, bad,
         n);
@@ -365,8 +341,7 @@ static void putf(bytes *s, const char *fmt, ...) {
 }
 static void put_int(bytes *s, uint64_t v, int size, int big) {
   uint8_t b[8];
-  for (int i = 0; i < size; i++)
-    b[big ? size - 1 - i : i] = (uint8_t)(v >> (8 * i));
+  for (int i = 0; i < size; i++) b[big ? size - 1 - i : i] = (uint8_t)(v >> (8 * i));
   put(s, b, (size_t)size);
 }
 static void put_f64(bytes *s, double x, int big) {
@@ -462,8 +437,7 @@ static void test_roundtrips(vm_ctx *ctx) {
   /* no flags, no arrays named vm_flag */
   memset(m->vflag, 0, (size_t)m->nv);
   vm_mesh_remove_field(m, "fixed", VM_FIELD_VERTEX);
-  for (int64_t v = 0; v < m->nv; v++)
-    m->vsurf[v] = -1;
+  for (int64_t v = 0; v < m->nv; v++) m->vsurf[v] = -1;
   char path[256];
   path_of(path, sizeof path, "noflags.vtu");
   CHECK(vm_mesh_write(ctx, m, path, VM_FMT_AUTO, NULL) == VM_OK, "noflags write");
@@ -473,8 +447,7 @@ static void test_roundtrips(vm_ctx *ctx) {
   free(text);
   vm_mesh *r = NULL;
   CHECK(vm_mesh_read(ctx, path, VM_FMT_AUTO, &r) == VM_OK, "noflags read");
-  if (r)
-    same_mesh(m, r, path);
+  if (r) same_mesh(m, r, path);
   vm_mesh_destroy(&r);
   vm_mesh_destroy(&m);
   CHECK(vm_ctx_alloc_live(ctx) == live0, "round trips leaked %ld", vm_ctx_alloc_live(ctx) - live0);
@@ -485,8 +458,7 @@ static void test_dim_and_lossy(vm_ctx *ctx) {
   long live0 = vm_ctx_alloc_live(ctx);
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
-  for (int i = 0; i < 4; i++)
-    vm_mesh_add_vertex(m, ref_quad[i][0], ref_quad[i][1], 0, NULL);
+  for (int i = 0; i < 4; i++) vm_mesh_add_vertex(m, ref_quad[i][0], ref_quad[i][1], 0, NULL);
   vm_mesh_add_vertex(m, 2, 0.5, 0, NULL);
   const int32_t q[4] = {0, 1, 2, 3}, t[3] = {1, 4, 2};
   vm_mesh_add_element(m, VM_QUAD, q);
@@ -538,8 +510,7 @@ static void test_dim_and_lossy(vm_ctx *ctx) {
       CHECK(st == VM_WARN_LOSSY || st == VM_ERR_NOMEM, "%s: status %d", path, st);
       CHECK(vm_ctx_alloc_live(ctx) == live, "%s: writer leaked", path);
       CHECK(st != VM_ERR_NOMEM || access(path, F_OK) != 0, "%s: file after failure", path);
-      if (st >= 0)
-        break;
+      if (st >= 0) break;
     }
   }
   vm_mesh_destroy(&m);
@@ -583,8 +554,7 @@ static void test_reference_cells(vm_ctx *ctx) {
   for (int c = 0; c < 6; c++) {
     int k = vm_elem_nverts(types[c]);
     putf(&s, "%d", k);
-    for (int i = 0; i < k; i++)
-      putf(&s, " %d", base + vtk_order[c][i]);
+    for (int i = 0; i < k; i++) putf(&s, " %d", base + vtk_order[c][i]);
     putf(&s, "\n");
     base += k;
   }
@@ -694,7 +664,8 @@ static void test_written_wedge_order(vm_ctx *ctx) {
       }
     }
     CHECK(ok, "%s: connectivity in the text", names[f]);
-    if (ok) CHECK(vtk_wedge_side(ref_prism, c) < 0, "%s: base normal points away from the top", names[f]);
+    if (ok)
+      CHECK(vtk_wedge_side(ref_prism, c) < 0, "%s: base normal points away from the top", names[f]);
     vm_mesh *r = NULL;
     CHECK(vm_mesh_read(ctx, path, VM_FMT_AUTO, &r) >= 0 && r && signed_measure(r, 0) > 0 &&
               !memcmp(r->conn, m->conn, 6 * sizeof *m->conn),
@@ -708,8 +679,7 @@ static void test_written_wedge_order(vm_ctx *ctx) {
 static void test_polydata(vm_ctx *ctx) {
   clear_warns();
   vm_mesh *m = read_str(ctx, "poly.vtk", polydata_vtk);
-  if (!m)
-    return;
+  if (!m) return;
   CHECK(m->ne == 2 && m->etype[0] == VM_QUAD && m->etype[1] == VM_TRI, "polygons");
   CHECK(m->dim == 2, "flat polydata is 2D");
   CHECK(nwarn == 1 && strstr(warns, "skipped 2") && strstr(warns, "poly.vtk"), "skip warning: %s",
@@ -770,8 +740,7 @@ static const char offsets_vtk[] = "# vtk DataFile Version 5.1\n"
 static void test_offsets_and_fields(vm_ctx *ctx) {
   clear_warns();
   vm_mesh *m = read_str(ctx, "layout51.vtk", offsets_vtk);
-  if (!m)
-    return;
+  if (!m) return;
   CHECK(m->ne == 2 && m->etype[0] == VM_TET && m->conn[4] == 1 && m->conn[7] == 4,
         "5.1 layout cells");
   CHECK(nwarn == 1 && strstr(warns, "skipped 1"), "skip warning: %s", warns);
@@ -841,16 +810,13 @@ static void build_binary_vtk(bytes *s, int classic) {
     putf(s, "\nCELLS 2 9\n");
     /* VTK's wedge: base (0,2,1) of the points, its normal away from the top */
     const int32_t c[9] = {6, 0, 2, 1, 3, 5, 4, 1, 5};
-    for (int i = 0; i < 9; i++)
-      put_int(s, (uint32_t)c[i], 4, 1);
+    for (int i = 0; i < 9; i++) put_int(s, (uint32_t)c[i], 4, 1);
   } else {
     putf(s, "\nCELLS 3 7\nOFFSETS vtktypeint64\n");
     const int64_t o[3] = {0, 6, 7}, c[7] = {0, 2, 1, 3, 5, 4, 5};
-    for (int i = 0; i < 3; i++)
-      put_int(s, (uint64_t)o[i], 8, 1);
+    for (int i = 0; i < 3; i++) put_int(s, (uint64_t)o[i], 8, 1);
     putf(s, "\nCONNECTIVITY vtktypeint64\n");
-    for (int i = 0; i < 7; i++)
-      put_int(s, (uint64_t)c[i], 8, 1);
+    for (int i = 0; i < 7; i++) put_int(s, (uint64_t)c[i], 8, 1);
   }
   putf(s, "\nCELL_TYPES 2\n");
   put_int(s, 13, 4, 1);
@@ -859,15 +825,13 @@ static void build_binary_vtk(bytes *s, int classic) {
   put_int(s, (uint16_t)-7, 2, 1);
   put_int(s, 9, 2, 1);
   putf(s, "\nPOINT_DATA 6\nCOLOR_SCALARS rgb 3\n");
-  for (int i = 0; i < 18; i++)
-    put_int(s, (uint64_t)(i * 15), 1, 1);
+  for (int i = 0; i < 18; i++) put_int(s, (uint64_t)(i * 15), 1, 1);
   putf(s, "\n");
   meta_lo = s->n;
   putf(s, "METADATA\nCOMPONENT_NAMES\nr\ng\nb\n\n");
   meta_hi = s->n;
   putf(s, "VECTORS disp double\n");
-  for (int i = 0; i < 18; i++)
-    put_f64(s, i / 3.0, 1);
+  for (int i = 0; i < 18; i++) put_f64(s, i / 3.0, 1);
   putf(s, "\n");
 }
 
@@ -942,8 +906,7 @@ static const char vtu_ascii[] =
 static void test_vtu_ascii(vm_ctx *ctx) {
   clear_warns();
   vm_mesh *m = read_str(ctx, "hand.vtu", vtu_ascii);
-  if (!m)
-    return;
+  if (!m) return;
   CHECK(m->nv == 5 && m->ne == 1 && m->etype[0] == VM_TET && m->xyz[14] == -1, "ascii VTU");
   CHECK(nwarn == 2 && strstr(warns, "skipped 2") && strstr(warns, "'names'"), "warnings: %s",
         warns);
@@ -980,17 +943,14 @@ static void build_vtu(bytes *s, const vtu_style *st) {
   const double pts[9][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1},         {1, 1, 0},
                             {2, 0, 0}, {2, 1, 0}, {3, 3, 3}, {-0.5, 0.25, 1e-3}};
   for (int i = 0; i < 9; i++)
-    for (int d = 0; d < 3; d++)
-      put_f64(&arr[0], pts[i][d], st->big);
+    for (int d = 0; d < 3; d++) put_f64(&arr[0], pts[i][d], st->big);
   const int32_t conn[9] = {0, 1, 2, 3, 1, 5, 6, 4, 8};
-  for (int i = 0; i < 9; i++)
-    put_int(&arr[1], (uint32_t)conn[i], 4, st->big);
+  for (int i = 0; i < 9; i++) put_int(&arr[1], (uint32_t)conn[i], 4, st->big);
   put_int(&arr[2], 4, 8, st->big);
   put_int(&arr[2], 9, 8, st->big);
   put_int(&arr[3], 10, 1, st->big);
   put_int(&arr[3], 14, 1, st->big);
-  for (int i = 0; i < 9; i++)
-    put_int(&arr[4], (uint16_t)(i * 1000), 2, st->big);
+  for (int i = 0; i < 9; i++) put_int(&arr[4], (uint16_t)(i * 1000), 2, st->big);
   put_f32(&arr[5], 0.5f, st->big);
   put_f32(&arr[5], -2.0f, st->big);
   const char *decl[6] = {
@@ -1013,8 +973,7 @@ static void build_vtu(bytes *s, const vtu_style *st) {
   for (int o = 0; o < 4; o++) {
     putf(s, "<%s>\n", order[o]);
     for (int i = 0; i < 6; i++) {
-      if (strcmp(parent[i], order[o]))
-        continue;
+      if (strcmp(parent[i], order[o])) continue;
       if (st->appended) {
         putf(s, "<DataArray %s format=\"appended\" offset=\"%zu\"/>\n", decl[i], app.n);
         block(&app, st, &arr[i]);
@@ -1033,8 +992,7 @@ static void build_vtu(bytes *s, const vtu_style *st) {
     putf(s, "\n</AppendedData>\n");
   }
   putf(s, "</VTKFile>\n");
-  for (int i = 0; i < 6; i++)
-    free(arr[i].b);
+  for (int i = 0; i < 6; i++) free(arr[i].b);
   free(app.b);
 }
 
@@ -1062,20 +1020,17 @@ static void test_vtu_binary(vm_ctx *ctx) {
       vm_mesh_destroy(&m);
     }
     truncations(ctx, names[k], s.b, s.n, 0);
-    if (k == 0 || k == 3 || k == 5)
-      alloc_failures(ctx, names[k], s.b, s.n);
+    if (k == 0 || k == 3 || k == 5) alloc_failures(ctx, names[k], s.b, s.n);
     free(s.b);
   }
 }
 
 static char *join(const char *const *pieces) {
   size_t n = 0;
-  for (int i = 0; pieces[i]; i++)
-    n += strlen(pieces[i]);
+  for (int i = 0; pieces[i]; i++) n += strlen(pieces[i]);
   char *s = malloc(n + 1);
   s[0] = 0;
-  for (int i = 0; pieces[i]; i++)
-    strcat(s, pieces[i]);
+  for (int i = 0; pieces[i]; i++) strcat(s, pieces[i]);
   return s;
 }
 
@@ -1084,8 +1039,7 @@ static void test_vtu_zlib(vm_ctx *ctx) {
   const char *names[4] = {"zdyn.vtu", "zblocks.vtu", "zstored.vtu", "zfixed_app.vtu"};
   for (int k = 0; k < 4; k++) {
     vm_mesh *m = read_str(ctx, names[k], vec[k]);
-    if (!m)
-      continue;
+    if (!m) continue;
     int ok = m->nv == ZV_NP && m->ne == 1 && m->etype[0] == VM_TET;
     for (int64_t i = 0; ok && i < m->nv; i++)
       ok = m->xyz[3 * i] == (double)i && m->xyz[3 * i + 1] == i / 2.0 &&
@@ -1102,8 +1056,7 @@ static void test_vtu_zlib(vm_ctx *ctx) {
     char *bad = vec[k];
     char *p = strstr(bad, "Name=\"ramp\" format=\"binary\">");
     CHECK(p != NULL, "ramp array in vector %d", k);
-    if (!p)
-      continue;
+    if (!p) continue;
     p = strchr(p, '>') + 1;
     p += (strchr(p, '<') - p) / 2;
     char keep = *p;
@@ -1116,8 +1069,7 @@ static void test_vtu_zlib(vm_ctx *ctx) {
   expect_fail_str(ctx, "lz4.vtu",
                   "<VTKFile type=\"UnstructuredGrid\" compressor=\"vtkLZ4DataCompressor\">",
                   "compressed VTU not supported", VM_ERR_FORMAT);
-  for (int k = 0; k < 4; k++)
-    free(vec[k]);
+  for (int k = 0; k < 4; k++) free(vec[k]);
 }
 
 /* Bad input. */
@@ -1219,8 +1171,7 @@ static void test_bad_vtk(vm_ctx *ctx) {
   expect_fail(ctx, "lie_b.vtk", s.b, s.n, "POINTS", F);
   s.n = 0;
   putf(&s, "%sPOINTS 1 float\n", bh);
-  for (int i = 0; i < 3; i++)
-    put_f32(&s, 0, 1);
+  for (int i = 0; i < 3; i++) put_f32(&s, 0, 1);
   putf(&s, "\nCELLS 1 4\n");
   put_int(&s, 3, 4, 1);
   put_int(&s, 0, 4, 1);
@@ -1232,8 +1183,7 @@ static void test_bad_vtk(vm_ctx *ctx) {
   expect_fail(ctx, "range_b.vtk", s.b, s.n, "point index 5 out of range", F);
   s.n = 0;
   putf(&s, "%sPOINTS 1 float\n", bh);
-  for (int i = 0; i < 3; i++)
-    put_f32(&s, 0, 1);
+  for (int i = 0; i < 3; i++) put_f32(&s, 0, 1);
   putf(&s, "\nCELLS 1 2\n");
   put_int(&s, 0x7fffffff, 4, 1);
   put_int(&s, 0, 4, 1);
@@ -1483,8 +1433,7 @@ int main(void) {
     return 1;
   }
   vm_ctx *ctx;
-  if (vm_ctx_create(&ctx))
-    return 1;
+  if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_log(ctx, on_log, NULL);
   long live0 = vm_ctx_alloc_live(ctx);
   test_roundtrips(ctx);
@@ -1506,7 +1455,6 @@ int main(void) {
   vm_ctx_destroy(&ctx);
   char cmd[128];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-  if (system(cmd) != 0)
-    fprintf(stderr, "could not remove %s\n", tmpdir);
+  if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", tmpdir);
   return vmtest_end("test_vtk");
 }

@@ -87,8 +87,7 @@ int main(void) {
     for (int k = 0; k < 3; k++) {
       int level = levels[l];
       size_t bs = bsizes[k];
-      if (bs == 7 && level != 6)
-        continue; /* tiny blocks: one level is enough */
+      if (bs == 7 && level != 6) continue; /* tiny blocks: one level is enough */
       text t = {0};
       puts_(&t, "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" "
                 "compressor=\"vtkZLibDataCompressor\"><UnstructuredGrid>");

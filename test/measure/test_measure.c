@@ -103,8 +103,7 @@ static void sample_jacobian(vm_ctx *ctx, const mcase *c, const vm_measure_ops *o
     double f[6], s = mt_trace_ctc(d, C), D = mt_det(d, C);
     if (ops->scalar(&p, d, s, D, 0, f)) continue;
     if (c->kind == VM_MEASURE_BARRIER && D + c->eps < 0.05 * (c->eps + 0.1)) continue;
-    if (c->kind == VM_MEASURE_QUASI_ISO &&
-        D - c->t * vm_phi_theta(c->theta, d, s, D) < 1e-2 * D)
+    if (c->kind == VM_MEASURE_QUASI_ISO && D - c->t * vm_phi_theta(c->theta, d, s, D) < 1e-2 * D)
       continue;
     return;
   }
@@ -125,11 +124,15 @@ static double check_scalar(const vm_measure_ops *ops, const vm_measure_params *p
   double hs = 1e-5 * s, hd = 1e-5 * fmax(fabs(D), 1e-2);
   for (int k = 0; k < 4; k++) ops->scalar(p, d, s + off[k] * hs, D, 1, v[k]);
   for (int n = 0; n < 3; n++) /* f_s, f_ss, f_sd from d/ds of f, f_s, f_d */
-    err = fmax(err, mt_relerr(f[n == 0 ? 1 : n == 1 ? 3 : 4],
+    err = fmax(err, mt_relerr(f[n == 0   ? 1
+                                : n == 1 ? 3
+                                         : 4],
                               fd4(v[0][n], v[1][n], v[2][n], v[3][n], hs)));
   for (int k = 0; k < 4; k++) ops->scalar(p, d, s, D + off[k] * hd, 1, v[k]);
   for (int n = 0; n < 3; n++) /* f_d, f_sd, f_dd from d/ddet of f, f_s, f_d */
-    err = fmax(err, mt_relerr(f[n == 0 ? 2 : n == 1 ? 4 : 5],
+    err = fmax(err, mt_relerr(f[n == 0   ? 2
+                                : n == 1 ? 4
+                                         : 5],
                               fd4(v[0][n], v[1][n], v[2][n], v[3][n], hd)));
   return err;
 }
@@ -195,8 +198,10 @@ static void test_derivatives(vm_ctx *ctx) {
         double C[9];
         sample_jacobian(ctx, c, ops, d, C);
         double s = mt_trace_ctc(d, C), D = mt_det(d, C);
-        if (D > 0) npos++;
-        else nneg++;
+        if (D > 0)
+          npos++;
+        else
+          nneg++;
         es = fmax(es, check_scalar(ops, &p, d, s, D));
         check_full(ops, &p, d, C, &eg, &eh);
         double W = w_of(ops, &p, d, C), Wr = w_reference(c->kind, &p, d, C);
@@ -211,8 +216,8 @@ static void test_derivatives(vm_ctx *ctx) {
       if (c->both_signs)
         CHECK(npos > 5 && nneg > 5, "%s d=%d: det signs %d+ %d-", c->label, d, npos, nneg);
       if (c->kind == VM_MEASURE_PENALTY) {
-        fprintf(stderr, "%-20s %2d drop_chi2: max rel err vs full + chi'' term %.3e\n",
-                c->label, d, edrop);
+        fprintf(stderr, "%-20s %2d drop_chi2: max rel err vs full + chi'' term %.3e\n", c->label, d,
+                edrop);
         CHECK(edrop < 1e-12, "%s d=%d: drop_chi2 rel err %.3e", c->label, d, edrop);
       }
     }
@@ -302,8 +307,8 @@ static void test_invariance(vm_ctx *ctx) {
         CHECK(e < 1e-10, "%s d=%d: invariance err %.3e", c->label, d, e);
       }
   }
-  fprintf(stderr, "invariance: max |W(R) - 1| %.2e, max rel |W(UCV^T) - W(C)|, G %.2e\n",
-          worst_rot, worst_inv);
+  fprintf(stderr, "invariance: max |W(R) - 1| %.2e, max rel |W(UCV^T) - W(C)|, G %.2e\n", worst_rot,
+          worst_inv);
 }
 
 /* Minimum at the isometry (balanced, quasi-iso, penalty / barrier with tiny
@@ -418,8 +423,10 @@ static void test_domains(vm_ctx *ctx) {
       double margin = det - q.t * ((1 - q.theta) * sh + 0.5 * q.theta * (1 + det * det));
       if (fabs(margin) < 1e-12) continue;
       int rc = vm_measure_eval(qi, &q, d, C, &W, NULL, NULL);
-      if (margin > 0) nin++;
-      else nout++;
+      if (margin > 0)
+        nin++;
+      else
+        nout++;
       CHECK((rc == 0) == (margin > 0) && (rc == 0) == (W < INFINITY),
             "quasi-iso d=%d t=%g: rc %d, det - t phi = %g", d, q.t, rc, margin);
     }

@@ -128,8 +128,8 @@ static void test_weights_and_ideal(void) {
       }
       CHECK(pos, "%s rule %d: a node of the ideal element has det <= 0", nm, rule);
       double v = rule_volume(R, x);
-      CHECK(fabs(v - vol[type]) < 1e-15, "%s rule %d: ideal volume %.17g, exact %.17g", nm, rule,
-            v, vol[type]);
+      CHECK(fabs(v - vol[type]) < 1e-15, "%s rule %d: ideal volume %.17g, exact %.17g", nm, rule, v,
+            vol[type]);
     }
 }
 
@@ -239,8 +239,10 @@ typedef struct fcase {
 } fcase;
 
 static const fcase f_cases[] = {
-    {VM_MEASURE_BALANCED, "balanced", 0, 0},   {VM_MEASURE_SHAPE, "shape", 0, 0},
-    {VM_MEASURE_SHAPE_ALT, "shape-alt", 0, 0}, {VM_MEASURE_QUASI_ISO, "quasi-iso(t=0.2)", 0.2, 0},
+    {VM_MEASURE_BALANCED, "balanced", 0, 0},
+    {VM_MEASURE_SHAPE, "shape", 0, 0},
+    {VM_MEASURE_SHAPE_ALT, "shape-alt", 0, 0},
+    {VM_MEASURE_QUASI_ISO, "quasi-iso(t=0.2)", 0.2, 0},
     {VM_MEASURE_BARRIER, "barrier(eps=0.1)", 0, 0.1},
 };
 enum { NF = (int)(sizeof f_cases / sizeof f_cases[0]) };
@@ -256,8 +258,10 @@ static int functional_pair(int type, const vm_measure_ops *ops, const vm_measure
   *Fh = 0;
   for (int q = 0; q < R->nnodes; q++) {
     vm_qnode_edges(&R->nodes[q], d, x, E);
-    if (Tinv) mt_mul(d, E, Tinv, C);
-    else memcpy(C, E, sizeof(double) * d * d);
+    if (Tinv)
+      mt_mul(d, E, Tinv, C);
+    else
+      memcpy(C, E, sizeof(double) * d * d);
     if (vm_measure_eval(ops, p, d, C, &W, NULL, NULL)) return 0;
     *Fh += R->nodes[q].beta * W;
   }
@@ -352,8 +356,8 @@ static void test_functional_bound(vm_ctx *ctx) {
         }
         CHECK(r >= 1 - 1e-12, "%s %s: F_h/F = %.17g < 1", vm_elem_name(type), c->label, r);
       }
-      CHECK(used >= NHEX / 2, "%s %s: only %d admissible samples", vm_elem_name(type),
-            c->label, used);
+      CHECK(used >= NHEX / 2, "%s %s: only %d admissible samples", vm_elem_name(type), c->label,
+            used);
       if (type == VM_HEX)
         fprintf(stderr, "%-8s %-18s %5d %14.10f %14.10f %11.6f..%-11.6f\n", vm_elem_name(type),
                 c->label, used, rmin, rmax, cmin, cmax);

@@ -84,8 +84,7 @@ static int check_pngs(int n, char **paths, long min_red) {
       printf("FAIL: %s: %dx%d, %s\n", paths[i], w, h, distinct < 2 ? "one colour" : "empty");
       bad = 1;
     } else if (red < min_red) {
-      printf("FAIL: %s: %ld strongly red pixels, fewer than %ld\n", paths[i], red,
-             min_red);
+      printf("FAIL: %s: %ld strongly red pixels, fewer than %ld\n", paths[i], red, min_red);
       bad = 1;
     } else {
       printf("ok: %s: %dx%d PNG, more than one colour", paths[i], w, h);
@@ -141,8 +140,10 @@ static int check_links(const char *dir) {
     CHECK(rc == 0 && distinct == 2, "%s: linked from index.html but missing or blank", path);
     char attr[64];
     snprintf(attr, sizeof attr, " width=\"%d\" height=\"%d\"", rc ? -1 : w, rc ? -1 : h);
-    CHECK(!strncmp(b + 1, attr, strlen(attr)), "%s: the page's size attributes do not match "
-          "the PNG", file);
+    CHECK(!strncmp(b + 1, attr, strlen(attr)),
+          "%s: the page's size attributes do not match "
+          "the PNG",
+          file);
     n++;
   }
   CHECK(strstr(html, "</html>") != NULL, "index.html is complete");
@@ -198,8 +199,7 @@ static int fig_surf(vm_report *r, const vm_mesh *c, const vm_mesh *a, const vm_r
   (void)c, (void)h;
   return vm_report_surface(r, "surf", "surface", a, "height", NULL);
 }
-static int fig_slice(vm_report *r, const vm_mesh *c, const vm_mesh *a,
-                     const vm_report_history *h) {
+static int fig_slice(vm_report *r, const vm_mesh *c, const vm_mesh *a, const vm_report_history *h) {
   (void)a, (void)h;
   return vm_report_slice(r, "slice", "slice", c, 2, NAN, NULL);
 }
@@ -208,8 +208,7 @@ static int fig_mesh(vm_report *r, const vm_mesh *c, const vm_mesh *a, const vm_r
   int st = vm_report_mesh(r, "c-", "cube", c, NULL, NULL);
   return st < 0 ? st : vm_report_mesh(r, "a-", "aircraft", a, NULL, NULL);
 }
-static int fig_write(vm_report *r, const vm_mesh *c, const vm_mesh *a,
-                     const vm_report_history *h) {
+static int fig_write(vm_report *r, const vm_mesh *c, const vm_mesh *a, const vm_report_history *h) {
   int st = vm_report_row(r, "key", "%d", 42);
   if (st >= 0) st = fig_hist(r, c, a, h);
   return st < 0 ? st : vm_report_write(r);
@@ -234,8 +233,8 @@ static void alloc_sweep(vm_ctx *ctx, const char *dir, const char *what, figure_f
       ok = 1;
       break;
     }
-    CHECK(st == VM_ERR_NOMEM, "%s: allocation %ld failing gives %d, not VM_ERR_NOMEM (%s)", what,
-          n, st, vm_ctx_error(ctx));
+    CHECK(st == VM_ERR_NOMEM, "%s: allocation %ld failing gives %d, not VM_ERR_NOMEM (%s)", what, n,
+          st, vm_ctx_error(ctx));
     failed++;
   }
   CHECK(ok, "%s: never succeeded", what);
@@ -289,8 +288,8 @@ int main(int argc, char **argv) {
     smin = fmin(smin, sj[e]);
     pmin = fmin(pmin, phi[e]);
   }
-  CHECK(smin == q.all.sj_min && pmin == q.all.phi_min, "element minima %g %g vs %g %g", smin,
-        pmin, q.all.sj_min, q.all.phi_min);
+  CHECK(smin == q.all.sj_min && pmin == q.all.phi_min, "element minima %g %g vs %g %g", smin, pmin,
+        q.all.sj_min, q.all.phi_min);
   CHECK(q.all.inverted_elems > 0 && smin < 0 && pmin < 0, "the cube is tangled");
   free(sj);
   free(phi);

@@ -85,8 +85,8 @@ static void test_bc(vm_ctx *ctx) {
   vm_analytic_add_sphere(s, 1, c, 3.0);
   vm_surface_ops ops = vm_analytic_surfaces_ops(s);
   /* free, fixed, box face, box edge, box corner, sphere */
-  double xyz[] = {0.5, 0.5, 0.5, 0.2, 0.3, 0.4, 0.5, 0.5, 0.0, 0.0, 0.5, 1.0,
-                  1.0, 1.0, 1.0, 1.0, 2.0, 2.0};
+  double xyz[] = {0.5, 0.5, 0.5, 0.2, 0.3, 0.4, 0.5, 0.5, 0.0,
+                  0.0, 0.5, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0};
   uint8_t fl[] = {VM_VERTEX_FREE, VM_VERTEX_FIXED, VM_VERTEX_SLIP,
                   VM_VERTEX_SLIP, VM_VERTEX_SLIP,  VM_VERTEX_SLIP};
   int32_t sf[] = {-1, -1, 0, 0, 0, 1};
@@ -94,8 +94,7 @@ static void test_bc(vm_ctx *ctx) {
   vm_bc *bc = NULL;
   CHECK(vm_bc_create(ctx, m, NULL, &bc) == VM_ERR_ARG, "slip without surfaces");
   CHECK(vm_bc_create(ctx, m, &ops, &bc) == VM_OK, "bc");
-  CHECK(vm_bc_count(bc, VM_VERTEX_SLIP) == 4 && vm_bc_count(bc, VM_VERTEX_FIXED) == 1,
-        "counts");
+  CHECK(vm_bc_count(bc, VM_VERTEX_SLIP) == 4 && vm_bc_count(bc, VM_VERTEX_FIXED) == 1, "counts");
   double x[18];
   memcpy(x, xyz, sizeof x);
   CHECK(vm_bc_project(bc, x) == VM_OK, "project");

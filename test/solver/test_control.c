@@ -156,8 +156,7 @@ static void test_untangle_hook(vm_ctx *ctx, vm_minimizer_kind kind) {
   vm_problem_create(ctx, m, &p);
   vm_node_stats ns;
   vm_problem_node_stats(p, m->xyz, &ns);
-  CHECK(ns.inverted > 0 && ns.min_det < 0, "tangled start (%lld inverted)",
-        (long long)ns.inverted);
+  CHECK(ns.inverted > 0 && ns.min_det < 0, "tangled start (%lld inverted)", (long long)ns.inverted);
   ctl c;
   memset(&c, 0, sizeof c);
   c.p = p;
@@ -226,8 +225,7 @@ static void test_stops(vm_ctx *ctx) {
   c.stop_at = 3;
   CHECK(run_small(ctx, &o, &r) == VM_OK, "hook stop status");
   CHECK(r.reason == VM_STOP_CALLBACK && r.iterations == 2 && c.hook_calls == 3,
-        "hook stop: %s its %d calls %d", vm_stop_reason_name(r.reason), r.iterations,
-        c.hook_calls);
+        "hook stop: %s its %d calls %d", vm_stop_reason_name(r.reason), r.iterations, c.hook_calls);
   c.stop_at = 0;
   c.fail_at = 2;
   CHECK(run_small(ctx, &o, &r) == VM_ERR_NUMERIC, "hook error passed through");
@@ -280,9 +278,9 @@ static void test_stops(vm_ctx *ctx) {
 typedef struct {
   vm_problem *p;
   uint8_t *mask;
-  double *x3;   /* x at the start of iteration 3 */
+  double *x3; /* x at the start of iteration 3 */
   int64_t n3;
-  int moved;    /* vertices outside the active part that moved in 3..5 */
+  int moved;            /* vertices outside the active part that moved in 3..5 */
   const uint8_t *touch; /* per vertex: in an active element */
   int calls;
 } mask_ctl;
@@ -368,7 +366,10 @@ static void test_threads(vm_ctx *ctx, vm_minimizer_kind kind, vm_precond_kind pc
   vm_ctx_set_threads(ctx, 1);
   CHECK(memcmp(res[0], res[1], (size_t)nv * 3 * sizeof(double)) == 0,
         "%s (precond %d): 1 and 2 threads differ",
-        kind == VM_MINIMIZER_NEWTON ? "newton" : kind ? "implicit" : "explicit", (int)pc);
+        kind == VM_MINIMIZER_NEWTON ? "newton"
+        : kind                      ? "implicit"
+                                    : "explicit",
+        (int)pc);
   free(res[0]);
   free(res[1]);
 }

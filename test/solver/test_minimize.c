@@ -77,8 +77,7 @@ static void run_return(vm_ctx *ctx, const char *name, vm_mesh *m, int n, vm_mini
   CHECK(md.F_increase == 0, "%s: F increased %d times", name, md.F_increase);
   int same = 1;
   for (int64_t v = 0; v < m->nv; v++)
-    if (m->vflag[v] == VM_VERTEX_FIXED && memcmp(m->xyz + 3 * v, before + 3 * v, 24) != 0)
-      same = 0;
+    if (m->vflag[v] == VM_VERTEX_FIXED && memcmp(m->xyz + 3 * v, before + 3 * v, 24) != 0) same = 0;
   CHECK(same, "%s: a fixed vertex was written", name);
   vm_minimizer_destroy(&mn);
   vm_problem_destroy(&p);

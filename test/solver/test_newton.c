@@ -78,11 +78,13 @@ static void test_measure_psd(void) {
         for (int trial = 0; trial < 200; trial++) {
           int nn = d * d;
           double C[9], H[81], Hp[81], G[9], W, Wp;
-          for (int k = 0; k < nn; k++) C[k] = (k % (d + 1) == 0 ? 1.0 : 0.0) + 0.9 * (2 * urand(&seed) - 1);
+          for (int k = 0; k < nn; k++)
+            C[k] = (k % (d + 1) == 0 ? 1.0 : 0.0) + 0.9 * (2 * urand(&seed) - 1);
           if (trial % 3 == 0 && (kind == VM_MEASURE_PENALTY || kind == VM_MEASURE_BARRIER))
             for (int k = 0; k < d; k++) C[k] = -C[k]; /* det < 0 */
           if (trial % 5 == 1) /* near a rotation: nothing to clamp for most */
-            for (int k = 0; k < nn; k++) C[k] = (k % (d + 1) == 0 ? 1.0 : 0.0) + 0.05 * (2 * urand(&seed) - 1);
+            for (int k = 0; k < nn; k++)
+              C[k] = (k % (d + 1) == 0 ? 1.0 : 0.0) + 0.05 * (2 * urand(&seed) - 1);
           if (vm_measure_eval(ops, &prm, d, C, &W, G, H)) continue;
           int ncl = -1;
           int st = vm_measure_hessian_psd(ops, &prm, d, C, &Wp, NULL, Hp, &ncl);
@@ -98,15 +100,14 @@ static void test_measure_psd(void) {
           for (int k = 0; k < nn; k++) {
             if (we[k] < 0) neg++;
             CHECK(fabs(wp[k] - fmax(we[k], 0)) <= 1e-9 * scale,
-                  "%s d %d trial %d: eigenvalue %d: %g, exact %g", ops->name, d, trial, k,
-                  wp[k], we[k]);
+                  "%s d %d trial %d: eigenvalue %d: %g, exact %g", ops->name, d, trial, k, wp[k],
+                  we[k]);
           }
           /* near-zero eigenvalues may be counted either way */
           int strict = 0;
           for (int k = 0; k < nn; k++)
             if (we[k] < -1e-9 * scale) strict++;
-          CHECK(ncl >= strict && ncl <= nn, "%s: clamped %d, negative %d",
-                ops->name, ncl, neg);
+          CHECK(ncl >= strict && ncl <= nn, "%s: clamped %d, negative %d", ops->name, ncl, neg);
           if (ncl > 0) clamped_seen++;
           double sym = 0;
           for (int a = 0; a < nn; a++)
@@ -129,16 +130,15 @@ static void test_measure_psd(void) {
               err = fmax(err, fabs((Gp[a] - Gm[a]) / (2 * h) - Hp[a * nn + b]));
           }
           if (prm.drop_chi2 && kind == VM_MEASURE_PENALTY) continue; /* not the true Hessian */
-          CHECK(err <= 1e-5 * fmax(scale, 1), "%s d %d: FD error %g (scale %g)", ops->name, d,
-                err, scale);
+          CHECK(err <= 1e-5 * fmax(scale, 1), "%s d %d: FD error %g (scale %g)", ops->name, d, err,
+                scale);
           fd_checked++;
         next:;
         }
     }
   }
   printf("measure PSD: %d FD checks, %d clamped cases\n", fd_checked, clamped_seen);
-  CHECK(fd_checked > 500 && clamped_seen > 100, "too few cases (%d, %d)", fd_checked,
-        clamped_seen);
+  CHECK(fd_checked > 500 && clamped_seen > 100, "too few cases (%d, %d)", fd_checked, clamped_seen);
 }
 
 /* Dense symmetric matrix of the assembled blocks (3 nv). */
@@ -185,7 +185,7 @@ static void check_blocks_fd(vm_ctx *ctx, const char *name, vm_mesh *m, int metri
     for (int64_t v = 0; v < nv; v++) {
       double t = (double)v;
       double a[6] = {1.5 + 0.3 * sin(t), 1.2 + 0.2 * cos(t), 1.0 + 0.1 * sin(2 * t),
-                     0.2 * sin(3 * t),   0.1 * cos(t),        0.15 * sin(t + 1)};
+                     0.2 * sin(3 * t),   0.1 * cos(t),       0.15 * sin(t + 1)};
       memcpy(G + 6 * v, a, sizeof a);
     }
     vm_problem_set_metric_tensor(p, G);
@@ -376,8 +376,8 @@ static void run_return(vm_ctx *ctx, const char *name, vm_mesh *m, int n, int ref
   for (int64_t v = 0; v < m->nv; v++)
     for (int k = 0; k < 3; k++) err = fmax(err, fabs(m->xyz[3 * v + k] - ref[3 * v + k]) / h);
   printf("newton %-24s precond %d its %3d  F %.10g -> %.14g  |g| %.2e  %s  cg %lld  err %.1e h\n",
-         name, (int)pc, r.iterations, r.F_initial, r.F, r.grad_norm,
-         vm_stop_reason_name(r.reason), (long long)r.pcg_iterations, err);
+         name, (int)pc, r.iterations, r.F_initial, r.F, r.grad_norm, vm_stop_reason_name(r.reason),
+         (long long)r.pcg_iterations, err);
   CHECK(st == VM_OK && r.reason == VM_STOP_GRAD_NORM, "%s: status %d reason %s", name, st,
         vm_stop_reason_name(r.reason));
   CHECK(err < 1e-6, "%s: max error %g h", name, err);
@@ -385,8 +385,7 @@ static void run_return(vm_ctx *ctx, const char *name, vm_mesh *m, int n, int ref
         max_its);
   int same = 1;
   for (int64_t v = 0; v < m->nv; v++)
-    if (m->vflag[v] == VM_VERTEX_FIXED && memcmp(m->xyz + 3 * v, before + 3 * v, 24) != 0)
-      same = 0;
+    if (m->vflag[v] == VM_VERTEX_FIXED && memcmp(m->xyz + 3 * v, before + 3 * v, 24) != 0) same = 0;
   CHECK(same, "%s: a fixed vertex was written", name);
   vm_minimizer_destroy(&mn);
   vm_problem_destroy(&p);

@@ -75,8 +75,7 @@ static solve_out solve(vm_ctx *ctx, const vm_csr *A, vm_precond_kind kind, doubl
   if (!st) st = vm_pcg_solve(ctx, A, M, b, x, &po, &pr);
   CHECK(st == VM_OK, "pcg status %d", st);
   if (!st) {
-    CHECK(pr.converged, "pcg did not converge (%d its, relres %g)", pr.iterations,
-          pr.rel_residual);
+    CHECK(pr.converged, "pcg did not converge (%d its, relres %g)", pr.iterations, pr.rel_residual);
     o.iters = pr.iterations;
     o.relres = pr.rel_residual;
     double e = 0, nx = 0;
@@ -103,8 +102,8 @@ static void test_small_exact(vm_ctx *ctx) {
   vm_csr_free(ctx, &A);
 }
 
-static void test_scaling(vm_ctx *ctx, const char *name, const stencil *s, const int *ns,
-                         int count, double rtol) {
+static void test_scaling(vm_ctx *ctx, const char *name, const stencil *s, const int *ns, int count,
+                         double rtol) {
   int amg[3] = {0}, jac[3] = {0};
   for (int c = 0; c < count; c++) {
     vm_csr A;
@@ -116,15 +115,15 @@ static void test_scaling(vm_ctx *ctx, const char *name, const stencil *s, const 
     jac[c] = oj.iters;
     printf("%-10s n=%3d^%d  unknowns %8lld  AMG %3d its (levels %d, op.cx %.2f, err %.1e)"
            "  Jacobi %4d its\n",
-           name, ns[c], s->dim, (long long)A.n, oa.iters, info.levels, info.op_complexity,
-           oa.err, oj.iters);
+           name, ns[c], s->dim, (long long)A.n, oa.iters, info.levels, info.op_complexity, oa.err,
+           oj.iters);
     CHECK(oa.err < 1e-4, "%s: AMG solution error %g", name, oa.err);
     vm_csr_free(ctx, &A);
   }
   CHECK(amg[count - 1] <= 2 * amg[0], "%s: AMG iterations grow: %d -> %d", name, amg[0],
         amg[count - 1]);
-  CHECK(jac[count - 1] > 2 * jac[0], "%s: Jacobi iterations should grow: %d -> %d", name,
-        jac[0], jac[count - 1]);
+  CHECK(jac[count - 1] > 2 * jac[0], "%s: Jacobi iterations should grow: %d -> %d", name, jac[0],
+        jac[count - 1]);
   CHECK(amg[count - 1] < jac[count - 1] / 4, "%s: AMG %d vs Jacobi %d", name, amg[count - 1],
         jac[count - 1]);
 }
@@ -143,7 +142,8 @@ static int hessian_system(vm_ctx *ctx, int n, vm_csr *A, double **b) {
   const int64_t *rp;
   const int32_t *adj;
   vm_problem_graph(p, &rp, &adj);
-  double F, *g = malloc((size_t)m->nv * 3 * sizeof *g), *hd = malloc((size_t)m->nv * 9 * sizeof *hd),
+  double F, *g = malloc((size_t)m->nv * 3 * sizeof *g),
+            *hd = malloc((size_t)m->nv * 9 * sizeof *hd),
             *ho = malloc((size_t)rp[m->nv] * 3 * sizeof *ho);
   vm_eval ev = {&F, g, hd, ho};
   st = vm_problem_eval(p, m->xyz, &ev);
@@ -207,8 +207,8 @@ static void test_hessian_systems(vm_ctx *ctx) {
       vm_precond_destroy(&M);
       free(x);
     }
-    printf("hex Hessian x-system %d^3 (jitter 0.1 h): AMG %d its, Jacobi %d its (rtol 1e-6)\n",
-           n, amg[c], jac[c]);
+    printf("hex Hessian x-system %d^3 (jitter 0.1 h): AMG %d its, Jacobi %d its (rtol 1e-6)\n", n,
+           amg[c], jac[c]);
     free(b);
     vm_csr_free(ctx, &A);
   }

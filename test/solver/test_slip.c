@@ -54,8 +54,8 @@ static void test_ball(vm_ctx *ctx, vm_minimizer_kind kind) {
   vm_minimizer_set_options(mn, &o);
   vm_minimize_result r;
   int st = vm_minimizer_run(mn, m->xyz, &r);
-  printf("ball %-8s its %3d  F %.10g -> %.10g  reason %s  phi_min %.3f\n",
-         vm_minimizer_name(mn), r.iterations, r.F_initial, r.F, vm_stop_reason_name(r.reason),
+  printf("ball %-8s its %3d  F %.10g -> %.10g  reason %s  phi_min %.3f\n", vm_minimizer_name(mn),
+         r.iterations, r.F_initial, r.F, vm_stop_reason_name(r.reason),
          (vm_problem_node_stats(p, m->xyz, &ns), ns.phi_min));
   CHECK(st >= 0, "run: %d %s", st, vm_ctx_error(ctx));
   CHECK(r.F < r.F_initial - 1e-3 * fabs(r.F_initial), "F did not decrease enough");
@@ -127,9 +127,8 @@ static void test_box(vm_ctx *ctx, vm_minimizer_kind kind) {
   double err = 0;
   for (size_t i = 0; i < (size_t)m->nv * 3; i++)
     if (fabs(m->xyz[i] - ref[i]) > err) err = fabs(m->xyz[i] - ref[i]);
-  printf("box slip %-8s its %4d  F %.12g -> %.15g  reason %s  err %.2e h\n",
-         vm_minimizer_name(mn), r.iterations, r.F_initial, r.F, vm_stop_reason_name(r.reason),
-         err / h);
+  printf("box slip %-8s its %4d  F %.12g -> %.15g  reason %s  err %.2e h\n", vm_minimizer_name(mn),
+         r.iterations, r.F_initial, r.F, vm_stop_reason_name(r.reason), err / h);
   CHECK(st == VM_OK, "run %d: %s", st, vm_ctx_error(ctx));
   CHECK(err / h < 1e-6, "box slip: error %g h", err / h);
   int feat_ok = 1, corners_ok = 1;

@@ -55,9 +55,8 @@ static inline int chk_sat_overlap(double A[3][3], double B[3][3], double gap) {
  * vertices are shrunk towards their centroids by `shrink` (relative) first,
  * pairs sharing an edge are skipped; pairs with both in group 0 (grp != NULL)
  * are skipped. O(n^2) with a box test: for small test meshes. */
-static inline int64_t chk_count_intersections(const double *xyz, int64_t ntri,
-                                               const int32_t *tri, const int32_t *grp,
-                                               double shrink) {
+static inline int64_t chk_count_intersections(const double *xyz, int64_t ntri, const int32_t *tri,
+                                              const int32_t *grp, double shrink) {
   double(*box)[6] = malloc(sizeof(double[6]) * (size_t)ntri);
   for (int64_t t = 0; t < ntri; t++) {
     for (int k = 0; k < 3; k++) {

@@ -26,9 +26,9 @@ static double ridge_distance(const double *p) {
 }
 
 typedef struct {
-  double near_frac;   /* vertices within 0.2 of the ridge / all */
-  double len_near;    /* mean length of edges with midpoint within 0.2 of the ridge */
-  double len_far;     /* ... farther than 0.4 */
+  double near_frac; /* vertices within 0.2 of the ridge / all */
+  double len_near;  /* mean length of edges with midpoint within 0.2 of the ridge */
+  double len_far;   /* ... farther than 0.4 */
 } ridge_stats;
 
 static ridge_stats measure(const vm_mesh *m) {
@@ -38,7 +38,8 @@ static ridge_stats measure(const vm_mesh *m) {
   s.near_frac = (double)nn / (double)m->nv;
   for (int64_t e = 0; e < m->ne; e++)
     for (int a = 0; a < 3; a++) {
-      const double *p = m->xyz + 3 * m->conn[3 * e + a], *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
+      const double *p = m->xyz + 3 * m->conn[3 * e + a],
+                   *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
       double mid[3] = {0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])};
       double l = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
                       (p[2] - q[2]) * (p[2] - q[2]));
@@ -85,8 +86,8 @@ static void test_lens(vm_ctx *ctx) {
          (long long)m->nv, r.iterations, r.F_initial, r.F, r.stop, r.nline, (long long)r.ncorner);
   printf("  vertices within 0.2 of the ridge: %.3f -> %.3f; edge length near/far: %.4f/%.4f = "
          "%.3f -> %.4f/%.4f = %.3f\n",
-         s0.near_frac, s1.near_frac, s0.len_near, s0.len_far, s0.len_near / s0.len_far,
-         s1.len_near, s1.len_far, s1.len_near / s1.len_far);
+         s0.near_frac, s1.near_frac, s0.len_near, s0.len_far, s0.len_near / s0.len_far, s1.len_near,
+         s1.len_far, s1.len_near / s1.len_far);
   printf("  min angle %.2f -> %.2f, flipped %lld, Hausdorff %.2e / %.2e (diagonal 2.45), max "
          "vertex distance %.2e\n",
          min0, r.min_angle_after, (long long)r.flipped, ab, ba, r.max_distance);
@@ -94,8 +95,7 @@ static void test_lens(vm_ctx *ctx) {
   CHECK(s1.near_frac > 1.25 * s0.near_frac, "near-ridge vertex fraction %g -> %g", s0.near_frac,
         s1.near_frac);
   CHECK(s1.len_near / s1.len_far < 0.85 * (s0.len_near / s0.len_far),
-        "near/far edge length ratio %g -> %g", s0.len_near / s0.len_far,
-        s1.len_near / s1.len_far);
+        "near/far edge length ratio %g -> %g", s0.len_near / s0.len_far, s1.len_near / s1.len_far);
   /* on the surface, nothing flipped, quality kept */
   CHECK(r.max_distance < 1e-12, "vertex distance to the surface %g", r.max_distance);
   CHECK(ab < 0.002 * 2.45 && ba < 0.002 * 2.45, "Hausdorff %g %g within 0.2%% of the diagonal", ab,

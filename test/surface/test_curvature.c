@@ -51,7 +51,8 @@ static err_t torus_err(vm_ctx *ctx, int nu, int kind, double jit, int smooth) {
 static err_t sphere_err(vm_ctx *ctx, int level, double jit, int smooth) {
   vm_mesh *m = NULL;
   err_t e = {INFINITY, INFINITY};
-  if (vm_mesh_create(ctx, &m) || vm_gen_icosphere(m, NULL, 1.0, level, 0, &(vm_gen_jitter){jit, 3})) {
+  if (vm_mesh_create(ctx, &m) ||
+      vm_gen_icosphere(m, NULL, 1.0, level, 0, &(vm_gen_jitter){jit, 3})) {
     vm_mesh_destroy(&m);
     return e;
   }
@@ -112,8 +113,8 @@ static void accuracy_table(vm_ctx *ctx) {
       double order = prev.rms > 0 ? log2(prev.rms / e.rms) : NAN;
       char size[32];
       snprintf(size, sizeof size, "level %d", level);
-      printf("%-16s %6.1f %4d %-10s %10.3e %10.3e %6.2f\n", "icosphere", jit, 0, size, e.rms,
-             e.max, order);
+      printf("%-16s %6.1f %4d %-10s %10.3e %10.3e %6.2f\n", "icosphere", jit, 0, size, e.rms, e.max,
+             order);
       if (ij == 0 && level == 5) {
         CHECK(e.rms <= 1e-5, "icosphere 5: rms %g > 1e-5", e.rms);
         CHECK(e.max <= 1e-5, "icosphere 5: max %g", e.max);
@@ -189,8 +190,8 @@ static void test_filter_fields(vm_ctx *ctx) {
   m4.nv = 4; /* the filter without smoothing touches values only */
   vm_curvature_filter f = {0.1, 2.0, 0};
   CHECK(vm_curvature_filter_apply(&m4, &f, H) == 0, "filter");
-  CHECK(H[0] == 0 && H[1] == -0.5 && H[2] == 2.0 && H[3] == -2.0, "filter: %g %g %g %g", H[0],
-        H[1], H[2], H[3]);
+  CHECK(H[0] == 0 && H[1] == -0.5 && H[2] == 2.0 && H[3] == -2.0, "filter: %g %g %g %g", H[0], H[1],
+        H[2], H[3]);
   vm_curvature_filter bad = {-1, 0, 0};
   CHECK(vm_curvature_filter_apply(m, &bad, H) == VM_ERR_ARG, "negative threshold");
   bad.threshold = NAN;

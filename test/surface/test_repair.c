@@ -146,8 +146,7 @@ static void test_refusals(vm_ctx *ctx) {
     vm_mesh_add_element(a, VM_TRI, tt);
   }
   CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "non-manifold vertex refused");
-  CHECK(strstr(vm_ctx_error(ctx), "(1, 1, 1)") != NULL, "names the vertex: %s",
-        vm_ctx_error(ctx));
+  CHECK(strstr(vm_ctx_error(ctx), "(1, 1, 1)") != NULL, "names the vertex: %s", vm_ctx_error(ctx));
   vm_mesh_destroy(&a);
   vm_mesh_destroy(&b);
 
@@ -175,11 +174,9 @@ static void test_refusals(vm_ctx *ctx) {
   CHECK(sorted && pairs[0] < pairs[1], "pairs sorted");
   vm_free(ctx, pairs);
   CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "self-intersecting refused");
-  CHECK(strstr(vm_ctx_error(ctx), "self-intersecting") != NULL, "message: %s",
-        vm_ctx_error(ctx));
+  CHECK(strstr(vm_ctx_error(ctx), "self-intersecting") != NULL, "message: %s", vm_ctx_error(ctx));
   o.require_closed = 0;
-  CHECK(vm_surface_repair(a, &o, &r) == 0 && r.self_intersections == count &&
-            r.components == 2,
+  CHECK(vm_surface_repair(a, &o, &r) == 0 && r.self_intersections == count && r.components == 2,
         "accepted with a warning when not required closed: %lld pairs",
         (long long)r.self_intersections);
   o.require_closed = 1;
@@ -301,7 +298,8 @@ static void test_remesh(vm_ctx *ctx) {
   int64_t n = 0;
   for (int64_t e = 0; e < m->ne; e++)
     for (int a = 0; a < 3; a++) {
-      const double *p = m->xyz + 3 * m->conn[3 * e + a], *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
+      const double *p = m->xyz + 3 * m->conn[3 * e + a],
+                   *q = m->xyz + 3 * m->conn[3 * e + (a + 1) % 3];
       s += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
                 (p[2] - q[2]) * (p[2] - q[2]));
       n++;
@@ -309,8 +307,8 @@ static void test_remesh(vm_ctx *ctx) {
   CHECK(s / n > 0.16 && s / n < 0.24, "mean edge %g for target 0.2", s / n);
   CHECK(consistently_closed(m), "remeshed sphere closed");
   double ab, ba;
-  CHECK(vm_surface_hausdorff(m, in, 0, &ab, &ba) == 0 && ab < 0.01 && ba < 0.02,
-        "hausdorff %g %g", ab, ba);
+  CHECK(vm_surface_hausdorff(m, in, 0, &ab, &ba) == 0 && ab < 0.01 && ba < 0.02, "hausdorff %g %g",
+        ab, ba);
   vm_mesh_destroy(&m);
   vm_mesh_destroy(&in);
 
@@ -332,8 +330,7 @@ static void test_remesh(vm_ctx *ctx) {
     if (f.vclass[v] == VM_FEATURE_CORNER) corners += on == 3;
     exact &= on >= 1; /* on a face plane */
   }
-  CHECK(exact && corners == 8, "feature vertices exactly on the cube's edges, %d corners",
-        corners);
+  CHECK(exact && corners == 8, "feature vertices exactly on the cube's edges, %d corners", corners);
   CHECK(consistently_closed(m), "remeshed cube closed");
   vm_surface_features_free(ctx, &f);
   o.target_edge_length = 0;
@@ -364,7 +361,9 @@ static void test_projector(vm_ctx *ctx) {
   CHECK(vm_surface_projector_assign(p, m, &f, 1e-9, vs) == 0, "assign");
   int ok = 1;
   for (int64_t v = 0; v < m->nv; v++) {
-    int want = f.vclass[v] == VM_FEATURE_CORNER ? -1 : f.vclass[v] == VM_FEATURE_SMOOTH ? 0 : f.vline[v];
+    int want = f.vclass[v] == VM_FEATURE_CORNER   ? -1
+               : f.vclass[v] == VM_FEATURE_SMOOTH ? 0
+                                                  : f.vline[v];
     ok &= vs[v] == want;
     if (f.vclass[v] != VM_FEATURE_LINE) continue;
     double pt[3] = {m->xyz[3 * v] + 0.05, m->xyz[3 * v + 1] - 0.03, m->xyz[3 * v + 2] + 0.02};

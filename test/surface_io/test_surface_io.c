@@ -52,8 +52,9 @@ static vm_mesh *icosphere(vm_ctx *ctx, int level) {
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
   const double t = (1 + sqrt(5.0)) / 2;
-  const double P[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                           {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  const double P[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                           {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                           {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
   static const int32_t F[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -201,7 +202,8 @@ static tri3 *canonical_tris(const vm_mesh *m, const int32_t *map, int64_t *n) {
 /* Same triangles (as oriented sets) up to vertex renumbering; the vertices
  * of `got` must equal those of `ref` rounded by round_fn (float for binary
  * STL, identity otherwise). */
-static void check_same_tris(const vm_mesh *ref, const vm_mesh *got, int to_float, const char *what) {
+static void check_same_tris(const vm_mesh *ref, const vm_mesh *got, int to_float,
+                            const char *what) {
   CHECK(got->nv == ref->nv, "%s: %lld vertices, expected %lld", what, (long long)got->nv,
         (long long)ref->nv);
   if (got->nv != ref->nv) return;
@@ -368,8 +370,8 @@ static void test_round_trips(vm_ctx *ctx, logbuf *L) {
   add_cube(mix2, 5.0);
   log_reset(L);
   int st = vm_mesh_write(ctx, mix2, tmp_path("mix.stl"), VM_FMT_AUTO, NULL);
-  CHECK(st == VM_WARN_LOSSY && L->nwarn == 1 && strstr(L->last, "quads"),
-        "quads to STL: %d %s", st, L->all);
+  CHECK(st == VM_WARN_LOSSY && L->nwarn == 1 && strstr(L->last, "quads"), "quads to STL: %d %s", st,
+        L->all);
   vm_mesh *r;
   st = vm_mesh_read(ctx, tmp_path("mix.stl"), VM_FMT_AUTO, &r);
   CHECK(st == VM_OK && r->ne == 320 + 12, "mix.stl: %d %s", st, vm_ctx_error(ctx));
@@ -393,8 +395,8 @@ static void test_lossy_and_refused(vm_ctx *ctx, logbuf *L) {
     log_reset(L);
     int st = vm_mesh_write(ctx, m, tmp_path(fmts[i]), VM_FMT_AUTO, NULL);
     int expect = i == 0 ? 4 : 3; /* STL also splits the quads */
-    CHECK(st == VM_WARN_LOSSY && L->nwarn == expect, "%s: status %d, %d warnings: %s", fmts[i],
-          st, L->nwarn, L->all);
+    CHECK(st == VM_WARN_LOSSY && L->nwarn == expect, "%s: status %d, %d warnings: %s", fmts[i], st,
+          L->nwarn, L->all);
     CHECK(strstr(L->all, "curvature") && strstr(L->all, "flags") && strstr(L->all, "origin"),
           "%s: warnings name the losses: %s", fmts[i], L->all);
   }
@@ -413,8 +415,8 @@ static void test_lossy_and_refused(vm_ctx *ctx, logbuf *L) {
   for (int i = 0; i < 4; i++) {
     const char *p = tmp_path(all4[i]);
     int st = vm_mesh_write(ctx, m, p, VM_FMT_AUTO, NULL);
-    CHECK(st == VM_ERR_UNSUPPORTED && strstr(vm_ctx_error(ctx), p),
-          "tet-only to %s: %d %s", all4[i], st, vm_ctx_error(ctx));
+    CHECK(st == VM_ERR_UNSUPPORTED && strstr(vm_ctx_error(ctx), p), "tet-only to %s: %d %s",
+          all4[i], st, vm_ctx_error(ctx));
     if (i) CHECK(access(p, F_OK) != 0, "%s must not exist", p);
   }
   size_t len;
@@ -489,8 +491,8 @@ static void test_bad_stl(vm_ctx *ctx) {
       "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
       "endloop\nendfacet\n",
       "end of file");
-  BAD(ctx, "word.stl",
-      "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 zero 0\n", "'zero'");
+  BAD(ctx, "word.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 zero 0\n",
+      "'zero'");
   BAD(ctx, "trailing.stl", "solid x\nendsolid x\ngarbage\n", "after 'endsolid'");
 
   /* NaN normals are common in the wild and ignored; several solids */
@@ -499,8 +501,9 @@ static void test_bad_stl(vm_ctx *ctx) {
                     "vertex 0 1 0\nendloop\nendfacet\nendsolid a\nsolid b\nfacet normal 0 0 1\n"
                     "outer loop\nvertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\nendloop\nendfacet\n"
                     "endsolid b\n");
-  if (m) CHECK(m->nv == 4 && m->ne == 2, "two solids merged: %lld %lld", (long long)m->nv,
-               (long long)m->ne);
+  if (m)
+    CHECK(m->nv == 4 && m->ne == 2, "two solids merged: %lld %lld", (long long)m->nv,
+          (long long)m->ne);
   vm_mesh_destroy(&m);
 
   m = GOOD(ctx, "oneline.stl",
@@ -517,9 +520,12 @@ static void test_bad_stl(vm_ctx *ctx) {
   float co[2][9] = {{0, 0, 0, 1, 0, 0, 0, 1, 0}, {1, 0, 0, 1, 1, 0, 0, 1, 0}};
   for (int t = 0; t < 2; t++) memcpy(b + 84 + 50 * t + 12, co[t], sizeof co[t]);
   m = good(ctx, "solid_binary.stl", b, sizeof b);
-  if (m) CHECK(m->nv == 4 && m->ne == 2 && m->xyz[3 * 1] == 1.0 && m->xyz[3 * 2 + 1] == 1.0, "binary with 'solid' header");
+  if (m)
+    CHECK(m->nv == 4 && m->ne == 2 && m->xyz[3 * 1] == 1.0 && m->xyz[3 * 2 + 1] == 1.0,
+          "binary with 'solid' header");
   vm_mesh_destroy(&m);
-  bad(ctx, "truncated.stl", b, sizeof b - 7, "the header says 2 triangles (184 bytes) but the file has 177");
+  bad(ctx, "truncated.stl", b, sizeof b - 7,
+      "the header says 2 triangles (184 bytes) but the file has 177");
   uint8_t big[84 + 100 + 3];
   memcpy(big, b, sizeof b);
   memset(big + sizeof b, 0, 3);
@@ -570,8 +576,10 @@ static void check_hexagon(vm_ctx *ctx, logbuf *L, int reversed) {
 
 static void test_obj(vm_ctx *ctx, logbuf *L) {
   BAD(ctx, "empty.obj", "", "empty");
-  BAD(ctx, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n", "line 3: vertex 3: coordinate is not finite");
-  BAD(ctx, "range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# c\nf 1 2 4\n", "line 5: vertex index 4 out of range (1..3)");
+  BAD(ctx, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n",
+      "line 3: vertex 3: coordinate is not finite");
+  BAD(ctx, "range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# c\nf 1 2 4\n",
+      "line 5: vertex index 4 out of range (1..3)");
   BAD(ctx, "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "index 0");
   BAD(ctx, "rel.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\n", "before the first vertex");
   BAD(ctx, "two.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "line 3: face with 2 vertices");
@@ -617,10 +625,12 @@ static void test_off(vm_ctx *ctx, logbuf *L) {
   BAD(ctx, "lying.off", "OFF\n1000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "cannot hold");
   BAD(ctx, "nan.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 NaN 0\n3 0 1 2\n",
       "line 5: vertex 2: coordinate is not finite");
-  BAD(ctx, "range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "line 6: face 0: bad vertex index '3'");
+  BAD(ctx, "range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+      "line 6: face 0: bad vertex index '3'");
   BAD(ctx, "few.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n# padding, padding\n",
       "expected face 1");
-  BAD(ctx, "more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n", "after the last face");
+  BAD(ctx, "more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n",
+      "after the last face");
   BAD(ctx, "4d.off", "4OFF\n3 1 0\n0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n", "not supported");
   BAD(ctx, "bin.off", "OFF BINARY\n", "binary OFF");
   BAD(ctx, "notoff.off", "hello\n", "not an OFF file");
@@ -641,7 +651,8 @@ static void test_off(vm_ctx *ctx, logbuf *L) {
 static void test_ply(vm_ctx *ctx, logbuf *L) {
   BAD(ctx, "empty.ply", "", "empty");
   BAD(ctx, "noply.ply", "plx\n", "not a PLY file");
-  BAD(ctx, "noend.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "end_header");
+  BAD(ctx, "noend.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+      "end_header");
   static const char head[] =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
@@ -665,7 +676,9 @@ static void test_ply(vm_ctx *ctx, logbuf *L) {
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n5\n",
       "after the last element");
-  BAD(ctx, "noz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n",
+  BAD(ctx, "noz.ply",
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 "
+      "0\n",
       "no scalar property 'z'");
   (void)head;
 

@@ -92,13 +92,12 @@ static void test_valid_meshes(vm_ctx *ctx) {
     CHECK(bn == 0 && be == 0 && first == -1, "cells %d corner: %lld bad nodes in %lld elements",
           cells, (long long)bn, (long long)be);
     orient(m, VM_RULE_GEOMETRIC, &bn, &be, &first);
-    CHECK(bn == 0 && be == 0 && first == -1,
-          "cells %d geometric: %lld bad nodes in %lld elements", cells, (long long)bn,
-          (long long)be);
+    CHECK(bn == 0 && be == 0 && first == -1, "cells %d geometric: %lld bad nodes in %lld elements",
+          cells, (long long)bn, (long long)be);
     int64_t ip = -1, wc = -1, fp[2] = {-2, -2};
     CHECK(vm_verify_prism_layer(m, &ip, &wc, fp) == VM_OK, "prism layer");
-    CHECK(ip == 0 && wc == 0 && fp[0] == -1, "cells %d: %lld intersecting, %lld crossings",
-          cells, (long long)ip, (long long)wc);
+    CHECK(ip == 0 && wc == 0 && fp[0] == -1, "cells %d: %lld intersecting, %lld crossings", cells,
+          (long long)ip, (long long)wc);
     vm_mesh_destroy(&m);
   }
 }
@@ -113,8 +112,7 @@ static void test_inverted(vm_ctx *ctx) {
   CHECK(vm_gen_rotated_cube(ctx, &o, &m, NULL) == VM_OK, "generate");
   int64_t corner = -1, owner = -1;
   for (int64_t v = 0; v < m->nv; v++)
-    if (m->xyz[3 * v] == -0.5 && m->xyz[3 * v + 1] == -0.5 && m->xyz[3 * v + 2] == -0.5)
-      corner = v;
+    if (m->xyz[3 * v] == -0.5 && m->xyz[3 * v + 1] == -0.5 && m->xyz[3 * v + 2] == -0.5) corner = v;
   for (int64_t e = 0; e < m->ne; e++)
     for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++)
       if (m->conn[k] == corner) owner = e;
@@ -222,8 +220,9 @@ static void test_near_coplanar(vm_ctx *ctx) {
           (long long)bn);
     vm_mesh_destroy(&m);
   }
-  fprintf(stderr, "near-coplanar: %d tries; naive sign wrong: %d exact-positive, "
-                  "%d exact-negative, %d exact-zero cases checked\n",
+  fprintf(stderr,
+          "near-coplanar: %d tries; naive sign wrong: %d exact-positive, "
+          "%d exact-negative, %d exact-zero cases checked\n",
           tried, wrong_pos, wrong_neg, wrong_zero);
   CHECK(wrong_pos >= 1 && wrong_neg >= 1 && wrong_zero >= 1,
         "no case where the naive determinant is wrong was found");
@@ -267,7 +266,8 @@ static void test_compound(vm_ctx *ctx) {
       const vm_qnode *n = &qr->nodes[q];
       i128 col[3][3];
       for (int k = 0; k < 3; k++)
-        for (int r = 0; r < 3; r++) col[k][r] = (i128)xi[(int)n->head[k]][r] - xi[(int)n->tail[k]][r];
+        for (int r = 0; r < 3; r++)
+          col[k][r] = (i128)xi[(int)n->head[k]][r] - xi[(int)n->tail[k]][r];
       i128 det = col[0][0] * (col[1][1] * col[2][2] - col[1][2] * col[2][1]) -
                  col[1][0] * (col[0][1] * col[2][2] - col[0][2] * col[2][1]) +
                  col[2][0] * (col[0][1] * col[1][2] - col[0][2] * col[1][1]);
@@ -298,8 +298,7 @@ static vm_mesh *plate_layer(vm_ctx *ctx, int n, int layers) {
   for (int l = 0; l < layers; l++)
     for (int j = 0; j < n; j++)
       for (int i = 0; i < n; i++) {
-        int32_t v00 = l * per + j * (n + 1) + i, v10 = v00 + 1, v01 = v00 + n + 1,
-                v11 = v01 + 1;
+        int32_t v00 = l * per + j * (n + 1) + i, v10 = v00 + 1, v01 = v00 + n + 1, v11 = v01 + 1;
         int32_t p1[6] = {v00, v10, v11, v00 + per, v10 + per, v11 + per};
         int32_t p2[6] = {v00, v11, v01, v00 + per, v11 + per, v01 + per};
         vm_mesh_add_element(m, VM_PRISM, p1);
@@ -349,8 +348,8 @@ static void test_prism_layer(vm_ctx *ctx) {
     m->xyz[3 * v] = 2.6;
     m->xyz[3 * v + 1] = 2.4;
     layer(m, &ip, &wc, fp);
-    CHECK(ip > 0 && wc == 0, "fold in the outer surface: %lld pairs, %lld crossings",
-          (long long)ip, (long long)wc);
+    CHECK(ip > 0 && wc == 0, "fold in the outer surface: %lld pairs, %lld crossings", (long long)ip,
+          (long long)wc);
     vm_mesh_destroy(&m);
   }
   /* two prisms whose tilted tops cross each other */
@@ -375,8 +374,7 @@ static void test_prism_layer(vm_ctx *ctx) {
   }
   /* the first prism's top dips through the second prism's wall triangle */
   {
-    const double top[6][3] = {{0, 0, 1}, {5, 0.2, -1}, {0, 1, 1},
-                              {2, 0, 1}, {3, 0, 1}, {2, 1, 1}};
+    const double top[6][3] = {{0, 0, 1}, {5, 0.2, -1}, {0, 1, 1}, {2, 0, 1}, {3, 0, 1}, {2, 1, 1}};
     vm_mesh *m = two_prisms(ctx, top);
     layer(m, &ip, &wc, fp);
     CHECK(ip == 0 && wc == 1 && fp[0] == 0 && fp[1] == 1,

@@ -81,12 +81,12 @@ static double slip_case(vm_ctx *ctx, const char *name, double alpha, int cells, 
     CHECK(st == VM_OK, "%s: slip create: %s", name, vm_ctx_error(ctx));
     if (st != VM_OK) goto out;
     ops = vm_volume_slip_ops(s);
-    CHECK(si.nboundary == nbv && si.nsurface == 6 * (n - 1) * (n - 1) &&
-              si.nline == 12 * (n - 1) && si.ncorner == 8 && si.lines == 12 &&
-              si.nkept_fixed == 0 && si.patches == 6,
+    CHECK(si.nboundary == nbv && si.nsurface == 6 * (n - 1) * (n - 1) && si.nline == 12 * (n - 1) &&
+              si.ncorner == 8 && si.lines == 12 && si.nkept_fixed == 0 && si.patches == 6,
           "%s: classes: %lld boundary, %lld surface, %lld line (%d lines), %lld corners, %lld "
-          "kept fixed", name, (long long)si.nboundary, (long long)si.nsurface,
-          (long long)si.nline, si.lines, (long long)si.ncorner, (long long)si.nkept_fixed);
+          "kept fixed",
+          name, (long long)si.nboundary, (long long)si.nsurface, (long long)si.nline, si.lines,
+          (long long)si.ncorner, (long long)si.nkept_fixed);
   }
   vm_mesh *before;
   vm_mesh_clone(m, &before);
@@ -139,10 +139,11 @@ static double slip_case(vm_ctx *ctx, const char *name, double alpha, int cells, 
   } else {
     CHECK(moved_bnd == 0 && ratio1 == ratio0, "%s: fixed boundary kept", name);
   }
-  fprintf(stderr, "%-22s M %4lld -> %lld, boundary edge ratio %.3f -> %.3f, phi_min %.3e, "
-          "psi_min %.3e, %d+%d+%d iterations\n", name, (long long)r.M_init,
-          (long long)r.M_final, ratio0, ratio1, r.phi_min, r.psi_min, r.iter_untangle,
-          r.iter_local, r.iter_opt);
+  fprintf(stderr,
+          "%-22s M %4lld -> %lld, boundary edge ratio %.3f -> %.3f, phi_min %.3e, "
+          "psi_min %.3e, %d+%d+%d iterations\n",
+          name, (long long)r.M_init, (long long)r.M_final, ratio0, ratio1, r.phi_min, r.psi_min,
+          r.iter_untangle, r.iter_local, r.iter_opt);
   phi = r.phi_min;
   vm_mesh_destroy(&before);
 out:

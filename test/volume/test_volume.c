@@ -57,9 +57,8 @@ static void untangle_case(vm_ctx *ctx, const char *name, int n, double frac, int
   if (case_staged)
     CHECK(r.split_valid && r.split_M_init > 0 && r.split_M_max >= r.split_M_init &&
               r.time_split <= r.time_untangle,
-          "%s: the split was tangled (M %lld, max %lld) and untangled first (%.2f s of %.2f)",
-          name, (long long)r.split_M_init, (long long)r.split_M_max, r.time_split,
-          r.time_untangle);
+          "%s: the split was tangled (M %lld, max %lld) and untangled first (%.2f s of %.2f)", name,
+          (long long)r.split_M_init, (long long)r.split_M_max, r.time_split, r.time_untangle);
   CHECK(st == VM_OK, "%s: status %d (%s), M %lld -> %lld", name, st, vm_ctx_error(ctx),
         (long long)r.M_init, (long long)r.M_final);
   CHECK(r.M_init > 0, "%s: the problem is tangled (M_init %lld)", name, (long long)r.M_init);
@@ -79,9 +78,11 @@ static void untangle_case(vm_ctx *ctx, const char *name, int n, double frac, int
   }
   CHECK(moved_fixed == 0, "%s: %lld fixed vertices moved", name, (long long)moved_fixed);
   CHECK(moved_free > 0, "%s: free vertices moved", name);
-  fprintf(stderr, "%-28s M %5lld -> 0 (max %5lld), %4d + %4d local + %4d opt iterations, "
-          "phi_min %.3e psi_min %.3e, %.2f s\n", name, (long long)r.M_init, (long long)r.M_max,
-          r.iter_untangle, r.iter_local, r.iter_opt, r.phi_min, r.psi_min, r.time_total);
+  fprintf(stderr,
+          "%-28s M %5lld -> 0 (max %5lld), %4d + %4d local + %4d opt iterations, "
+          "phi_min %.3e psi_min %.3e, %.2f s\n",
+          name, (long long)r.M_init, (long long)r.M_max, r.iter_untangle, r.iter_local, r.iter_opt,
+          r.phi_min, r.psi_min, r.time_total);
   if (phi_out) *phi_out = r.phi_min;
   vm_free(ctx, ref);
   vm_mesh_destroy(&before);
@@ -236,7 +237,7 @@ static void determinism(vm_ctx *ctx) {
 static void impossible(vm_ctx *ctx) {
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
-  static const double p[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+  static const double p[8][3] = {{0, 0, 0},  {1, 0, 0},  {1, 1, 0},  {0, 1, 0},
                                  {0, 0, -1}, {1, 0, -1}, {1, 1, -1}, {0.5, 0.5, -0.5}};
   for (int i = 0; i < 8; i++) vm_mesh_add_vertex(m, p[i][0], p[i][1], p[i][2], NULL);
   static const int32_t hex[8] = {0, 1, 2, 3, 4, 5, 6, 7};
@@ -276,10 +277,10 @@ int main(void) {
                 VM_RULE_CORNER, NULL);
   untangle_case(ctx, "tets n=8 pi/2", 8, 0.5, VM_GEN_TETS, VM_UNTANGLE_ADAPTIVE, VM_RULE_CORNER,
                 NULL);
-  untangle_case(ctx, "mixed n=8 pi/8", 8, 0.125, VM_GEN_MIXED, VM_UNTANGLE_ADAPTIVE,
-                VM_RULE_CORNER, NULL);
-  untangle_case(ctx, "hex n=12 3pi/8", 12, 0.375, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE,
-                VM_RULE_CORNER, NULL);
+  untangle_case(ctx, "mixed n=8 pi/8", 8, 0.125, VM_GEN_MIXED, VM_UNTANGLE_ADAPTIVE, VM_RULE_CORNER,
+                NULL);
+  untangle_case(ctx, "hex n=12 3pi/8", 12, 0.375, VM_GEN_HEX, VM_UNTANGLE_ADAPTIVE, VM_RULE_CORNER,
+                NULL);
   untangle_case(ctx, "hex n=8 pi/2 foldover", 8, 0.5, VM_GEN_HEX, VM_UNTANGLE_FOLDOVER,
                 VM_RULE_CORNER, NULL);
   untangle_case(ctx, "tets n=8 pi/2 foldover", 8, 0.5, VM_GEN_TETS, VM_UNTANGLE_FOLDOVER,

@@ -21,11 +21,11 @@
 
 struct vm_volume_slip {
   vm_ctx *ctx;
-  vm_surface_projector *proj;    /* the whole surface and its feature lines */
+  vm_surface_projector *proj; /* the whole surface and its feature lines */
   int32_t npatch;
-  vm_surface_projector **patch;  /* one per patch */
-  int64_t nb;     /* boundary vertices */
-  int32_t *bvert; /* their indices in the volume mesh */
+  vm_surface_projector **patch; /* one per patch */
+  int64_t nb;                   /* boundary vertices */
+  int32_t *bvert;               /* their indices in the volume mesh */
 };
 
 void vm_volume_slip_destroy(vm_volume_slip **p) {
@@ -129,8 +129,8 @@ static int find_patches(vm_ctx *ctx, const vm_mesh *b, const vm_surface_features
 }
 
 /* The faces of patch p of b as a mesh of their own. */
-static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int32_t p,
-                      int32_t *g2l, vm_mesh **out) {
+static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int32_t p, int32_t *g2l,
+                      vm_mesh **out) {
   vm_mesh *pm = NULL;
   int st = vm_mesh_create(ctx, &pm);
   for (int64_t v = 0; v < b->nv; v++) g2l[v] = -1;
@@ -168,8 +168,10 @@ static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, vm_mesh **bout, int32
   int st = vm_mesh_boundary(m, &nface, &fv, &fnv, NULL, &nonman);
   if (st < 0) return st;
   if (nonman > 0) {
-    st = vm_error(ctx, VM_ERR_ARG, "slip boundary: %lld faces are shared by more than two "
-                  "elements (non-manifold mesh)", (long long)nonman);
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "slip boundary: %lld faces are shared by more than two "
+                  "elements (non-manifold mesh)",
+                  (long long)nonman);
     goto fail;
   }
   if (nface == 0) {

@@ -34,16 +34,11 @@ vm_volume_opts vm_volume_opts_default(void) {
 
 const char *vm_untangle_method_name(vm_untangle_method m) {
   switch (m) {
-  case VM_UNTANGLE_PENALTY:
-    return "penalty";
-  case VM_UNTANGLE_PENALTY_ONEWAY:
-    return "penalty-oneway";
-  case VM_UNTANGLE_BARRIER:
-    return "barrier";
-  case VM_UNTANGLE_ADAPTIVE:
-    return "adaptive";
-  case VM_UNTANGLE_FOLDOVER:
-    return "foldover";
+  case VM_UNTANGLE_PENALTY: return "penalty";
+  case VM_UNTANGLE_PENALTY_ONEWAY: return "penalty-oneway";
+  case VM_UNTANGLE_BARRIER: return "barrier";
+  case VM_UNTANGLE_ADAPTIVE: return "adaptive";
+  case VM_UNTANGLE_FOLDOVER: return "foldover";
   }
   return "?";
 }
@@ -62,21 +57,21 @@ typedef struct {
   uint8_t *guard;   /* staged: nodes kept admissible (eps = delta0), or NULL */
   double *best;     /* coordinates with the fewest inverted nodes */
   int64_t best_M;
-  int64_t M;        /* at the last statistics */
+  int64_t M; /* at the last statistics */
   double min_det;
   double eps;
   const char *phase;
   const char *phase_name; /* of the global untangling phase */
   int phase_iter;
   int total_iter;
-  int go_local;     /* the global phase stops when few nodes remain inverted */
-  double F_before;  /* adaptive: F before and after the last step (same eps) */
+  int go_local;    /* the global phase stops when few nodes remain inverted */
+  double F_before; /* adaptive: F before and after the last step (same eps) */
   double F_after;
   int have_step;
-  int done;         /* adaptive: det >= eps everywhere: untangled with margin */
-  double pressure;  /* adaptive: multiplier of (35), halved on stalls */
-  int block_iter;   /* foldover: iterations at the current eps */
-  double F_block0;  /* foldover: F before the first of them */
+  int done;           /* adaptive: det >= eps everywhere: untangled with margin */
+  double pressure;    /* adaptive: multiplier of (35), halved on stalls */
+  int block_iter;     /* foldover: iterations at the current eps */
+  double F_block0;    /* foldover: F before the first of them */
   double eps_restart; /* foldover: least eps after a stalled local round */
   double t0;
 } ut_state;
@@ -176,8 +171,7 @@ static int update_eps(ut_state *s, int first) {
   default:
     s->eps = sqrt(o->delta0 * o->delta0 + 0.004 * neg * neg); /* (35) */
     if (o->method == VM_UNTANGLE_PENALTY_ONEWAY) {
-      for (int64_t q = 0; q < s->nnodes; q++)
-        s->node_eps[q] = s->dets[q] > 0 ? o->delta0 : s->eps;
+      for (int64_t q = 0; q < s->nnodes; q++) s->node_eps[q] = s->dets[q] > 0 ? o->delta0 : s->eps;
       int st = vm_problem_set_node_eps(s->P, s->node_eps);
       if (st < 0) return st;
     }
@@ -226,9 +220,8 @@ static void monitor(void *user, const vm_iter_info *it) {
   s->phase_iter = it->iter;
   s->total_iter++;
   if (!s->o->progress) return;
-  vm_volume_progress p = {s->phase,   it->iter,     s->total_iter, it->F,
-                          it->inverted, it->min_det, s->eps,      it->tau,
-                          it->pcg_iters, now() - s->t0};
+  vm_volume_progress p = {s->phase,    it->iter, s->total_iter, it->F,         it->inverted,
+                          it->min_det, s->eps,   it->tau,       it->pcg_iters, now() - s->t0};
   s->o->progress(s->o->user, &p);
 }
 
@@ -312,7 +305,8 @@ static int local_phase(ut_state *s, int *budget) {
   uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
   int st = (!emask || !vmark || !saved) ? VM_ERR_NOMEM : vm_mesh_vertex_elements(m, &vrp, &vel);
   int rings = s->o->local_rings, stalls = 0;
-  while (st >= 0 && s->M > 0 && *budget > 0 && !out_of_time(s) && rings <= 4 * s->o->local_rings + 8) {
+  while (st >= 0 && s->M > 0 && *budget > 0 && !out_of_time(s) &&
+         rings <= 4 * s->o->local_rings + 8) {
     int64_t M0 = s->M;
     local_mask(s, rings, vrp, vel, emask, vmark);
     memcpy(saved, m->vflag, (size_t)m->nv);
@@ -426,9 +420,9 @@ static int set_stage_rule(ut_state *s, vm_rule rule) {
   size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
   if (rule == VM_RULE_CORNER_SPLIT || rule == VM_RULE_GEOMETRIC_SPLIT) {
     /* the split's nodes follow the base rule's */
-    int first_guard = vm_qrule_get(VM_HEX, rule == VM_RULE_CORNER_SPLIT ? VM_RULE_CORNER
-                                                                         : VM_RULE_GEOMETRIC)
-                          ->nnodes;
+    int first_guard =
+        vm_qrule_get(VM_HEX, rule == VM_RULE_CORNER_SPLIT ? VM_RULE_CORNER : VM_RULE_GEOMETRIC)
+            ->nnodes;
     if (!(s->guard = vm_alloc_array(s->ctx, nn, 1))) return VM_ERR_NOMEM;
     const int32_t *nel = vm_problem_node_elements(s->P);
     int64_t first = 0;
@@ -441,8 +435,8 @@ static int set_stage_rule(ut_state *s, vm_rule rule) {
   return VM_OK;
 }
 
-int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
-                  const vm_volume_opts *opts, vm_volume_report *report) {
+int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_volume_opts *opts,
+                  vm_volume_report *report) {
   vm_volume_opts o = opts ? *opts : vm_volume_opts_default();
   vm_volume_report rep;
   memset(&rep, 0, sizeof rep);

@@ -22,19 +22,19 @@ typedef struct {
 } mat;
 
 typedef struct {
-  mat A;       /* level operator; level 0 is a view of the caller's matrix */
+  mat A;        /* level operator; level 0 is a view of the caller's matrix */
   double *dinv; /* omega / a_ii of the smoother */
   double rho;   /* estimate of rho(D^{-1} A) the smoother was scaled with */
-  mat P, R;    /* prolongator to this level from the next, and P^T */
+  mat P, R;     /* prolongator to this level from the next, and P^T */
   double *b, *x, *r;
 } level;
 
 typedef struct {
   int nlev;
   level lev[AMG_MAX_LEVELS];
-  int dense;       /* coarsest solved by dense Cholesky */
-  double *chol;    /* lower factor, row-major nc x nc */
-  uint8_t *cnull;  /* pivots dropped as numerically zero */
+  int dense;        /* coarsest solved by dense Cholesky */
+  double *chol;     /* lower factor, row-major nc x nc */
+  uint8_t *cnull;   /* pivots dropped as numerically zero */
   int64_t n0, nnz0; /* finest size and pattern size at the last full setup */
 } amg_impl;
 
@@ -248,9 +248,8 @@ static int level_smoother(vm_ctx *ctx, level *L, int lev, int estimate) {
   for (int64_t i = 0; i < n; i++) {
     d[i] = mat_diag(&L->A, i);
     if (!(d[i] > 0))
-      return vm_error(ctx, VM_ERR_NUMERIC,
-                      "amg: non-positive diagonal %g in row %lld of level %d", d[i],
-                      (long long)i, lev);
+      return vm_error(ctx, VM_ERR_NUMERIC, "amg: non-positive diagonal %g in row %lld of level %d",
+                      d[i], (long long)i, lev);
   }
   if (estimate || !(L->rho > 0)) {
     int st = spectral_radius(ctx, &L->A, d, &L->rho);
@@ -467,8 +466,8 @@ done:
 
 /* Prolongator: P = (I - w D_F^{-1} F) P0 (smoothed), or P = P0 (plain),
  * with P0 the aggregate indicator matrix. */
-static int build_prolongator(vm_ctx *ctx, const mat *F, const int32_t *agg, int64_t na,
-                             int smooth, mat *P) {
+static int build_prolongator(vm_ctx *ctx, const mat *F, const int32_t *agg, int64_t na, int smooth,
+                             mat *P) {
   const int64_t n = F->nr;
   if (!smooth) {
     int st = mat_alloc(ctx, P, n, na, n);
@@ -670,8 +669,9 @@ static int amg_setup(vm_precond *p, const vm_csr *A) {
   }
   amg_clear(ctx, M);
   const vm_amg_options *o = &p->amg;
-  int maxlev = o->max_levels < 1 ? 1 : o->max_levels > AMG_MAX_LEVELS ? AMG_MAX_LEVELS
-                                                                         : o->max_levels;
+  int maxlev = o->max_levels < 1                ? 1
+               : o->max_levels > AMG_MAX_LEVELS ? AMG_MAX_LEVELS
+                                                : o->max_levels;
   int64_t csize = o->coarse_size < 1 ? 1 : o->coarse_size;
   M->n0 = A->n;
   M->nnz0 = A->rowptr[A->n];
@@ -741,8 +741,7 @@ fail:
 
 static int amg_update(vm_precond *p, const vm_csr *A) {
   amg_impl *M = p->impl;
-  if (!M || M->nlev == 0 || M->n0 != A->n || M->nnz0 != A->rowptr[A->n])
-    return amg_setup(p, A);
+  if (!M || M->nlev == 0 || M->n0 != A->n || M->nnz0 != A->rowptr[A->n]) return amg_setup(p, A);
   vm_ctx *ctx = p->ctx;
   mat_view(&M->lev[0].A, A);
   if (!p->amg.update_coarse && M->nlev > 1) {
@@ -784,5 +783,5 @@ static void amg_info(const vm_precond *p, vm_precond_info *info) {
   info->op_complexity = nnz0 > 0 ? tot / nnz0 : 1.0;
 }
 
-const vm_precond_ops vm_precond_amg_ops = {"amg", amg_setup, amg_update, amg_apply, amg_info,
-                                           amg_destroy};
+const vm_precond_ops vm_precond_amg_ops = {"amg",     amg_setup, amg_update,
+                                           amg_apply, amg_info,  amg_destroy};

@@ -149,7 +149,7 @@ VM_INLINE void cross(const double *a, const double *b, double *c) {
 }
 
 VM_INLINE void node2_eval(const elem_ctx *ec, const vm_qnode *q, const double *S, int full,
-                              node2 *v) {
+                          node2 *v) {
   double e[2][3];
   for (int k = 0; k < 2; k++)
     for (int r = 0; r < 3; r++) e[k][r] = ec->x[q->head[k]][r] - ec->x[q->tail[k]][r];
@@ -230,8 +230,7 @@ VM_INLINE void node_hess(const vm_nodepat *pt, int d, double gs[6][3], double gd
       for (int l = 0; l < d; l++) kuv += b[u][l] * b[v][l];
       kuv *= fs2;
       double *o = acc->o[pt->pidx[k]];
-      for (int r = 0; r < 3; r++)
-        o[r] += u1[u][r] * gs[v][r] + u2[u][r] * gd[v][r] + kuv * Gd[r];
+      for (int r = 0; r < 3; r++) o[r] += u1[u][r] * gs[v][r] + u2[u][r] * gd[v][r] + kuv * Gd[r];
     }
 }
 
@@ -291,7 +290,8 @@ VM_INLINE void node_hess_full(const vm_nodepat *pt, double gs[6][3], double gd[6
       double c[3] = {bu[1] * bv[2] - bu[2] * bv[1], bu[2] * bv[0] - bu[0] * bv[2],
                      bu[0] * bv[1] - bu[1] * bv[0]};
       double w[3];
-      for (int r = 0; r < 3; r++) w[r] = Kd[3 * r] * c[0] + Kd[3 * r + 1] * c[1] + Kd[3 * r + 2] * c[2];
+      for (int r = 0; r < 3; r++)
+        w[r] = Kd[3 * r] * c[0] + Kd[3 * r + 1] * c[1] + Kd[3 * r + 2] * c[2];
       double K[9] = {0, w[2], -w[1], -w[2], 0, w[0], w[1], -w[0], 0};
       double H[9];
       for (int r = 0; r < 3; r++)
@@ -426,7 +426,8 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
         metric_root(ec, Q);
         for (int r = 0; r < 3; r++)
           for (int l = 0; l < 3; l++)
-            C[3 * r + l] = Q[3 * r] * v->M[l] + Q[3 * r + 1] * v->M[3 + l] + Q[3 * r + 2] * v->M[6 + l];
+            C[3 * r + l] =
+                Q[3 * r] * v->M[l] + Q[3 * r + 1] * v->M[3 + l] + Q[3 * r + 2] * v->M[6 + l];
       }
       nneg = vm_psd_negative3(C, f, lam, D);
       for (int k = 0; k < nneg; k++) {
@@ -436,7 +437,8 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
         } else {
           for (int r = 0; r < 3; r++)
             for (int l = 0; l < 3; l++)
-              mk[3 * r + l] = sc * (Q[r] * D[k][l] + Q[3 + r] * D[k][3 + l] + Q[6 + r] * D[k][6 + l]);
+              mk[3 * r + l] =
+                  sc * (Q[r] * D[k][l] + Q[3 + r] * D[k][3 + l] + Q[6 + r] * D[k][6 + l]);
         }
         for (int u = 0; u < pt->nloc; u++)
           for (int r = 0; r < 3; r++)
@@ -708,8 +710,8 @@ static double block_sum(const vm_problem *p, int64_t b) {
 }
 
 int vm_problem_value(vm_problem *p, const double *x, double *F) {
-  if (!p || !x || !F) return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_value: NULL argument")
-                               : VM_ERR_ARG;
+  if (!p || !x || !F)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_value: NULL argument") : VM_ERR_ARG;
   int bad = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(vm_problem_threads(p))
   for (int64_t b = 0; b < p->nblock; b++) {
@@ -818,8 +820,7 @@ int vm_problem_eval(vm_problem *p, const double *x, vm_eval *out) {
 
 int vm_problem_eval_blocks(vm_problem *p, const double *x, vm_eval_blocks *out) {
   if (!p || !x || !out)
-    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval_blocks: NULL argument")
-             : VM_ERR_ARG;
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_eval_blocks: NULL argument") : VM_ERR_ARG;
   vm_eval ev = {out->F, out->grad, out->hdiag, NULL};
   if (!out->hblk && out->hdiag) {
     /* diagonal blocks only: through the full kernel all the same, so
@@ -870,8 +871,8 @@ static void elem_sd(const vm_problem *p, int64_t i, const double *x, double *s, 
 }
 
 int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
-  if (!p || !x) return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_stats: NULL argument")
-                         : VM_ERR_ARG;
+  if (!p || !x)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_stats: NULL argument") : VM_ERR_ARG;
   int64_t inv = 0;
   double mind = INFINITY, phimin = INFINITY, psimin = INFINITY;
   int d = p->tdim;

@@ -63,8 +63,7 @@ int vm_analytic_add_plane(vm_analytic_surfaces *s, int surf_id, const double poi
   double len = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
   if (!(len > 0) || !isfinite(len))
     return vm_error(s->ctx, VM_ERR_ARG, "plane %d: zero or non-finite normal", surf_id);
-  double a[6] = {point[0], point[1], point[2], normal[0] / len, normal[1] / len,
-                 normal[2] / len};
+  double a[6] = {point[0], point[1], point[2], normal[0] / len, normal[1] / len, normal[2] / len};
   return add_surface(s, surf_id, SURF_PLANE, a);
 }
 
@@ -172,8 +171,8 @@ struct vm_bc {
   vm_ctx *ctx;
   int64_t nv;
   int dim;
-  uint8_t *cls;     /* per vertex: VM_VERTEX_FREE / FIXED / SLIP */
-  int32_t *slip;    /* per vertex: index among slip vertices or -1 */
+  uint8_t *cls;  /* per vertex: VM_VERTEX_FREE / FIXED / SLIP */
+  int32_t *slip; /* per vertex: index among slip vertices or -1 */
   int64_t nslip;
   int64_t *slip_v;  /* slip vertex ids */
   int32_t *surf_id; /* per slip vertex */
@@ -403,8 +402,6 @@ int vm_bc_basis(const vm_bc *bc, int64_t v, double Q[9]) {
 
 int vm_bc_class(const vm_bc *bc, int64_t v) { return bc->cls[v]; }
 
-int64_t vm_bc_count(const vm_bc *bc, int cls) {
-  return cls >= 0 && cls < 3 ? bc->count[cls] : 0;
-}
+int64_t vm_bc_count(const vm_bc *bc, int cls) { return cls >= 0 && cls < 3 ? bc->count[cls] : 0; }
 
 int vm_bc_dim(const vm_bc *bc) { return bc->dim; }

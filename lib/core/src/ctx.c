@@ -146,9 +146,7 @@ int vm_ctx_threads(const vm_ctx *ctx) { return ctx ? ctx->nthreads : 0; }
 void vm_ctx_set_interrupt(vm_ctx *ctx, volatile int *flag) {
   if (ctx) ctx->interrupt = flag;
 }
-int vm_ctx_interrupted(const vm_ctx *ctx) {
-  return ctx && ctx->interrupt && *ctx->interrupt;
-}
+int vm_ctx_interrupted(const vm_ctx *ctx) { return ctx && ctx->interrupt && *ctx->interrupt; }
 
 static uint64_t splitmix64(uint64_t *x) {
   uint64_t z = (*x += 0x9e3779b97f4a7c15ULL);
@@ -178,8 +176,6 @@ uint64_t vm_ctx_rand_u64(vm_ctx *ctx) {
   return r;
 }
 
-double vm_ctx_rand_unit(vm_ctx *ctx) {
-  return (double)(vm_ctx_rand_u64(ctx) >> 11) * 0x1.0p-53;
-}
+double vm_ctx_rand_unit(vm_ctx *ctx) { return (double)(vm_ctx_rand_u64(ctx) >> 11) * 0x1.0p-53; }
 
 const char *vm_version(void) { return VM_VERSION_STRING; }

@@ -14,7 +14,8 @@
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void sym_eig(int n, double *A, double *w, double *V) {
+static inline void
+sym_eig(int n, double *A, double *w, double *V) {
   for (int i = 0; i < n; i++)
     for (int k = 0; k < n; k++) V[i * n + k] = i == k;
   for (int sweep = 0; sweep < 60; sweep++) {
@@ -29,9 +30,9 @@ static inline void sym_eig(int n, double *A, double *w, double *V) {
         double apq = A[p * n + q];
         if (apq == 0) continue;
         double theta = (A[q * n + q] - A[p * n + p]) / (2 * apq);
-        double t = fabs(theta) > 1e150 ? 0.5 / theta
-                                        : (theta >= 0 ? 1.0 : -1.0) /
-                                              (fabs(theta) + sqrt(theta * theta + 1));
+        double t = fabs(theta) > 1e150
+                       ? 0.5 / theta
+                       : (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
         double c = 1 / sqrt(t * t + 1), s = t * c;
         for (int k = 0; k < n; k++) {
           double akp = A[k * n + p], akq = A[k * n + q];
@@ -137,7 +138,8 @@ int vm_psd_negative3(const double *C, const double f[6], double lam[9], double D
       double sgn = flip ? 1.0 : -1.0;
       for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
-          D[nneg][3 * a + b] = r2 * (U[3 * a + i] * V[3 * b + j] + sgn * U[3 * a + j] * V[3 * b + i]);
+          D[nneg][3 * a + b] =
+              r2 * (U[3 * a + i] * V[3 * b + j] + sgn * U[3 * a + j] * V[3 * b + i]);
       lam[nneg++] = l;
     }
   }

@@ -137,8 +137,8 @@ static vm_jac_verdict bern_decide(const bern3 *p, int level, decide_state *s) {
         if (c < lo) lo = c;
         if (!(c > tol)) all_pos = 0;
         /* a corner coefficient is the value of det J there */
-        int corner = (i == 0 || i == p->deg[0]) && (j == 0 || j == p->deg[1]) &&
-                     (k == 0 || k == p->deg[2]);
+        int corner =
+            (i == 0 || i == p->deg[0]) && (j == 0 || j == p->deg[1]) && (k == 0 || k == p->deg[2]);
         if (corner && c < -tol) return VM_JAC_INVALID;
       }
   if (all_pos) {
@@ -340,8 +340,7 @@ static vm_jac_verdict certify_planar(int type, const double *x, double *min_coef
   return v;
 }
 
-vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth,
-                                   double *min_bound) {
+vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, double *min_bound) {
   if (max_depth <= 0) max_depth = DEFAULT_DEPTH;
   double lo = INFINITY;
   vm_jac_verdict v;

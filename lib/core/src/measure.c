@@ -89,8 +89,8 @@ static void add_dcof(int d, const double *C, double fd, double *H) {
     }
 }
 
-int vm_measure_eval(const vm_measure_ops *ops, const vm_measure_params *p, int d,
-                    const double *C, double *W, double *G, double *H) {
+int vm_measure_eval(const vm_measure_ops *ops, const vm_measure_params *p, int d, const double *C,
+                    double *W, double *G, double *H) {
   if (!W) return VM_ERR_ARG;
   *W = INFINITY;
   if (!ops || !ops->scalar || !p || !C || (d != 2 && d != 3)) return VM_ERR_ARG;

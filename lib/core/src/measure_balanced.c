@@ -12,5 +12,4 @@ static int balanced_scalar(const vm_measure_params *p, int d, double s, double d
   return 0;
 }
 
-const vm_measure_ops vm_measure_balanced_ops = {VM_MEASURE_BALANCED, "balanced",
-                                                balanced_scalar};
+const vm_measure_ops vm_measure_balanced_ops = {VM_MEASURE_BALANCED, "balanced", balanced_scalar};

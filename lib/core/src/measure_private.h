@@ -35,8 +35,7 @@ static inline vm_sd_fn vm_shape_term(int d, double s) {
 static inline vm_sd_fn vm_phi_theta_fn(double theta, int d, double s, double det) {
   vm_sd_fn g = vm_shape_term(d, s);
   double a = 1 - theta;
-  vm_sd_fn phi = {a * g.v + 0.5 * theta * (1 + det * det), a * g.s, theta * det, a * g.ss,
-                  theta};
+  vm_sd_fn phi = {a * g.v + 0.5 * theta * (1 + det * det), a * g.s, theta * det, a * g.ss, theta};
   return phi;
 }
 

@@ -75,8 +75,7 @@ int vm_elem_faces(int type, int faces[6][4], int nfv[6]) {
       nfv[n] = 3;
     }
     return n;
-  default:
-    return 0;
+  default: return 0;
   }
 }
 
@@ -276,8 +275,7 @@ int vm_mesh_check(const vm_mesh *m) {
 
 vm_field *vm_mesh_find_field(const vm_mesh *m, const char *name, int location) {
   for (int i = 0; i < m->nfield; i++)
-    if (m->fields[i].location == location && !strcmp(m->fields[i].name, name))
-      return &m->fields[i];
+    if (m->fields[i].location == location && !strcmp(m->fields[i].name, name)) return &m->fields[i];
   return NULL;
 }
 

@@ -82,9 +82,8 @@ int vm_minimizer_set_options(vm_minimizer *m, const vm_minimize_options *o) {
   if (!m || !o) return VM_ERR_ARG;
   if (o->max_iter < 0 || !(o->armijo > 0 && o->armijo < 0.5) || o->ls_max_evals < 1 ||
       !(o->pcg_rtol > 0 && o->pcg_rtol < 1) || o->pcg_maxit < 1 || o->rel_decrease_tol < 0 ||
-      o->grad_atol < 0 || o->grad_rtol < 0 || o->amg_rebuild_every < 1 ||
-      (int)o->precond < 0 || (int)o->precond > VM_PRECOND_BLOCK_JACOBI || o->stats_every < 0 ||
-      o->ls_extrapolate < 0)
+      o->grad_atol < 0 || o->grad_rtol < 0 || o->amg_rebuild_every < 1 || (int)o->precond < 0 ||
+      (int)o->precond > VM_PRECOND_BLOCK_JACOBI || o->stats_every < 0 || o->ls_extrapolate < 0)
     return vm_error(m->ctx, VM_ERR_ARG, "vm_minimizer_set_options: invalid option value");
   m->opt = *o;
   if (m->opt.rel_decrease_count < 1) m->opt.rel_decrease_count = 1;
@@ -126,14 +125,13 @@ static void commit(const vm_minimizer *m, const double *src, double *x) {
   const int64_t nv = m->nv;
 #pragma omp parallel for num_threads(nt) schedule(static) if (nv >= VM_PAR_MIN)
   for (int64_t v = 0; v < nv; v++)
-    if (vm_bc_class(m->bc, v) != VM_VERTEX_FIXED)
-      memcpy(x + 3 * v, src + 3 * v, 3 * sizeof *x);
+    if (vm_bc_class(m->bc, v) != VM_VERTEX_FIXED) memcpy(x + 3 * v, src + 3 * v, 3 * sizeof *x);
 }
 
 /* F at V(x + tau d) into *F (+INFINITY outside the domain or when a
  * projection fails). Returns VM_OK or a hard error. */
-static int trial_value(vm_minimizer *m, const double *x, const double *d, double tau,
-                       double *xt, double *F) {
+static int trial_value(vm_minimizer *m, const double *x, const double *d, double tau, double *xt,
+                       double *F) {
   int st = vm_bc_step(m->bc, x, d, tau, xt);
   if (st < 0) {
     *F = INFINITY;
@@ -334,8 +332,8 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
     }
     if (st < 0) break;
     if (st > 0 || !isfinite(F)) {
-      st = vm_error(ctx, VM_ERR_ARG,
-                    "iteration %d starts outside the measure's domain (F = %g)", iter, F);
+      st = vm_error(ctx, VM_ERR_ARG, "iteration %d starts outside the measure's domain (F = %g)",
+                    iter, F);
       break;
     }
     if (iter == 1) r.F_initial = F;

@@ -8,8 +8,7 @@
 
 /* Cholesky solve of the k x k system (A + mu I) a = b; 0 if positive
  * definite (pivots above tol). */
-static int chol_solve(const double *A, int k, double mu, double tol, const double *b,
-                      double *a) {
+static int chol_solve(const double *A, int k, double mu, double tol, const double *b, double *a) {
   double L[9] = {0};
   for (int j = 0; j < k; j++) {
     double s = A[j * 3 + j] + mu;

@@ -38,7 +38,7 @@ typedef struct {
   int gen;        /* pattern generation: own builds, or coordinate 0's when shared */
   vm_precond *pc;
   vm_precond *fallback; /* Jacobi, for a step whose AMG setup failed */
-  int full_iter;  /* iteration of the last full preconditioner setup (0: none) */
+  int full_iter;        /* iteration of the last full preconditioner setup (0: none) */
   int have_pattern;
 } coord_system;
 
@@ -243,8 +243,7 @@ static void fill_values(vm_minimizer *m, int c, const double *hdiag, const doubl
       }
       A->val[k] = a;
     }
-    if (!(A->val[dpos] > 0) || !isfinite(A->val[dpos]))
-      A->val[dpos] = off > 0 ? off : 1.0;
+    if (!(A->val[dpos] > 0) || !isfinite(A->val[dpos])) A->val[dpos] = off > 0 ? off : 1.0;
   }
 }
 

@@ -89,8 +89,8 @@ static int newton_begin(vm_minimizer *m) {
     return VM_ERR_NOMEM;
   int st = vm_problem_graph_coupled(m->prob, S->coupled);
   if (st) return st;
-  vm_precond_kind kind = m->opt.precond == VM_PRECOND_JACOBI ? VM_PRECOND_BLOCK_JACOBI
-                                                             : m->opt.precond;
+  vm_precond_kind kind =
+      m->opt.precond == VM_PRECOND_JACOBI ? VM_PRECOND_BLOCK_JACOBI : m->opt.precond;
   vm_amg_options amg = m->opt.amg;
   amg.block_size = 3;
   st = vm_precond_create(ctx, kind, &amg, &S->pc);
@@ -241,7 +241,8 @@ static void fill_values(vm_minimizer *m, const double *hdiag, const double *hblk
         }
         /* exact symmetry of the diagonal block */
         for (int r = 0; r < 3; r++)
-          for (int q = r + 1; q < 3; q++) B[3 * r + q] = B[3 * q + r] = 0.5 * (B[3 * r + q] + B[3 * q + r]);
+          for (int q = r + 1; q < 3; q++)
+            B[3 * r + q] = B[3 * q + r] = 0.5 * (B[3 * r + q] + B[3 * q + r]);
       } else {
         int64_t u = adj[k];
         proj_block(Lv, S->ident[v], hblk + 9 * k, S->L + 9 * u, S->ident[u], B);

@@ -29,10 +29,10 @@ struct vm_minimizer {
   vm_minimize_options opt;
   vm_surface_ops surf;
   int has_surf;
-  vm_bc *bc;  /* during a run */
+  vm_bc *bc; /* during a run */
   int64_t nv;
-  int sdim;   /* space dimension of the vertices: 2 or 3 */
-  void *impl; /* the member's per-run state */
+  int sdim;            /* space dimension of the vertices: 2 or 3 */
+  void *impl;          /* the member's per-run state */
   double last_tau;     /* the last accepted step length (0 before the first) */
   int last_infeasible; /* infeasible trials in its line search */
 };
@@ -45,7 +45,6 @@ extern const vm_minimizer_ops vm_minimizer_newton_ops;
  * a = -(Q^T H Q + mu I)^{-1} Q^T g with the smallest mu >= 0 from a short
  * sequence that makes the k x k matrix numerically positive definite;
  * d = Q a. Returns 0, or 1 if H is zero in the subspace (d = 0). */
-int vm_min_vertex_step(const double H[9], const double g[3], const double Q[9], int k,
-                       double d[3]);
+int vm_min_vertex_step(const double H[9], const double g[3], const double Q[9], int k, double d[3]);
 
 #endif

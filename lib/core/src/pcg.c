@@ -126,8 +126,8 @@ static void jacobi_info(const vm_precond *p, vm_precond_info *info) {
   info->op_complexity = 1.0;
 }
 
-static const vm_precond_ops jacobi_ops = {"jacobi", jacobi_setup, jacobi_setup, jacobi_apply,
-                                          jacobi_info, jacobi_destroy};
+static const vm_precond_ops jacobi_ops = {"jacobi",     jacobi_setup, jacobi_setup,
+                                          jacobi_apply, jacobi_info,  jacobi_destroy};
 
 /* Block Jacobi: z_i = D_i^{-1} r_i with D_i the 3x3 diagonal block of
  * unknowns 3i..3i+2 (inverted through its Cholesky factor; a block that is
@@ -172,8 +172,9 @@ static int spd3_inverse(const double *B, double *X) {
 }
 
 static int bjacobi_setup(vm_precond *p, const vm_csr *A) {
-  if (A->n % 3) return vm_error(p->ctx, VM_ERR_ARG, "block jacobi: n = %lld is not a multiple of 3",
-                                (long long)A->n);
+  if (A->n % 3)
+    return vm_error(p->ctx, VM_ERR_ARG, "block jacobi: n = %lld is not a multiple of 3",
+                    (long long)A->n);
   bjacobi_impl *J = p->impl;
   if (!J || J->n != A->n) {
     bjacobi_destroy(p);
@@ -187,8 +188,9 @@ static int bjacobi_setup(vm_precond *p, const vm_csr *A) {
   const int64_t nb = A->n / 3;
   int bad = 0;
   int nt = vm_nthreads(p->ctx);
-#pragma omp parallel for num_threads(nt) schedule(static) if (nb >= VM_PAR_MIN / 8) \
-    reduction(| : bad)
+#pragma omp parallel for num_threads(nt) schedule(static) if (nb >= VM_PAR_MIN / 8)                \
+    reduction(|                                                                                    \
+              : bad)
   for (int64_t i = 0; i < nb; i++) {
     double B[9] = {0};
     for (int r = 0; r < 3; r++) {
@@ -199,7 +201,8 @@ static int bjacobi_setup(vm_precond *p, const vm_csr *A) {
       }
     }
     for (int r = 0; r < 3; r++)
-      for (int c = r + 1; c < 3; c++) B[3 * r + c] = B[3 * c + r] = 0.5 * (B[3 * r + c] + B[3 * c + r]);
+      for (int c = r + 1; c < 3; c++)
+        B[3 * r + c] = B[3 * c + r] = 0.5 * (B[3 * r + c] + B[3 * c + r]);
     double *X = J->binv + 9 * i;
     if (spd3_inverse(B, X)) {
       for (int k = 0; k < 9; k++) X[k] = 0;
@@ -239,7 +242,7 @@ static void bjacobi_info(const vm_precond *p, vm_precond_info *info) {
 }
 
 static const vm_precond_ops bjacobi_ops = {"block-jacobi", bjacobi_setup, bjacobi_setup,
-                                           bjacobi_apply, bjacobi_info, bjacobi_destroy};
+                                           bjacobi_apply,  bjacobi_info,  bjacobi_destroy};
 
 /* Identity: z = r. */
 typedef struct {
@@ -274,8 +277,8 @@ static void identity_info(const vm_precond *p, vm_precond_info *info) {
   info->op_complexity = 1.0;
 }
 
-static const vm_precond_ops identity_ops = {"none", identity_setup, identity_setup,
-                                            identity_apply, identity_info, identity_destroy};
+static const vm_precond_ops identity_ops = {"none",         identity_setup, identity_setup,
+                                            identity_apply, identity_info,  identity_destroy};
 
 vm_amg_options vm_amg_options_default(void) {
   vm_amg_options o;

@@ -70,7 +70,6 @@ static void gather(const vm_problem *p, int64_t i, const double *xyz, double *x)
   }
 }
 
-
 static void build_patterns(vm_problem *p) {
   memset(p->pat, 0, sizeof p->pat);
   memset(p->npair, 0, sizeof p->npair);
@@ -128,7 +127,6 @@ static int build_nodes(vm_problem *p, int64_t **noff_out, int32_t **nelem_out, i
   return VM_OK;
 }
 
-
 /* Orientation normal of a 2D target element: none (0) for plane meshes and
  * ideal elements, which lie in the xy plane; else the target's own Newell
  * normal. Nonzero return: degenerate target. */
@@ -143,8 +141,7 @@ static int target_normal(const vm_problem *p, const double *tc, int k, double *n
  * (d x d) if det T != 0 and returns det T. 2D nodes in 3D (n != 0) use the
  * node's own plane: T is the R factor of the 3 x 2 edge matrix, so
  * T^T T is its Gram matrix, with the sign of n . (c0 x c1). */
-static double node_target(const vm_qnode *q, int d, const double *tc, const double *n,
-                          double *S) {
+static double node_target(const vm_qnode *q, int d, const double *tc, const double *n, double *S) {
   double col[3][3];
   for (int k = 0; k < d; k++)
     for (int r = 0; r < 3; r++) col[k][r] = tc[3 * q->head[k] + r] - tc[3 * q->tail[k] + r];
@@ -423,7 +420,6 @@ int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
   return set_target_data(p, VM_TGT_FIELD, NULL, fld);
 }
 
-
 int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
   if (!p) return VM_ERR_ARG;
   if (rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
@@ -466,7 +462,6 @@ int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
   return VM_OK;
 }
 
-
 static int check_params(vm_ctx *ctx, const vm_measure_params *q) {
   if (!(q->theta >= 0 && q->theta <= 1))
     return vm_error(ctx, VM_ERR_ARG, "theta %g is not in [0, 1]", q->theta);
@@ -498,7 +493,6 @@ int vm_problem_set_params(vm_problem *p, const vm_measure_params *prm) {
 
 const vm_measure_params *vm_problem_params(const vm_problem *p) { return p ? &p->prm : NULL; }
 
-
 static void free_metric(vm_problem *p) {
   vm_free(p->ctx, p->mg);
   vm_free(p->ctx, p->mG);
@@ -517,8 +511,8 @@ int vm_problem_set_metric_scalar(vm_problem *p, const double *g) {
     const int32_t *cv = elem_verts(p, i);
     for (int a = 0; a < nverts_of[elem_type(p, i)]; a++)
       if (!(g[cv[a]] > 0) || !isfinite(g[cv[a]]))
-        return vm_error(p->ctx, VM_ERR_ARG, "metric at vertex %d is %g, not finite and > 0",
-                        cv[a], g[cv[a]]);
+        return vm_error(p->ctx, VM_ERR_ARG, "metric at vertex %d is %g, not finite and > 0", cv[a],
+                        g[cv[a]]);
   }
   double *mg = vm_alloc_array(p->ctx, (size_t)p->nae, sizeof *mg);
   double *dq = vm_alloc_array(p->ctx, (size_t)p->nae, sizeof *dq);
@@ -630,7 +624,6 @@ int vm_problem_update_normals(vm_problem *p, const double *vertex_normals) {
   return VM_OK;
 }
 
-
 /* Vertex -> active elements (ascending) in CSR form. */
 static int build_v2e(vm_problem *p, int64_t **rp_out, int32_t **el_out) {
   vm_ctx *ctx = p->ctx;
@@ -730,8 +723,8 @@ static int build_graph(vm_problem *p, const int64_t *vrp, const int32_t *vel) {
 
 /* Greedy colouring of chunks of `chunk` consecutive active elements in
  * order; returns the number of colours in *ncolor, colours in color[]. */
-static void color_chunks(const vm_problem *p, const int64_t *vrp, const int32_t *vel,
-                         int64_t chunk, int32_t *color, int64_t *forb, int *ncolor) {
+static void color_chunks(const vm_problem *p, const int64_t *vrp, const int32_t *vel, int64_t chunk,
+                         int32_t *color, int64_t *forb, int *ncolor) {
   int64_t nchunk = (p->nae + chunk - 1) / chunk;
   int nc = 0;
   for (int64_t c = 0; c < nchunk; c++) {
@@ -802,8 +795,7 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
   if (!m) return vm_error(ctx, VM_ERR_ARG, "vm_problem_create: mesh is NULL");
   int64_t counts[VM_NTYPES];
   int tdim = vm_mesh_count_types(m, counts);
-  if (tdim != 2 && tdim != 3)
-    return vm_error(ctx, VM_ERR_ARG, "mesh has no 2D or 3D elements");
+  if (tdim != 2 && tdim != 3) return vm_error(ctx, VM_ERR_ARG, "mesh has no 2D or 3D elements");
   if (tdim == 3 && m->dim != 3)
     return vm_error(ctx, VM_ERR_ARG, "3D elements in a mesh of dimension %d", m->dim);
   vm_problem *p = vm_calloc(ctx, 1, sizeof *p);
@@ -840,8 +832,7 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
     int k = vm_elem_nverts(t);
     for (int a = 0; a < k; a++) {
       if (cv[a] < 0 || cv[a] >= m->nv) {
-        st = vm_error(ctx, VM_ERR_ARG, "element %lld: vertex %d out of range", (long long)e,
-                      cv[a]);
+        st = vm_error(ctx, VM_ERR_ARG, "element %lld: vertex %d out of range", (long long)e, cv[a]);
         goto fail;
       }
       for (int b = 0; b < a; b++)
@@ -902,7 +893,6 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p);
   *pp = NULL;
 }
-
 
 int64_t vm_problem_num_nodes(const vm_problem *p) { return p ? p->nn : 0; }
 int vm_problem_dim(const vm_problem *p) { return p ? p->tdim : 0; }

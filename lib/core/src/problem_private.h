@@ -60,23 +60,23 @@ struct vm_problem {
 
   /* active elements (highest dimension, mesh order) and their nodes */
   int64_t nae;
-  int32_t *ael;   /* mesh element of active element i */
-  int64_t *noff;  /* nae + 1: first node of active element i */
+  int32_t *ael;  /* mesh element of active element i */
+  int64_t *noff; /* nae + 1: first node of active element i */
   int64_t nn;
   int32_t *nelem; /* mesh element of each node */
 
   /* targets: node S = T^{-1} (d x d row-major) and wb = beta kappa det T,
    * shared per element type for ideal targets, per node otherwise */
   int tgt;
-  double tgt_size;  /* edge length of the ideal targets */
-  double *tgt_ref;  /* VM_TGT_REFERENCE: 3*nv copy */
-  double *tgt_fld;  /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
-  double *Snode;    /* nn*d*d or NULL */
-  double *wnode;    /* nn or NULL */
+  double tgt_size; /* edge length of the ideal targets */
+  double *tgt_ref; /* VM_TGT_REFERENCE: 3*nv copy */
+  double *tgt_fld; /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
+  double *Snode;   /* nn*d*d or NULL */
+  double *wnode;   /* nn or NULL */
   double Sid[VM_NTYPES][VM_QRULE_MAX_NODES * 9];
   double wid[VM_NTYPES][VM_QRULE_MAX_NODES];
   int sdiag[VM_NTYPES]; /* ideal S of every node of the type is diagonal */
-  double tvol;      /* sum of w beta kappa det T over all nodes */
+  double tvol;          /* sum of w beta kappa det T over all nodes */
 
   /* metric G_x per active element: g (scalar), G (tensor: xx yy zz xy yz xz;
    * plane meshes use xx yy xy with zz = yz = xz = 0) and det Q */

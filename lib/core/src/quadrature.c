@@ -126,21 +126,17 @@ const vm_qrule *vm_qrule_get(int type, int rule) {
         rules[VM_TRI][0] = (vm_qrule){VM_TRI, VM_RULE_CORNER, 2, 1, 0.5, tri_nodes};
         rules[VM_QUAD][0] = (vm_qrule){VM_QUAD, VM_RULE_CORNER, 2, 4, 1.0, quad_nodes};
         rules[VM_TET][0] = (vm_qrule){VM_TET, VM_RULE_CORNER, 3, 1, 1.0 / 6, tet_nodes};
-        rules[VM_PYRAMID][0] =
-            (vm_qrule){VM_PYRAMID, VM_RULE_CORNER, 3, 4, 1.0 / 3, pyr_nodes};
+        rules[VM_PYRAMID][0] = (vm_qrule){VM_PYRAMID, VM_RULE_CORNER, 3, 4, 1.0 / 3, pyr_nodes};
         rules[VM_PRISM][0] = (vm_qrule){VM_PRISM, VM_RULE_CORNER, 3, 6, 0.5, prism_corner};
         rules[VM_HEX][0] = (vm_qrule){VM_HEX, VM_RULE_CORNER, 3, 8, 1.0, hex_corner};
         for (int t = 0; t < VM_NTYPES; t++)
           for (int r = 1; r < NRULES; r++) rules[t][r] = rules[t][0];
-        rules[VM_PRISM][1] =
-            (vm_qrule){VM_PRISM, VM_RULE_GEOMETRIC, 3, 12, 0.5, prism_geom};
+        rules[VM_PRISM][1] = (vm_qrule){VM_PRISM, VM_RULE_GEOMETRIC, 3, 12, 0.5, prism_geom};
         rules[VM_HEX][1] = (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC, 3, 64, 1.0, hex_geom};
         rules[VM_HEX][2] = (vm_qrule){VM_HEX, VM_RULE_SPLIT, 3, 6, 1.0, hex_split};
-        rules[VM_HEX][3] =
-            (vm_qrule){VM_HEX, VM_RULE_CORNER_SPLIT, 3, 14, 1.0, hex_corner_split};
+        rules[VM_HEX][3] = (vm_qrule){VM_HEX, VM_RULE_CORNER_SPLIT, 3, 14, 1.0, hex_corner_split};
         rules[VM_PRISM][4] = rules[VM_PRISM][1];
-        rules[VM_HEX][4] =
-            (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC_SPLIT, 3, 70, 1.0, hex_geom_split};
+        rules[VM_HEX][4] = (vm_qrule){VM_HEX, VM_RULE_GEOMETRIC_SPLIT, 3, 70, 1.0, hex_geom_split};
         atomic_store_explicit(&tables_ready, 1, memory_order_release);
       }
     }
@@ -192,8 +188,7 @@ void vm_elem_ideal(int type, double ref[VM_MAX_ELEM_VERTS * 3]) {
     memcpy(ref, h, sizeof h);
     break;
   }
-  default:
-    break;
+  default: break;
   }
 }
 

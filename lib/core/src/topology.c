@@ -8,7 +8,7 @@
 typedef struct {
   int32_t key[4]; /* sorted vertex ids, -1 padded */
   int32_t elem;
-  int8_t local;   /* face index within the element */
+  int8_t local; /* face index within the element */
 } face_rec;
 
 static int cmp_face(const void *a, const void *b) {

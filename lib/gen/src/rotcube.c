@@ -22,8 +22,7 @@ vm_rotcube_opts vm_rotcube_opts_default(void) {
 static void rotate(const double k[3], double a, const double p[3], double out[3]) {
   double c = cos(a), s = sin(a);
   double kp = k[0] * p[0] + k[1] * p[1] + k[2] * p[2];
-  double kx[3] = {k[1] * p[2] - k[2] * p[1], k[2] * p[0] - k[0] * p[2],
-                  k[0] * p[1] - k[1] * p[0]};
+  double kx[3] = {k[1] * p[2] - k[2] * p[1], k[2] * p[0] - k[0] * p[2], k[0] * p[1] - k[1] * p[0]};
   for (int i = 0; i < 3; i++) out[i] = p[i] * c + kx[i] * s + k[i] * kp * (1 - c);
 }
 
@@ -63,8 +62,7 @@ static int add_cell(gen_state *g, int kind, const int32_t c[8], const double ctr
   int st = VM_OK;
   int32_t v[8];
   switch (kind) {
-  case 0:
-    return vm_mesh_add_element(g->m, VM_HEX, c);
+  case 0: return vm_mesh_add_element(g->m, VM_HEX, c);
   case 1:
     for (int p = 0; p < 2 && !st; p++) {
       for (int q = 0; q < 6; q++) v[q] = c[prisms[p][q]];
@@ -90,8 +88,7 @@ static int add_cell(gen_state *g, int kind, const int32_t c[8], const double ctr
   }
 }
 
-int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out,
-                        double **xyz_ref) {
+int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out, double **xyz_ref) {
   *out = NULL;
   if (xyz_ref) *xyz_ref = NULL;
   int n = o->n;
@@ -100,8 +97,7 @@ int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out,
   double al = sqrt(o->axis[0] * o->axis[0] + o->axis[1] * o->axis[1] + o->axis[2] * o->axis[2]);
   if (!(al > 0)) return vm_error(ctx, VM_ERR_ARG, "rotated cube: zero rotation axis");
   if (!(o->inner > 0 && o->inner < 0.5))
-    return vm_error(ctx, VM_ERR_ARG, "rotated cube: inner half-size %g not in (0, 1/2)",
-                    o->inner);
+    return vm_error(ctx, VM_ERR_ARG, "rotated cube: inner half-size %g not in (0, 1/2)", o->inner);
   if (o->cells < VM_GEN_HEX || o->cells > VM_GEN_MIXED)
     return vm_error(ctx, VM_ERR_ARG, "rotated cube: unknown cell kind %d", o->cells);
   gen_state g = {o, {o->axis[0] / al, o->axis[1] / al, o->axis[2] / al}, NULL, NULL};
@@ -138,8 +134,7 @@ int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out,
       }
   /* the "fixed" convention of the readers, mirrored from the flags */
   if ((st = vm_mesh_add_field(g.m, "fixed", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &fx))) goto fail;
-  for (int64_t v = 0; v < g.m->nv; v++)
-    ((int32_t *)fx->data)[v] = g.m->vflag[v] == VM_VERTEX_FIXED;
+  for (int64_t v = 0; v < g.m->nv; v++) ((int32_t *)fx->data)[v] = g.m->vflag[v] == VM_VERTEX_FIXED;
   *out = g.m;
   if (xyz_ref) *xyz_ref = g.ref;
   return VM_OK;

@@ -76,8 +76,8 @@ static int32_t midpoint(ico_points *P, edge_map *em, int32_t a, int32_t b) {
   return P->n++;
 }
 
-int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int level,
-                     unsigned flags, const vm_gen_jitter *jitter) {
+int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int level, unsigned flags,
+                     const vm_gen_jitter *jitter) {
   vm_ctx *ctx = m->ctx;
   if (!(radius > 0) || level < 0 || level > 12 || (flags & ~(unsigned)VM_GEN_PROJECT_AT_END))
     return vm_error(ctx, VM_ERR_ARG, "icosphere: radius %g level %d flags %u", radius, level,
@@ -165,13 +165,12 @@ done:
 
 /* ---- torus and cylinder ---- */
 
-int vm_gen_torus(vm_mesh *m, const double centre[3], double R, double r, int nu, int nv,
-                 int cells, const vm_gen_jitter *jitter, double *H) {
+int vm_gen_torus(vm_mesh *m, const double centre[3], double R, double r, int nu, int nv, int cells,
+                 const vm_gen_jitter *jitter, double *H) {
   vm_ctx *ctx = m->ctx;
   if (!(r > 0) || !(R > r) || nu < 3 || nv < 3 || (int64_t)nu * nv > INT32_MAX - m->nv ||
       cells < VM_GEN_TORUS_TRI || cells > VM_GEN_TORUS_QUAD)
-    return vm_error(ctx, VM_ERR_ARG, "torus: R %g r %g nu %d nv %d cells %d", R, r, nu, nv,
-                    cells);
+    return vm_error(ctx, VM_ERR_ARG, "torus: R %g r %g nu %d nv %d cells %d", R, r, nu, nv, cells);
   int64_t nv0 = m->nv, ne0 = m->ne;
   double amount = jitter_amount(jitter);
   uint64_t s = jitter ? jitter->seed : 0;
@@ -207,8 +206,7 @@ int vm_gen_torus(vm_mesh *m, const double centre[3], double R, double r, int nu,
   return st ? rollback(m, nv0, ne0, st) : VM_OK;
 }
 
-int vm_gen_cylinder(vm_mesh *m, double r, double h, int na, int nz,
-                    const vm_gen_jitter *jitter) {
+int vm_gen_cylinder(vm_mesh *m, double r, double h, int na, int nz, const vm_gen_jitter *jitter) {
   vm_ctx *ctx = m->ctx;
   if (!(r > 0) || !(h > 0) || na < 3 || nz < 2 || (int64_t)na * nz > INT32_MAX - m->nv)
     return vm_error(ctx, VM_ERR_ARG, "cylinder: r %g h %g na %d nz %d", r, h, na, nz);
@@ -406,8 +404,7 @@ int vm_gen_lens(vm_mesh *m, double R, double d, double h) {
   if (!st) st = vm_mesh_add_vertex(m, 0, 0, -(R - d), &bot);
   for (int i = 0; i < cnt[1] && !st; i++) { /* pole fans */
     st = add_tri(m, top, start[0] + i, start[0] + (i + 1) % cnt[1]);
-    if (!st)
-      st = add_tri(m, bot, start[nring - 1] + (i + 1) % cnt[1], start[nring - 1] + i);
+    if (!st) st = add_tri(m, bot, start[nring - 1] + (i + 1) % cnt[1], start[nring - 1] + i);
   }
   for (int r = 0; r + 1 < nr && !st; r++) /* upper: ring r inside ring r+1 */
     st = stitch(m, start[r], cnt[r + 1], off[r], start[r + 1], cnt[r + 2], off[r + 1], 0);

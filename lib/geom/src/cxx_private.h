@@ -15,16 +15,16 @@
 #include "varmesh/ctx.h"
 
 #define VM_CXX_BEGIN try {
-#define VM_CXX_END(ctx, where)                                                        \
-  }                                                                                  \
-  catch (const std::bad_alloc &) {                                                   \
-    return vm_error((ctx), VM_ERR_NOMEM, "%s: out of memory", (where));              \
-  }                                                                                  \
-  catch (const std::exception &e) {                                                  \
-    return vm_error((ctx), VM_ERR_BACKEND, "%s: %s", (where), e.what());              \
-  }                                                                                  \
-  catch (...) {                                                                      \
-    return vm_error((ctx), VM_ERR_BACKEND, "%s: unknown exception", (where));         \
+#define VM_CXX_END(ctx, where)                                                                     \
+  }                                                                                                \
+  catch (const std::bad_alloc &) {                                                                 \
+    return vm_error((ctx), VM_ERR_NOMEM, "%s: out of memory", (where));                            \
+  }                                                                                                \
+  catch (const std::exception &e) {                                                                \
+    return vm_error((ctx), VM_ERR_BACKEND, "%s: %s", (where), e.what());                           \
+  }                                                                                                \
+  catch (...) {                                                                                    \
+    return vm_error((ctx), VM_ERR_BACKEND, "%s: unknown exception", (where));                      \
   }
 
 #endif

@@ -162,8 +162,8 @@ int vm_surface_detect_features(const vm_mesh *m, double angle_deg, double corner
   vm_ctx *ctx = m->ctx;
   memset(f, 0, sizeof *f);
   if (!(angle_deg > 0 && angle_deg <= 180) || !(corner_deg > 0))
-    return vm_error(ctx, VM_ERR_ARG, "features: angle %g, corner angle %g out of range",
-                    angle_deg, corner_deg);
+    return vm_error(ctx, VM_ERR_ARG, "features: angle %g, corner angle %g out of range", angle_deg,
+                    corner_deg);
   int64_t ne = 0, nref = 0, first = -1;
   int32_t *ev = NULL;
   double *ang = NULL;
@@ -194,8 +194,7 @@ int vm_surface_detect_features(const vm_mesh *m, double angle_deg, double corner
   return st;
 }
 
-int vm_surface_features_apply(vm_mesh *m, const vm_surface_features *f,
-                              const int32_t *line_map) {
+int vm_surface_features_apply(vm_mesh *m, const vm_surface_features *f, const int32_t *line_map) {
   if (!m || !f || f->nv != m->nv)
     return vm_error(m ? m->ctx : NULL, VM_ERR_ARG, "features do not belong to this mesh");
   vm_ctx *ctx = m->ctx;

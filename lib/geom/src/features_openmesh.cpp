@@ -26,21 +26,20 @@ typedef OpenMesh::PolyMesh_ArrayKernelT<DoubleTraits> Mesh;
 
 // OpenMesh reports refused faces on omerr(); the library must not print.
 class QuietOpenMesh {
- public:
+public:
   QuietOpenMesh() : was_(omerr().is_enabled()) { omerr().disable(); }
   ~QuietOpenMesh() {
     if (was_) omerr().enable();
   }
 
- private:
+private:
   bool was_;
 };
 
-}  // namespace
+} // namespace
 
-extern "C" int vm_om_edge_angles(const vm_mesh *m, int64_t *nedge, int32_t **ev,
-                                 double **angle, uint8_t **boundary, int64_t *nrefused,
-                                 int64_t *first_refused) {
+extern "C" int vm_om_edge_angles(const vm_mesh *m, int64_t *nedge, int32_t **ev, double **angle,
+                                 uint8_t **boundary, int64_t *nrefused, int64_t *first_refused) {
   vm_ctx *ctx = m->ctx;
   *nedge = 0;
   *ev = NULL;

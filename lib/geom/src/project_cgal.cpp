@@ -95,8 +95,8 @@ Point closest_on_segment(const Segment &s, const Point &p, double *t) {
 void orthogonal_pair(const double t[3], double n[6]) {
   double a[3] = {0, 0, 0};
   int k = std::fabs(t[0]) <= std::fabs(t[1]) && std::fabs(t[0]) <= std::fabs(t[2]) ? 0
-          : std::fabs(t[1]) <= std::fabs(t[2])                                        ? 1
-                                                                                      : 2;
+          : std::fabs(t[1]) <= std::fabs(t[2])                                     ? 1
+                                                                                   : 2;
   a[k] = 1;
   double u[3] = {t[1] * a[2] - t[2] * a[1], t[2] * a[0] - t[0] * a[2], t[0] * a[1] - t[1] * a[0]};
   double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
@@ -108,7 +108,7 @@ void orthogonal_pair(const double t[3], double n[6]) {
   }
 }
 
-}  // namespace
+} // namespace
 
 struct vm_surface_projector {
   vm_ctx *ctx;
@@ -126,7 +126,8 @@ extern "C" {
 static int project_cb(void *user, int surf_id, const double p[3], double out[3], double normals[9]);
 }
 
-static int project_cb(void *user, int surf_id, const double p[3], double out[3], double normals[9]) {
+static int project_cb(void *user, int surf_id, const double p[3], double out[3],
+                      double normals[9]) {
   vm_surface_projector *pr = static_cast<vm_surface_projector *>(user);
   VM_CXX_BEGIN
   if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return VM_ERR_NUMERIC;
@@ -204,7 +205,8 @@ extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
     pr->nline = f->nline;
     // order each line's edges into a chain so neighbouring segments are adjacent
     std::vector<std::vector<int64_t>> by_line(static_cast<std::size_t>(f->nline) + 1);
-    for (int64_t k = 0; k < f->nedge; k++) by_line[static_cast<std::size_t>(f->eline[k])].push_back(k);
+    for (int64_t k = 0; k < f->nedge; k++)
+      by_line[static_cast<std::size_t>(f->eline[k])].push_back(k);
     pr->lstart.push_back(0);
     for (int32_t l = 1; l <= f->nline; l++) {
       const std::vector<int64_t> &ed = by_line[static_cast<std::size_t>(l)];
@@ -236,7 +238,7 @@ extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
             pick = j;
             break;
           }
-        if (pick == es.size()) {  // not a simple chain: continue from any unused edge
+        if (pick == es.size()) { // not a simple chain: continue from any unused edge
           while (used[next_unused]) next_unused++;
           pick = next_unused;
           cur = es[pick].first;
@@ -356,8 +358,9 @@ namespace {
 double one_sided(const std::vector<Triangle> &from, const TriTree &to, double spacing) {
   double worst = 0;
   for (const Triangle &t : from) {
-    double lmax = std::sqrt(std::max({(t[1] - t[0]).squared_length(), (t[2] - t[1]).squared_length(),
-                                      (t[0] - t[2]).squared_length()}));
+    double lmax =
+        std::sqrt(std::max({(t[1] - t[0]).squared_length(), (t[2] - t[1]).squared_length(),
+                            (t[0] - t[2]).squared_length()}));
     int n = static_cast<int>(std::ceil(lmax / spacing));
     n = std::max(1, std::min(n, 64));
     for (int i = 0; i <= n; i++)
@@ -370,7 +373,7 @@ double one_sided(const std::vector<Triangle> &from, const TriTree &to, double sp
   return std::sqrt(worst);
 }
 
-}  // namespace
+} // namespace
 
 extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
                                     double *ba) {

@@ -200,7 +200,7 @@ Point face_centroid(const SMesh &sm, face_descriptor f) {
   return Point(s[0] / n, s[1] / n, s[2] / n);
 }
 
-}  // namespace
+} // namespace
 
 extern "C" vm_repair_opts vm_repair_opts_default(void) {
   vm_repair_opts o;
@@ -239,7 +239,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   r.removed_polygons = static_cast<int64_t>(remove_invalid(polys));
   r.removed_polygons +=
       static_cast<int64_t>(PMP::merge_duplicate_polygons_in_polygon_soup(pts, polys));
-  r.removed_isolated = static_cast<int64_t>(PMP::remove_isolated_points_in_polygon_soup(pts, polys));
+  r.removed_isolated =
+      static_cast<int64_t>(PMP::remove_isolated_points_in_polygon_soup(pts, polys));
   if (polys.empty())
     return vm_error(ctx, VM_ERR_FORMAT, "repair: no valid face left (all %lld were degenerate)",
                     static_cast<long long>(r.nf_in));
@@ -273,8 +274,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     PMP::degenerate_faces(sm, std::back_inserter(deg));
     r.removed_degenerate = static_cast<int64_t>(deg.size());
     if (!deg.empty() && !PMP::remove_degenerate_faces(sm))
-      return vm_error(ctx, VM_ERR_FORMAT,
-                      "repair: %zu zero-area faces could not all be removed", deg.size());
+      return vm_error(ctx, VM_ERR_FORMAT, "repair: %zu zero-area faces could not all be removed",
+                      deg.size());
     // faces of zero area to working precision (not exactly collinear after
     // rounding): caps within 1e-6 rad of 180 degrees, needles of ratio 1e8
     std::size_t ndeg = numerically_degenerate(sm);
@@ -302,7 +303,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
       std::vector<std::size_t> ids;
       for (halfedge_descriptor h : nmv) ids.push_back(sm.target(h).idx());
       std::sort(ids.begin(), ids.end());
-      std::size_t nids = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
+      std::size_t nids =
+          static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
       const Point &p = sm.point(vertex_descriptor(static_cast<SMesh::size_type>(ids.front())));
       return vm_error(ctx, VM_ERR_FORMAT,
                       "%zu non-manifold vertices after repair (faces meeting at a point); the "
@@ -361,8 +363,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   sm.remove_property_map(fcc);
 
   if (m->nfield > 0)
-    vm_log(ctx, VM_LOG_WARN, "repair: %d fields dropped (the vertex numbering changes)",
-           m->nfield);
+    vm_log(ctx, VM_LOG_WARN, "repair: %d fields dropped (the vertex numbering changes)", m->nfield);
   r.nv = static_cast<int64_t>(sm.number_of_vertices());
   r.nf = static_cast<int64_t>(sm.number_of_faces());
   int st = replace_mesh(m, sm);
@@ -395,8 +396,8 @@ extern "C" int vm_surface_self_intersections(const vm_mesh *m, int64_t *count, i
   std::sort(ip.begin(), ip.end());
   *count = static_cast<int64_t>(ip.size());
   if (pairs) {
-    int32_t *out = static_cast<int32_t *>(vm_alloc_array(ctx, 2 * (ip.size() ? ip.size() : 1),
-                                                         sizeof *out));
+    int32_t *out =
+        static_cast<int32_t *>(vm_alloc_array(ctx, 2 * (ip.size() ? ip.size() : 1), sizeof *out));
     if (!out) return VM_ERR_NOMEM;
     for (std::size_t i = 0; i < ip.size(); i++) {
       out[2 * i] = ip[i].first;
@@ -412,8 +413,8 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
                                  double corner_deg) {
   if (!m || !o) return VM_ERR_ARG;
   vm_ctx *ctx = m->ctx;
-  if (!(o->target_edge_length > 0) || !std::isfinite(o->target_edge_length) ||
-      o->iterations < 1 || o->relaxation_steps < 0 || !(o->keep_angle >= 0))
+  if (!(o->target_edge_length > 0) || !std::isfinite(o->target_edge_length) || o->iterations < 1 ||
+      o->relaxation_steps < 0 || !(o->keep_angle >= 0))
     return vm_error(ctx, VM_ERR_ARG, "remesh: target edge length %g, %d iterations",
                     o->target_edge_length, o->iterations);
   if (f && f->nv != m->nv)
@@ -430,8 +431,9 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
   auto vcorner = sm.add_property_map<vertex_descriptor, bool>("v:vm_corner", false).first;
   if (f) {
     for (int64_t k = 0; k < f->nedge; k++) {
-      halfedge_descriptor h = sm.halfedge(vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k])),
-                                          vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k + 1])));
+      halfedge_descriptor h =
+          sm.halfedge(vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k])),
+                      vertex_descriptor(static_cast<SMesh::size_type>(f->edge[2 * k + 1])));
       if (h == SMesh::null_halfedge())
         return vm_error(ctx, VM_ERR_ARG, "remesh: feature edge %lld is not a mesh edge",
                         static_cast<long long>(k));
@@ -454,21 +456,23 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
       if (f->vclass[v] != VM_FEATURE_LINE || n.size() != 2) continue;
       const double *p = m->xyz + 3 * v, *a = m->xyz + 3 * static_cast<int64_t>(n[0]),
                    *b = m->xyz + 3 * static_cast<int64_t>(n[1]);
-      double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]}, w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
+      double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]},
+             w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
       double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
       double lw = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
       if (lu > 0 && lw > 0 && (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (lu * lw) < ckeep)
         vcm[vertex_descriptor(static_cast<SMesh::size_type>(v))] = true;
     }
   }
-  PMP::isotropic_remeshing(faces(sm), o->target_edge_length, sm,
-                           CGAL::parameters::number_of_iterations(static_cast<unsigned>(o->iterations))
-                               .number_of_relaxation_steps(static_cast<unsigned>(o->relaxation_steps))
-                               .edge_is_constrained_map(ecm)
-                               .vertex_is_constrained_map(vcm)
-                               .protect_constraints(false)
-                               .collapse_constraints(true)
-                               .relax_constraints(false));
+  PMP::isotropic_remeshing(
+      faces(sm), o->target_edge_length, sm,
+      CGAL::parameters::number_of_iterations(static_cast<unsigned>(o->iterations))
+          .number_of_relaxation_steps(static_cast<unsigned>(o->relaxation_steps))
+          .edge_is_constrained_map(ecm)
+          .vertex_is_constrained_map(vcm)
+          .protect_constraints(false)
+          .collapse_constraints(true)
+          .relax_constraints(false));
   sm.collect_garbage();
   // Feature vertices are not relaxed along their lines: CGAL 5.5 then also
   // moves constrained vertices (corners).

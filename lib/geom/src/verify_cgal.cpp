@@ -37,16 +37,15 @@ NT diff_det(int d, const double *const h[3], const double *const t[3], const int
   for (int k = 0; k < d; k++)
     for (int r = 0; r < d; r++) c[k][r] = NT(h[k][rows[r]]) - NT(t[k][rows[r]]);
   if (d == 2) return c[0][0] * c[1][1] - c[1][0] * c[0][1];
-  return CGAL::determinant(c[0][0], c[1][0], c[2][0], c[0][1], c[1][1], c[2][1], c[0][2],
-                           c[1][2], c[2][2]);
+  return CGAL::determinant(c[0][0], c[1][0], c[2][0], c[0][1], c[1][1], c[2][1], c[0][2], c[1][2],
+                           c[2][2]);
 }
 
 CGAL::Sign diff_det_sign(int d, const double *const h[3], const double *const t[3],
                          const int rows[3]) {
   {
     CGAL::Protect_FPU_rounding<true> upward;
-    CGAL::Uncertain<CGAL::Sign> s =
-        CGAL::sign(diff_det<CGAL::Interval_nt_advanced>(d, h, t, rows));
+    CGAL::Uncertain<CGAL::Sign> s = CGAL::sign(diff_det<CGAL::Interval_nt_advanced>(d, h, t, rows));
     if (CGAL::is_certain(s)) return CGAL::get_certain(s);
   }
   return CGAL::sign(diff_det<CGAL::Exact_rational>(d, h, t, rows));
@@ -76,8 +75,7 @@ bool node_is_bad(const vm_qnode *q, int d, bool surface, const double *const x[8
     s = one_tail ? CGAL::orientation(p3(t[0]), p3(h[0]), p3(h[1]), p3(h[2]))
                  : diff_det_sign(3, h, t, xyz);
   else
-    s = one_tail ? CGAL::orientation(p2(t[0]), p2(h[0]), p2(h[1]))
-                 : diff_det_sign(2, h, t, xyz);
+    s = one_tail ? CGAL::orientation(p2(t[0]), p2(h[0]), p2(h[1])) : diff_det_sign(2, h, t, xyz);
   return s != CGAL::POSITIVE;
 }
 
@@ -146,8 +144,8 @@ extern "C" int vm_verify_orientation(const vm_mesh *m, int rule, int64_t *bad_no
     int type = m->etype[e];
     if (vm_elem_dim(type) != top) continue;
     const vm_qrule *qr = vm_qrule_get(type, rule);
-    if (!qr) return vm_error(ctx, VM_ERR_ARG, "verify: element %lld: unknown type %d",
-                             (long long)e, type);
+    if (!qr)
+      return vm_error(ctx, VM_ERR_ARG, "verify: element %lld: unknown type %d", (long long)e, type);
     const double *x[8];
     for (int i = 0; i < vm_elem_nverts(type); i++) x[i] = vertex(m, m->conn[m->eoff[e] + i]);
     int64_t here = 0;
@@ -188,25 +186,24 @@ extern "C" int vm_verify_prism_layer(const vm_mesh *m, int64_t *intersecting_pai
     std::sort(key[i].begin(), key[i].end());
     order[i] = i;
   }
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return key[a] != key[b] ? key[a] < key[b] : a < b;
-  });
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
   std::vector<Face> faces;
   for (size_t i = 0; i < order.size();) {
     size_t j = i + 1;
     while (j < order.size() && key[order[j]] == key[order[i]]) j++;
     const Face &f = all[order[i]];
     // degenerate triangles are left to the orientation check
-    if (j == i + 1 && !CGAL::collinear(p3(vertex(m, f.v[0])), p3(vertex(m, f.v[1])),
-                                       p3(vertex(m, f.v[2]))))
+    if (j == i + 1 &&
+        !CGAL::collinear(p3(vertex(m, f.v[0])), p3(vertex(m, f.v[1])), p3(vertex(m, f.v[2]))))
       faces.push_back(f);
     i = j;
   }
   std::vector<Box> boxes;
   boxes.reserve(faces.size());
   for (const Face &f : faces) {
-    CGAL::Bbox_3 b = p3(vertex(m, f.v[0])).bbox() + p3(vertex(m, f.v[1])).bbox() +
-                     p3(vertex(m, f.v[2])).bbox();
+    CGAL::Bbox_3 b =
+        p3(vertex(m, f.v[0])).bbox() + p3(vertex(m, f.v[1])).bbox() + p3(vertex(m, f.v[2])).bbox();
     boxes.push_back(Box(b, &f));
   }
   int64_t nout = 0, nwall = 0;

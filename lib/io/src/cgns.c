@@ -41,8 +41,8 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   cgsize_t size[3] = {(cgsize_t)m->nv, (cgsize_t)g->ncell, 0};
   double *c = vm_alloc_array(ctx, (size_t)(m->nv ? m->nv : 1), sizeof *c);
   int32_t *order = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *order);
-  cgsize_t *conn = vm_alloc_array(ctx, (size_t)(8 * (g->ncell > g->nface ? g->ncell : g->nface) + 1),
-                                  sizeof *conn);
+  cgsize_t *conn = vm_alloc_array(
+      ctx, (size_t)(8 * (g->ncell > g->nface ? g->ncell : g->nface) + 1), sizeof *conn);
   double *cellval = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *cellval);
   if (!c || !order || !conn || !cellval) {
     st = VM_ERR_NOMEM;
@@ -101,21 +101,22 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
       char sname[64];
       snprintf(sname, sizeof sname, "%.40s_%s", g->name[f], nv == 3 ? "tri" : "quad");
       int S;
-      if (cg_section_write(fn, B, Z, sname, nv == 3 ? CGNS_ENUMV(TRI_3) : CGNS_ENUMV(QUAD_4),
-                           next, next + n - 1, 0, conn, &S)) {
+      if (cg_section_write(fn, B, Z, sname, nv == 3 ? CGNS_ENUMV(TRI_3) : CGNS_ENUMV(QUAD_4), next,
+                           next + n - 1, 0, conn, &S)) {
         st = cg_fail(ctx, path, "face section");
         goto done;
       }
       next += n;
     }
     int F, FB, BC;
-    CGNS_ENUMT(BCType_t) bt = !strcmp(g->name[f], "wall")    ? CGNS_ENUMV(BCWall)
-                              : !strcmp(g->name[f], "outer") ? CGNS_ENUMV(BCFarfield)
-                                                             : CGNS_ENUMV(BCTypeUserDefined);
+    CGNS_ENUMT(BCType_t)
+    bt = !strcmp(g->name[f], "wall")    ? CGNS_ENUMV(BCWall)
+         : !strcmp(g->name[f], "outer") ? CGNS_ENUMV(BCFarfield)
+                                        : CGNS_ENUMV(BCTypeUserDefined);
     cgsize_t range[2] = {first, next - 1};
     if (cg_family_write(fn, B, g->name[f], &F) || cg_fambc_write(fn, B, F, "FamBC", bt, &FB) ||
-        cg_boco_write(fn, B, Z, g->name[f], CGNS_ENUMV(FamilySpecified), CGNS_ENUMV(PointRange),
-                      2, range, &BC) ||
+        cg_boco_write(fn, B, Z, g->name[f], CGNS_ENUMV(FamilySpecified), CGNS_ENUMV(PointRange), 2,
+                      range, &BC) ||
         cg_boco_gridlocation_write(fn, B, Z, BC, CGNS_ENUMV(FaceCenter)) ||
         cg_goto(fn, B, "Zone_t", Z, "ZoneBC_t", 1, "BC_t", BC, "end") ||
         cg_famname_write(g->name[f])) {
@@ -187,7 +188,6 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
   return ex_groups_lossy(ctx, m, path, "CGNS", 1) ? VM_WARN_LOSSY : VM_OK;
 }
 
-
 /* Reading. libcgns opens files by path only: the buffer goes to a private
  * temporary file (mkstemp in $TMPDIR or /tmp), which is unlinked as soon as
  * cg_open has it open, so nothing is left behind on any path. */
@@ -212,13 +212,13 @@ typedef struct {
     cgsize_t start, end;
     int64_t moff; /* offset of its first element in emap */
     char name[33];
-  } *sec;
-  int64_t nid;    /* element ids covered by sections */
-  int32_t *emap;  /* section element -> vm element, -1 if dropped */
-  int32_t *tag;   /* per vm element: family tag (0 none) */
+  } * sec;
+  int64_t nid;   /* element ids covered by sections */
+  int32_t *emap; /* section element -> vm element, -1 if dropped */
+  int32_t *tag;  /* per vm element: family tag (0 none) */
   int ntag;
   char (*tname)[33];
-  int64_t nskip;  /* NODE / BAR_2 elements dropped */
+  int64_t nskip; /* NODE / BAR_2 elements dropped */
 } cg_rd;
 
 /* A libcgns failure on this input: one line, "name: what: libcgns message". */
@@ -267,17 +267,19 @@ static int32_t cg_elem(const cg_rd *r, int64_t id) {
   int lo = 0, hi = r->nsec - 1;
   while (lo <= hi) {
     int mid = (lo + hi) / 2;
-    if (id < r->sec[mid].start) hi = mid - 1;
-    else if (id > r->sec[mid].end) lo = mid + 1;
-    else return r->emap[r->sec[mid].moff + (id - r->sec[mid].start)];
+    if (id < r->sec[mid].start)
+      hi = mid - 1;
+    else if (id > r->sec[mid].end)
+      lo = mid + 1;
+    else
+      return r->emap[r->sec[mid].moff + (id - r->sec[mid].start)];
   }
   return -1;
 }
 
 static int cg_coords(cg_rd *r, int64_t nv) {
   int st;
-  if ((st = cg_bound(r, 3 * nv, "coordinates")) || (st = vm_mesh_set_vertices(r->m, nv)))
-    return st;
+  if ((st = cg_bound(r, 3 * nv, "coordinates")) || (st = vm_mesh_set_vertices(r->m, nv))) return st;
   if (!nv) return VM_OK;
   double *c = vm_alloc_array(r->ctx, (size_t)nv, sizeof *c);
   if (!c) return VM_ERR_NOMEM;
@@ -317,10 +319,11 @@ static int cg_sections(cg_rd *r) {
       return cg_rfail(r, "section");
     s->name[32] = 0;
     if (s->start < 1 || s->end < s->start)
-      return vm_error(r->ctx, VM_ERR_FORMAT, "%s: section '%s': element range %lld..%lld",
-                      r->name, s->name, (long long)s->start, (long long)s->end);
+      return vm_error(r->ctx, VM_ERR_FORMAT, "%s: section '%s': element range %lld..%lld", r->name,
+                      s->name, (long long)s->start, (long long)s->end);
     if (s->type != CGNS_ENUMV(MIXED) && vm_type_of(s->type) == -1)
-      return vm_error(r->ctx, VM_ERR_UNSUPPORTED, "%s: section '%s': element type %s is not "
+      return vm_error(r->ctx, VM_ERR_UNSUPPORTED,
+                      "%s: section '%s': element type %s is not "
                       "supported (linear TRI_3, QUAD_4, TETRA_4, PYRA_5, PENTA_6, HEXA_8, MIXED)",
                       r->name, s->name, type_name(s->type));
     if ((st = cg_bound(r, (int64_t)s->end - s->start + 1, "section elements"))) return st;
@@ -342,16 +345,17 @@ static int cg_sections(cg_rd *r) {
     CGNS_ENUMT(ElementType_t) t;
     cgsize_t a, b, size;
     /* sorted: re-read the flag of this section */
-    if (cg_section_read(r->fn, 1, 1, s->S, nm, &t, &a, &b, &nb, &pf))
-      return cg_rfail(r, "section");
+    if (cg_section_read(r->fn, 1, 1, s->S, nm, &t, &a, &b, &nb, &pf)) return cg_rfail(r, "section");
     if (cg_ElementDataSize(r->fn, 1, 1, s->S, &size)) return cg_rfail(r, "section size");
     int64_t ne = (int64_t)s->end - s->start + 1;
     int npe = 0;
     if (s->type != CGNS_ENUMV(MIXED)) cg_npe(s->type, &npe);
     if ((st = cg_bound(r, size, "connectivity"))) return st;
     if (s->type == CGNS_ENUMV(MIXED) ? size < 2 * ne : size != ne * npe)
-      return vm_error(r->ctx, VM_ERR_FORMAT, "%s: section '%s': %lld connectivity entries for "
-                      "%lld elements", r->name, s->name, (long long)size, (long long)ne);
+      return vm_error(r->ctx, VM_ERR_FORMAT,
+                      "%s: section '%s': %lld connectivity entries for "
+                      "%lld elements",
+                      r->name, s->name, (long long)size, (long long)ne);
     int mixed = s->type == CGNS_ENUMV(MIXED);
     cgsize_t *conn = vm_alloc_array(r->ctx, (size_t)(size ? size : 1), sizeof *conn);
     cgsize_t *par = pf ? vm_alloc_array(r->ctx, (size_t)(4 * ne), sizeof *par) : NULL;
@@ -375,9 +379,10 @@ static int cg_sections(cg_rd *r) {
         et = typed ? (CGNS_ENUMT(ElementType_t))conn[k++] : CGNS_ENUMV(ElementTypeNull);
         if (!typed || vm_type_of(et) == -1 || cg_npe(et, &npe) || npe < 1 || k + npe > size ||
             off[e + 1] != k + npe) {
-          st = vm_error(r->ctx, VM_ERR_FORMAT, "%s: section '%s': element %lld: type %d is "
-                        "not supported or its nodes disagree with the offsets", r->name, s->name,
-                        (long long)(s->start + e), (int)et);
+          st = vm_error(r->ctx, VM_ERR_FORMAT,
+                        "%s: section '%s': element %lld: type %d is "
+                        "not supported or its nodes disagree with the offsets",
+                        r->name, s->name, (long long)(s->start + e), (int)et);
           break;
         }
       }
@@ -386,9 +391,11 @@ static int cg_sections(cg_rd *r) {
       for (int j = 0; j < npe; j++) {
         cgsize_t x = conn[k++];
         if (x < 1 || x > r->m->nv) {
-          st = vm_error(r->ctx, VM_ERR_FORMAT, "%s: section '%s': element %lld: node %lld is "
-                        "not in 1..%lld", r->name, s->name, (long long)(s->start + e),
-                        (long long)x, (long long)r->m->nv);
+          st = vm_error(r->ctx, VM_ERR_FORMAT,
+                        "%s: section '%s': element %lld: node %lld is "
+                        "not in 1..%lld",
+                        r->name, s->name, (long long)(s->start + e), (long long)x,
+                        (long long)r->m->nv);
           break;
         }
         if (j < VM_MAX_ELEM_VERTS) v[j] = (int32_t)(x - 1);
@@ -448,8 +455,10 @@ static int cg_bcs(cg_rd *r) {
     }
     if ((st = cg_bound(r, np, "boundary condition points"))) return st;
     if (range && np != 2)
-      return vm_error(r->ctx, VM_ERR_FORMAT, "%s: boundary condition '%s': a range of %lld "
-                      "values", r->name, bname, (long long)np);
+      return vm_error(r->ctx, VM_ERR_FORMAT,
+                      "%s: boundary condition '%s': a range of %lld "
+                      "values",
+                      r->name, bname, (long long)np);
     cgsize_t *p = vm_alloc_array(r->ctx, (size_t)(np ? np : 1), sizeof *p);
     if (!p) return VM_ERR_NOMEM;
     if (np && cg_boco_read(r->fn, 1, 1, bc, p, NULL)) {
@@ -462,9 +471,10 @@ static int cg_bcs(cg_rd *r) {
     int tag = find_tag(r, have_fam && fam[0] ? fam : bname);
     int64_t a = range ? p[0] : 0, b = range ? p[1] : np - 1;
     if (range && (b < a || b - a >= r->nid)) {
-      st = vm_error(r->ctx, VM_ERR_FORMAT, "%s: boundary condition '%s': element range "
-                    "%lld..%lld is not inside the %lld elements", r->name, bname, (long long)a,
-                    (long long)b, (long long)r->nid);
+      st = vm_error(r->ctx, VM_ERR_FORMAT,
+                    "%s: boundary condition '%s': element range "
+                    "%lld..%lld is not inside the %lld elements",
+                    r->name, bname, (long long)a, (long long)b, (long long)r->nid);
       vm_free(r->ctx, p);
       return st;
     }
@@ -474,20 +484,22 @@ static int cg_bcs(cg_rd *r) {
         nbad++;
         continue;
       }
-      if (r->tag[e]) nclash += r->tag[e] != tag;
-      else r->tag[e] = tag;
+      if (r->tag[e])
+        nclash += r->tag[e] != tag;
+      else
+        r->tag[e] = tag;
     }
     vm_free(r->ctx, p);
   }
   if (nvert_bc)
-    vm_log(r->ctx, VM_LOG_WARN, "%s: %lld boundary conditions given on vertices ignored",
-           r->name, (long long)nvert_bc);
+    vm_log(r->ctx, VM_LOG_WARN, "%s: %lld boundary conditions given on vertices ignored", r->name,
+           (long long)nvert_bc);
   if (nbad)
     vm_log(r->ctx, VM_LOG_WARN, "%s: %lld boundary-condition elements are not faces; ignored",
            r->name, (long long)nbad);
   if (nclash)
-    vm_log(r->ctx, VM_LOG_WARN, "%s: %lld faces in two boundary conditions keep the first",
-           r->name, (long long)nclash);
+    vm_log(r->ctx, VM_LOG_WARN, "%s: %lld faces in two boundary conditions keep the first", r->name,
+           (long long)nclash);
   /* faces in no boundary condition: one family per section, named after it */
   for (int i = 0; i < r->nsec; i++) {
     const struct csec *s = &r->sec[i];
@@ -547,8 +559,10 @@ static int cg_fields(cg_rd *r, int64_t ncell) {
       /* cell value k belongs to the k-th cell in element-id order */
       for (int64_t e = 0, k = 0; !st && k < n; e++) {
         if (at_cells && vm_elem_dim(r->m->etype[e]) != 3) continue;
-        if (isint) ((int32_t *)f->data)[e] = ((const int *)buf)[k];
-        else ((double *)f->data)[e] = ((const double *)buf)[k];
+        if (isint)
+          ((int32_t *)f->data)[e] = ((const int *)buf)[k];
+        else
+          ((double *)f->data)[e] = ((const double *)buf)[k];
         k++;
       }
       vm_free(r->ctx, buf);
@@ -571,8 +585,10 @@ static int cg_parse(cg_rd *r) {
                     "%s: %d bases (one base with one zone can be read)", r->name, nb);
   if (cg_base_read(r->fn, 1, nm, &cdim, &pdim)) return cg_rfail(r, "base");
   if (cdim != 3 || pdim != 3)
-    return vm_error(r->ctx, VM_ERR_UNSUPPORTED, "%s: base of cell dimension %d in %d "
-                    "dimensions (3 and 3 can be read)", r->name, cdim, pdim);
+    return vm_error(r->ctx, VM_ERR_UNSUPPORTED,
+                    "%s: base of cell dimension %d in %d "
+                    "dimensions (3 and 3 can be read)",
+                    r->name, cdim, pdim);
   if (cg_nzones(r->fn, 1, &nz)) return cg_rfail(r, "zones");
   if (nz != 1)
     return vm_error(r->ctx, nz ? VM_ERR_UNSUPPORTED : VM_ERR_FORMAT,

@@ -31,8 +31,8 @@ int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char 
   int64_t nflag = 0;
   for (int64_t v = 0; v < m->nv; v++) nflag += m->vflag[v] != VM_VERTEX_FREE;
   if (nflag) {
-    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store vertex flags (%lld fixed or slip); dropped",
-           path, fmt, (long long)nflag);
+    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store vertex flags (%lld fixed or slip); dropped", path,
+           fmt, (long long)nflag);
     lossy = 1;
   }
   return lossy;

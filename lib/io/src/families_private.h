@@ -9,14 +9,14 @@
 
 typedef struct {
   int64_t ncell;
-  int32_t *cell;   /* element indices of the cells (top dimension) */
+  int32_t *cell; /* element indices of the cells (top dimension) */
   int nfam;
-  char **name;     /* family names (vm_strdup) */
-  int64_t *fbeg;   /* faces of family f: [fbeg[f], fbeg[f+1]) */
+  char **name;   /* family names (vm_strdup) */
+  int64_t *fbeg; /* faces of family f: [fbeg[f], fbeg[f+1]) */
   int64_t nface;
-  int32_t *fv;     /* 4 vertices per face (unused -1) */
-  uint8_t *fnv;    /* 3 or 4 */
-  int32_t *felem;  /* the face's element in the mesh, -1 if extracted */
+  int32_t *fv;    /* 4 vertices per face (unused -1) */
+  uint8_t *fnv;   /* 3 or 4 */
+  int32_t *felem; /* the face's element in the mesh, -1 if extracted */
 } ex_groups;
 
 /* VM_OK if the mesh can be exported (3D, with volume cells), else a

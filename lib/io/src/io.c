@@ -117,8 +117,8 @@ int vm_read_file(vm_ctx *ctx, const char *path, uint8_t **buf, size_t *len) {
   return VM_OK;
 }
 
-int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                        int format, vm_mesh **out) {
+int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, int format,
+                        vm_mesh **out) {
   *out = NULL;
   if (format == VM_FMT_AUTO) format = vm_format_from_path(name);
   if (format == VM_FMT_AUTO)
@@ -127,8 +127,8 @@ int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_
   vm_writer_fn wr;
   handlers(format, &rd, &wr);
   if (!rd)
-    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be read",
-                    name, vm_format_name(format));
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be read", name,
+                    vm_format_name(format));
   int st = rd(ctx, name, buf, len, out);
   if (st < 0) {
     vm_mesh_destroy(out);
@@ -168,8 +168,8 @@ int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
   vm_writer_fn wr;
   handlers(format, &rd, &wr);
   if (!wr)
-    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be written",
-                    path, vm_format_name(format));
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be written", path,
+                    vm_format_name(format));
   vm_write_opts def = vm_write_opts_default();
   int st = vm_mesh_check(m);
   if (st < 0) return st;
@@ -244,8 +244,7 @@ int vm_outfile_commit(vm_outfile **pf) {
     return st;
   }
   if (rename(f->tmp, f->path) != 0) {
-    int st = vm_error(ctx, VM_ERR_IO, "%s: cannot rename into place: %s", f->path,
-                      strerror(errno));
+    int st = vm_error(ctx, VM_ERR_IO, "%s: cannot rename into place: %s", f->path, strerror(errno));
     vm_outfile_abort(pf);
     return st;
   }

@@ -24,10 +24,8 @@ int vm_lex_fail(vm_lex *lx, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
-  return vm_error(lx->ctx, VM_ERR_FORMAT, "%s: line %lld: %s", lx->name, (long long)lx->line,
-                  msg);
+  return vm_error(lx->ctx, VM_ERR_FORMAT, "%s: line %lld: %s", lx->name, (long long)lx->line, msg);
 }
-
 
 int vm_lex_eof(vm_lex *lx) {
   for (;;) {
@@ -86,8 +84,7 @@ int vm_lex_int(vm_lex *lx, int64_t *v, const char *what) {
   char *e;
   errno = 0;
   long long x = strtoll(buf, &e, 10);
-  if (*e || errno)
-    return vm_lex_fail(lx, "%s: '%s' is not an integer", what, buf);
+  if (*e || errno) return vm_lex_fail(lx, "%s: '%s' is not an integer", what, buf);
   *v = x;
   return VM_OK;
 }

@@ -13,8 +13,8 @@ typedef struct vm_lex {
   vm_ctx *ctx;
   const char *name;
   const char *p, *end;
-  int64_t line;  /* 1-based line of p */
-  char comment;  /* lines starting (after blanks) with this are skipped; 0 none */
+  int64_t line; /* 1-based line of p */
+  char comment; /* lines starting (after blanks) with this are skipped; 0 none */
 } vm_lex;
 
 void vm_lex_init(vm_lex *lx, vm_ctx *ctx, const char *name, const void *buf, size_t len);

@@ -31,7 +31,7 @@ static int face_ref(vm_surf_text *t, const char *s, size_t n, int64_t nv, int64_
   if (vm_surf_parse_int(s, k, &i) < 0)
     return vm_surf_fail(t, "bad vertex reference '%s'", vm_surf_tok_show(s, n, show));
   /* texture and normal indices are not used, but must be numbers */
-  for (const char *p = slash; p; ) {
+  for (const char *p = slash; p;) {
     const char *q = p + 1, *e = s + n;
     const char *nx = memchr(q, '/', (size_t)(e - q));
     size_t len = (size_t)((nx ? nx : e) - q);
@@ -55,8 +55,8 @@ static int face_ref(vm_surf_text *t, const char *s, size_t n, int64_t nv, int64_
 static int read_obj(vm_surf_text *t, vm_mesh *m, vm_surf_polys *P) {
   vm_ctx *ctx = t->ctx;
   const char *name = t->name;
-  obj_skip extra = {0, 0}, normals = {0, 0}, texcoords = {0, 0}, params = {0, 0},
-           lines = {0, 0}, groups = {0, 0}, other = {0, 0};
+  obj_skip extra = {0, 0}, normals = {0, 0}, texcoords = {0, 0}, params = {0, 0}, lines = {0, 0},
+           groups = {0, 0}, other = {0, 0};
   char other_kw[40] = "";
   int64_t *face = NULL, fcap = 0;
   int st = VM_OK;
@@ -146,8 +146,7 @@ done:
   return st;
 }
 
-int vm_read_obj(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                     vm_mesh **out) {
+int vm_read_obj(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out) {
   return vm_surf_read_text(ctx, name, buf, len, '#', read_obj, out);
 }
 

@@ -169,8 +169,7 @@ done:
   return st;
 }
 
-int vm_read_off(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                     vm_mesh **out) {
+int vm_read_off(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out) {
   return vm_surf_read_text(ctx, name, buf, len, '#', read_off, out);
 }
 

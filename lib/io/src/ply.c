@@ -13,9 +13,9 @@ enum { T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_F32, T_F64, T_COUNT };
 static const struct {
   const char *name, *alias;
   int size, integral;
-} ply_types[T_COUNT] = {{"char", "int8", 1, 1},    {"uchar", "uint8", 1, 1},
-                        {"short", "int16", 2, 1},  {"ushort", "uint16", 2, 1},
-                        {"int", "int32", 4, 1},    {"uint", "uint32", 4, 1},
+} ply_types[T_COUNT] = {{"char", "int8", 1, 1},     {"uchar", "uint8", 1, 1},
+                        {"short", "int16", 2, 1},   {"ushort", "uint16", 2, 1},
+                        {"int", "int32", 4, 1},     {"uint", "uint32", 4, 1},
                         {"float", "float32", 4, 0}, {"double", "float64", 8, 0}};
 
 #define PLY_MAXELEM 32
@@ -42,9 +42,9 @@ typedef struct {
   int format;
   int nelem;
   ply_elem elem[PLY_MAXELEM];
-  vm_surf_text t;             /* header, and ASCII data */
+  vm_surf_text t;               /* header, and ASCII data */
   const uint8_t *buf, *p, *end; /* binary data */
-  const char *ename;          /* element being read, for messages */
+  const char *ename;            /* element being read, for messages */
   int64_t item;
 } ply_reader;
 
@@ -81,8 +81,7 @@ static int header_word(ply_reader *R, const char **s, size_t *n, const char *wha
 
 static int copy_name(ply_reader *R, char *dst, const char *s, size_t n) {
   char show[40];
-  if (n >= PLY_NAME)
-    return vm_surf_fail(&R->t, "name '%s' too long", vm_surf_tok_show(s, n, show));
+  if (n >= PLY_NAME) return vm_surf_fail(&R->t, "name '%s' too long", vm_surf_tok_show(s, n, show));
   memcpy(dst, s, n);
   dst[n] = 0;
   return VM_OK;
@@ -235,8 +234,7 @@ static int read_data(ply_reader *R, vm_mesh *m, vm_surf_polys *P) {
         if (j != ix[0] && j != ix[1] && j != ix[2])
           list_add(dropped_v, sizeof dropped_v, E->prop[j].name);
     } else if (is_face) {
-      if ((iface = find_prop(E, "vertex_indices", 1)) < 0)
-        iface = find_prop(E, "vertex_index", 1);
+      if ((iface = find_prop(E, "vertex_indices", 1)) < 0) iface = find_prop(E, "vertex_index", 1);
       if (iface < 0) {
         st = vm_error(ctx, VM_ERR_FORMAT, "%s: element 'face' has no 'vertex_indices' list",
                       R->name);
@@ -355,16 +353,14 @@ static int read_data(ply_reader *R, vm_mesh *m, vm_surf_polys *P) {
   if (st < 0) goto done;
   if (dropped_v[0])
     vm_log(ctx, VM_LOG_WARN, "%s: vertex properties dropped: %s", R->name, dropped_v);
-  if (dropped_f[0])
-    vm_log(ctx, VM_LOG_WARN, "%s: face properties dropped: %s", R->name, dropped_f);
+  if (dropped_f[0]) vm_log(ctx, VM_LOG_WARN, "%s: face properties dropped: %s", R->name, dropped_f);
   if (skipped[0]) vm_log(ctx, VM_LOG_WARN, "%s: elements skipped: %s", R->name, skipped);
 done:
   vm_free(ctx, face);
   return st;
 }
 
-int vm_read_ply(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                     vm_mesh **out) {
+int vm_read_ply(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out) {
   *out = NULL;
   if (len == 0) return vm_error(ctx, VM_ERR_FORMAT, "%s: empty file", name);
   ply_reader *R = vm_calloc(ctx, 1, sizeof *R);

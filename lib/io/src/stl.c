@@ -106,8 +106,9 @@ static int read_binary(vm_ctx *ctx, const char *name, const uint8_t *buf, vm_mes
       double x = le_float(p + 12 + 4 * i);
       if (!isfinite(x)) {
         vm_free(ctx, xyz);
-        return vm_error(ctx, VM_ERR_FORMAT, "%s: triangle %lld: vertex %d: coordinate is not finite",
-                        name, (long long)t, i / 3);
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "%s: triangle %lld: vertex %d: coordinate is not finite", name,
+                        (long long)t, i / 3);
       }
       xyz[9 * t + i] = x + 0.0; /* -0 -> +0 so the two merge */
     }
@@ -132,8 +133,8 @@ typedef struct {
 static int next_tok(stl_text *S, const char **s, size_t *n, const char *want) {
   if (vm_surf_tok(&S->t, s, n)) return VM_OK;
   if (S->facet >= 0)
-    return vm_surf_fail(&S->t, "facet %lld: unexpected end of file, expected %s", (long long)S->facet,
-                        want);
+    return vm_surf_fail(&S->t, "facet %lld: unexpected end of file, expected %s",
+                        (long long)S->facet, want);
   return vm_surf_fail(&S->t, "unexpected end of file, expected %s", want);
 }
 
@@ -267,8 +268,7 @@ fail:
   return st;
 }
 
-int vm_read_stl(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                     vm_mesh **out) {
+int vm_read_stl(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out) {
   *out = NULL;
   if (len == 0) return vm_error(ctx, VM_ERR_FORMAT, "%s: empty file", name);
   size_t i = 0;

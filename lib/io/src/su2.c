@@ -71,12 +71,12 @@ typedef struct {
   const char *name;
   vm_lex lx;
   vm_mesh *m;
-  int dim;                   /* 0 until NDIME */
+  int dim; /* 0 until NDIME */
   int have_elem, have_poin, have_mark;
-  int64_t vmax, vmax_line;   /* largest vertex index seen before NPOIN, and its line */
+  int64_t vmax, vmax_line; /* largest vertex index seen before NPOIN, and its line */
   int nmark;
-  int64_t *mbeg;             /* elements of marker k: [mbeg[k], mbeg[k+1]) */
-  int64_t nline;             /* line markers dropped */
+  int64_t *mbeg; /* elements of marker k: [mbeg[k], mbeg[k+1]) */
+  int64_t nline; /* line markers dropped */
   /* the tokens of the current record line */
   int ntok;
   const char *tok[SU2_MAX_TOK];
@@ -100,8 +100,7 @@ static int su2_fail(su2_rd *r, int64_t line, const char *fmt, ...) {
 
 /* Split the next non-blank, non-comment line into tokens. */
 static int su2_record(su2_rd *r, const char *what) {
-  if (vm_lex_eof(&r->lx))
-    return vm_lex_fail(&r->lx, "unexpected end of file, expected %s", what);
+  if (vm_lex_eof(&r->lx)) return vm_lex_fail(&r->lx, "unexpected end of file, expected %s", what);
   r->line = r->lx.line;
   const char *s, *e;
   size_t n;
@@ -191,8 +190,10 @@ static int su2_verts(su2_rd *r, int type, int k, int32_t *v, const char *what) {
  * trailing integer (the element's index, ignored). */
 static int su2_arity(su2_rd *r, int k, const char *what, int64_t id) {
   if (r->ntok < 1 + k || r->ntok > 2 + k)
-    return su2_fail(r, r->line, "%s of type %lld: expected %d vertex indices and an optional index, found %d numbers",
-                    what, (long long)id, k, r->ntok - 1);
+    return su2_fail(
+        r, r->line,
+        "%s of type %lld: expected %d vertex indices and an optional index, found %d numbers", what,
+        (long long)id, k, r->ntok - 1);
   if (r->ntok == 2 + k) {
     int64_t x;
     return tok_int(r, 1 + k, &x, what);
@@ -238,7 +239,8 @@ static int su2_points(su2_rd *r, int64_t n) {
     /* dim coordinates, then up to two integers (the point's index and, in
      * partitioned files, a second one), ignored */
     if (r->ntok < r->dim || r->ntok > r->dim + 2)
-      return su2_fail(r, r->line, "point %lld: expected %d coordinates and an optional index, found %d numbers",
+      return su2_fail(r, r->line,
+                      "point %lld: expected %d coordinates and an optional index, found %d numbers",
                       (long long)i, r->dim, r->ntok);
     double *x = r->m->xyz + 3 * i;
     for (int c = 0; c < r->dim; c++)
@@ -306,9 +308,7 @@ static int su2_kv_int(su2_rd *r, const su2_kv *kv, int64_t *v, int64_t *second) 
   return st;
 }
 
-static int kv_is(const su2_kv *kv, const char *key) {
-  return vm_tok_is(kv->key, kv->nkey, key);
-}
+static int kv_is(const su2_kv *kv, const char *key) { return vm_tok_is(kv->key, kv->nkey, key); }
 
 static int su2_markers(su2_rd *r, int64_t n) {
   int st = su2_count(r, "NMARK", n, 4);
@@ -322,8 +322,9 @@ static int su2_markers(su2_rd *r, int64_t n) {
                          (long long)k + 1);
     if ((st = su2_keyline(r, &kv))) return st;
     if (!kv_is(&kv, "MARKER_TAG"))
-      return su2_fail(r, kv.line, "expected MARKER_TAG= of marker %lld, found %.*s=",
-                      (long long)k + 1, (int)(kv.nkey > 40 ? 40 : kv.nkey), kv.key);
+      return su2_fail(r, kv.line,
+                      "expected MARKER_TAG= of marker %lld, found %.*s=", (long long)k + 1,
+                      (int)(kv.nkey > 40 ? 40 : kv.nkey), kv.key);
     if (kv.nval == 0 || kv.nval > 200 || memchr(kv.val, 0, kv.nval))
       return su2_fail(r, kv.line, "MARKER_TAG= needs a name of 1 to 200 characters");
     char key[64], nm[201];
@@ -399,7 +400,8 @@ static int su2_parse(su2_rd *r) {
     if (kv_is(&kv, "FFD_NBOX") || kv_is(&kv, "FFD_NLEVEL")) {
       /* free-form deformation boxes (SU2_DEF): not part of the mesh */
       if ((st = su2_kv_int(r, &kv, &x, NULL))) return st;
-      if (x < 0) return su2_fail(r, kv.line, "%.*s= %lld is negative", (int)kv.nkey, kv.key, (long long)x);
+      if (x < 0)
+        return su2_fail(r, kv.line, "%.*s= %lld is negative", (int)kv.nkey, kv.key, (long long)x);
       if (x > 0) {
         vm_log(r->ctx, VM_LOG_WARN, "%s: line %lld: FFD boxes and the rest of the file ignored",
                r->name, (long long)kv.line);
@@ -447,8 +449,8 @@ int vm_read_su2(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
         for (int64_t e = r.mbeg[k]; e < r.mbeg[k + 1]; e++) ((int32_t *)f->data)[e] = k + 1;
     }
     if (!st && r.nline)
-      vm_log(ctx, VM_LOG_WARN, "%s: %lld line elements of markers dropped (no edge elements)",
-             name, (long long)r.nline);
+      vm_log(ctx, VM_LOG_WARN, "%s: %lld line elements of markers dropped (no edge elements)", name,
+             (long long)r.nline);
   }
   vm_free(ctx, r.mbeg);
   if (st < 0) {

@@ -207,8 +207,7 @@ static int earclip(vm_mesh *m, const int32_t *v, int k, double *uv, int *link, i
         if ((pj[0] == pa[0] && pj[1] == pa[1]) || (pj[0] == pb[0] && pj[1] == pb[1]) ||
             (pj[0] == pc[0] && pj[1] == pc[1]))
           continue;
-        if (cross2(pa, pc, pj) >= 0 && cross2(pc, pb, pj) >= 0 && cross2(pb, pa, pj) >= 0)
-          ok = 0;
+        if (cross2(pa, pc, pj) >= 0 && cross2(pc, pb, pj) >= 0 && cross2(pb, pa, pj) >= 0) ok = 0;
       }
       if (ok) {
         found = c;
@@ -248,8 +247,8 @@ int vm_surf_polys_build(vm_surf_polys *P, const char *name, const char *rec_kind
     for (int64_t i = P->off[f]; i < P->off[f + 1]; i++)
       if (P->idx[i] < 0 || P->idx[i] >= m->nv)
         return vm_error(ctx, VM_ERR_FORMAT,
-                        "%s: %s %lld: vertex index %lld out of range (%d..%lld)", name,
-                        rec_kind, (long long)P->rec[f], (long long)(P->idx[i] + base), base,
+                        "%s: %s %lld: vertex index %lld out of range (%d..%lld)", name, rec_kind,
+                        (long long)P->rec[f], (long long)(P->idx[i] + base), base,
                         (long long)(m->nv - 1 + base));
     if (k > kmax) kmax = k;
   }
@@ -290,8 +289,8 @@ static int cmp_edge_use(const void *a, const void *b) {
   return x->elem < y->elem ? -1 : x->elem > y->elem;
 }
 
-int vm_surf_read_text(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                      char comment, vm_surf_parse_fn parse, vm_mesh **out) {
+int vm_surf_read_text(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, char comment,
+                      vm_surf_parse_fn parse, vm_mesh **out) {
   *out = NULL;
   if (len == 0) return vm_error(ctx, VM_ERR_FORMAT, "%s: empty file", name);
   vm_mesh *m;
@@ -395,8 +394,8 @@ int vm_surf_write_prepare(vm_ctx *ctx, const vm_mesh *m, const char *path, const
     *lossy = 1;
   }
   if (split_quads && *nquad) {
-    vm_log(ctx, VM_LOG_WARN, "%s: %lld quads written as two triangles each: %s has no quads",
-           path, (long long)*nquad, fmt);
+    vm_log(ctx, VM_LOG_WARN, "%s: %lld quads written as two triangles each: %s has no quads", path,
+           (long long)*nquad, fmt);
     *lossy = 1;
   }
   if (m->nfield) {
@@ -405,8 +404,7 @@ int vm_surf_write_prepare(vm_ctx *ctx, const vm_mesh *m, const char *path, const
     *lossy = 1;
   }
   int64_t nflag = 0;
-  for (int64_t v = 0; v < m->nv; v++)
-    nflag += m->vflag[v] != VM_VERTEX_FREE || m->vsurf[v] != -1;
+  for (int64_t v = 0; v < m->nv; v++) nflag += m->vflag[v] != VM_VERTEX_FREE || m->vsurf[v] != -1;
   if (nflag) {
     vm_log(ctx, VM_LOG_WARN,
            "%s: flags of %lld fixed/slip vertices not written: %s cannot carry vertex flags", path,

@@ -71,8 +71,8 @@ int vm_surf_report_topology(vm_ctx *ctx, const char *name, const vm_mesh *m);
  * parse on the buffer (comment character `comment`), reports the topology,
  * and returns the mesh in *out or destroys it on failure. */
 typedef int (*vm_surf_parse_fn)(vm_surf_text *t, vm_mesh *m, vm_surf_polys *P);
-int vm_surf_read_text(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                      char comment, vm_surf_parse_fn parse, vm_mesh **out);
+int vm_surf_read_text(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, char comment,
+                      vm_surf_parse_fn parse, vm_mesh **out);
 
 /* Writers: count what can be written and warn about what cannot. On success
  * *lossy is set to 1 if anything is lost; n2d receives the number of

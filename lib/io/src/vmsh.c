@@ -1,4 +1,5 @@
-/* lib/io/src/vmsh.c: the .vmsh binary and .vmsht text mesh formats (specification: docs/vmsh.md). */
+/* lib/io/src/vmsh.c: the .vmsh binary and .vmsht text mesh formats (specification: docs/vmsh.md).
+ */
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -330,8 +331,7 @@ static int check_chunk(const bin_reader *r, const bin_chunk *c, int index, bin_c
     k->nattr++;
     return VM_OK;
   }
-  default:
-    return VM_OK;
+  default: return VM_OK;
   }
 }
 
@@ -440,8 +440,7 @@ static int load_chunk(const bin_reader *r, const bin_chunk *c, const bin_counts 
     attr_at[m->nattr++] = c->off;
     return VM_OK;
   }
-  default:
-    return VM_OK;
+  default: return VM_OK;
   }
 }
 

@@ -39,8 +39,7 @@ int vm_vtk_build_elements(vm_ctx *ctx, vm_mesh *m, const char *name, const char 
                           const vm_vtk_cells *c, int64_t **map) {
   *map = NULL;
   int64_t *mp = vm_alloc_array(ctx, c->n > 0 ? (size_t)c->n : 1, sizeof *mp);
-  if (!mp)
-    return VM_ERR_NOMEM;
+  if (!mp) return VM_ERR_NOMEM;
   int64_t ne = 0, nconn = 0, skipped = 0;
   for (int64_t i = 0; i < c->n; i++) {
     int32_t t = c->types[i];
@@ -85,8 +84,7 @@ int vm_vtk_build_elements(vm_ctx *ctx, vm_mesh *m, const char *name, const char 
   }
   m->eoff[0] = 0;
   for (int64_t i = 0; i < c->n; i++) {
-    if (mp[i] < 0)
-      continue;
+    if (mp[i] < 0) continue;
     int64_t e = mp[i];
     int et = vm_elem_from_vtk(c->types[i]);
     m->etype[e] = (uint8_t)et;
@@ -128,29 +126,24 @@ int vm_vtk_finish_mesh(vm_ctx *ctx, vm_mesh *m, const char *where) {
     memcpy(m->vsurf, f->data, (size_t)m->nv * sizeof *m->vsurf);
     vm_mesh_remove_field(m, VM_VTK_SURF_NAME, VM_FIELD_VERTEX);
   }
-  if (int_point_field(m, "fixed"))
-    vm_mesh_apply_fixed_field(m);
+  if (int_point_field(m, "fixed")) vm_mesh_apply_fixed_field(m);
   int dim = 2;
   for (int64_t e = 0; e < m->ne && dim == 2; e++)
-    if (vm_elem_dim(m->etype[e]) != 2)
-      dim = 3;
+    if (vm_elem_dim(m->etype[e]) != 2) dim = 3;
   for (int64_t v = 0; v < m->nv && dim == 2; v++)
-    if (m->xyz[3 * v + 2] != 0.0)
-      dim = 3;
+    if (m->xyz[3 * v + 2] != 0.0) dim = 3;
   m->dim = dim;
   return VM_OK;
 }
 
 int vm_vtk_need_flags(const vm_mesh *m) {
   for (int64_t v = 0; v < m->nv; v++)
-    if (m->vflag[v] != VM_VERTEX_FREE)
-      return 1;
+    if (m->vflag[v] != VM_VERTEX_FREE) return 1;
   return 0;
 }
 
 int vm_vtk_field_written(const vm_field *f, int flags) {
-  if (!flags || f->location != VM_FIELD_VERTEX)
-    return 1;
+  if (!flags || f->location != VM_FIELD_VERTEX) return 1;
   return strcmp(f->name, VM_VTK_FLAG_NAME) != 0 && strcmp(f->name, VM_VTK_SURF_NAME) != 0;
 }
 
@@ -247,8 +240,7 @@ static int rd_fail(vtkrd *r, const char *rec, size_t at, const char *fmt, ...) {
   va_end(ap);
   if (r->binary && rec)
     return vm_error(r->ctx, VM_ERR_FORMAT, "%s: %s data at byte %zu: %s", r->name, rec, at, msg);
-  if (rec)
-    return vm_lex_fail(&r->lx, "%s: %s", rec, msg);
+  if (rec) return vm_lex_fail(&r->lx, "%s: %s", rec, msg);
   return vm_lex_fail(&r->lx, "%s", msg);
 }
 
@@ -256,8 +248,7 @@ static int get_dtype(vtkrd *r, dtype *t, const char *rec) {
   const char *s;
   size_t n;
   int st = vm_lex_word(&r->lx, &s, &n, "a data type");
-  if (st)
-    return st;
+  if (st) return st;
   for (size_t i = 0; i < sizeof dtype_tab / sizeof dtype_tab[0]; i++)
     if (vm_tok_is(s, n, dtype_tab[i].name)) {
       *t = dtype_tab[i].t;
@@ -269,28 +260,23 @@ static int get_dtype(vtkrd *r, dtype *t, const char *rec) {
 
 static int get_count(vtkrd *r, int64_t *v, const char *what) {
   int st = vm_lex_int(&r->lx, v, what);
-  if (st)
-    return st;
-  if (*v < 0)
-    return vm_lex_fail(&r->lx, "%s: negative count %lld", what, (long long)*v);
+  if (st) return st;
+  if (*v < 0) return vm_lex_fail(&r->lx, "%s: negative count %lld", what, (long long)*v);
   return VM_OK;
 }
 
 /* Nonzero if more than blanks follow on the current line. */
 static int line_has_more(const vtkrd *r) {
   const char *q = r->lx.p;
-  while (q < r->lx.end && (*q == ' ' || *q == '\t' || *q == '\r'))
-    q++;
+  while (q < r->lx.end && (*q == ' ' || *q == '\t' || *q == '\r')) q++;
   return q < r->lx.end && *q != '\n';
 }
 
 /* End of a keyword line: in binary files the data start right after it,
  * so nothing else may stand there; text files are read token by token. */
 static int end_line(vtkrd *r, const char *rec) {
-  if (!r->binary)
-    return VM_OK;
-  if (line_has_more(r))
-    return vm_lex_fail(&r->lx, "%s: unexpected text at end of line", rec);
+  if (!r->binary) return VM_OK;
+  if (line_has_more(r)) return vm_lex_fail(&r->lx, "%s: unexpected text at end of line", rec);
   const char *s;
   size_t n;
   vm_lex_line(&r->lx, &s, &n);
@@ -301,8 +287,7 @@ static int end_line(vtkrd *r, const char *rec) {
  * raw bytes: blanks, then `word` as a whole token. Consumes it on a match. */
 static int take_word(vtkrd *r, const char *word) {
   if (!r->binary) {
-    if (!vm_lex_peek_is(&r->lx, word))
-      return 0;
+    if (!vm_lex_peek_is(&r->lx, word)) return 0;
     const char *s;
     size_t n;
     vm_lex_word(&r->lx, &s, &n, word);
@@ -310,13 +295,10 @@ static int take_word(vtkrd *r, const char *word) {
   }
   const char *q = r->lx.p;
   int64_t nl = 0;
-  while (q < r->lx.end && (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n'))
-    nl += *q++ == '\n';
+  while (q < r->lx.end && (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n')) nl += *q++ == '\n';
   size_t w = strlen(word);
-  if ((size_t)(r->lx.end - q) < w || strncasecmp(q, word, w) != 0)
-    return 0;
-  if (q + w < r->lx.end && !(q[w] == ' ' || q[w] == '\t' || q[w] == '\r' || q[w] == '\n'))
-    return 0;
+  if ((size_t)(r->lx.end - q) < w || strncasecmp(q, word, w) != 0) return 0;
+  if (q + w < r->lx.end && !(q[w] == ' ' || q[w] == '\t' || q[w] == '\r' || q[w] == '\n')) return 0;
   r->lx.p = q + w;
   r->lx.line += nl;
   return 1;
@@ -337,16 +319,14 @@ static int fit_count(vtkrd *r, int64_t a, int64_t b, int size, int64_t *out, con
 
 static uint64_t load_be(const uint8_t *p, int size) {
   uint64_t v = 0;
-  for (int i = 0; i < size; i++)
-    v = v << 8 | p[i];
+  for (int i = 0; i < size; i++) v = v << 8 | p[i];
   return v;
 }
 
 /* Advance over `n` bytes of binary data, keeping the line count honest. */
 static void skip_bytes(vtkrd *r, size_t n) {
   const char *e = r->lx.p + n;
-  for (const char *q = r->lx.p; (q = memchr(q, '\n', (size_t)(e - q))) != NULL; q++)
-    r->lx.line++;
+  for (const char *q = r->lx.p; (q = memchr(q, '\n', (size_t)(e - q))) != NULL; q++) r->lx.line++;
   r->lx.p = e;
 }
 
@@ -361,8 +341,7 @@ typedef struct {
  * [lo, hi]. The caller has checked the count against the file size. */
 static int read_ints(vtkrd *r, const dtype *t, int64_t count, int64_t *out, int64_t lo, int64_t hi,
                      const rdesc *d) {
-  if (t->kind == 'f')
-    return vm_lex_fail(&r->lx, "%s: needs an integer data type", d->rec);
+  if (t->kind == 'f') return vm_lex_fail(&r->lx, "%s: needs an integer data type", d->rec);
   if (r->binary) {
     size_t at = rd_off(r);
     const uint8_t *p = (const uint8_t *)r->lx.p;
@@ -378,15 +357,13 @@ static int read_ints(vtkrd *r, const dtype *t, int64_t count, int64_t *out, int6
         memcpy(&v, &u, sizeof v);
       } else {
         v = (int64_t)u;
-        if (u >> (8 * t->size - 1))
-          v -= (int64_t)1 << (8 * t->size);
+        if (u >> (8 * t->size - 1)) v -= (int64_t)1 << (8 * t->size);
       }
       if (v < lo || v > hi)
         return rd_fail(r, d->rec, at + (size_t)(i * t->size),
                        "%s %lld: value %lld out of range [%lld, %lld]", d->item,
                        (long long)(i / d->ncomp), (long long)v, (long long)lo, (long long)hi);
-      if (out)
-        out[i] = v;
+      if (out) out[i] = v;
     }
     skip_bytes(r, (size_t)count * (size_t)t->size);
     return VM_OK;
@@ -394,14 +371,12 @@ static int read_ints(vtkrd *r, const dtype *t, int64_t count, int64_t *out, int6
   for (int64_t i = 0; i < count; i++) {
     int64_t v;
     int st = vm_lex_int(&r->lx, &v, d->rec);
-    if (st)
-      return st;
+    if (st) return st;
     if (v < lo || v > hi)
       return vm_lex_fail(&r->lx, "%s: %s %lld: value %lld out of range [%lld, %lld]", d->rec,
                          d->item, (long long)(i / d->ncomp), (long long)v, (long long)lo,
                          (long long)hi);
-    if (out)
-      out[i] = v;
+    if (out) out[i] = v;
   }
   return VM_OK;
 }
@@ -431,16 +406,14 @@ static int read_reals(vtkrd *r, const dtype *t, int64_t count, double *out, int 
           memcpy(&v, &u, sizeof v);
         } else {
           v = (int64_t)u;
-          if (u >> (8 * t->size - 1))
-            v -= (int64_t)1 << (8 * t->size);
+          if (u >> (8 * t->size - 1)) v -= (int64_t)1 << (8 * t->size);
         }
         x = (double)v;
       }
       if (need_finite && !isfinite(x))
         return rd_fail(r, d->rec, at + (size_t)(i * t->size), "%s %lld is not finite", d->item,
                        (long long)(i / d->ncomp));
-      if (out)
-        out[i] = x;
+      if (out) out[i] = x;
     }
     skip_bytes(r, (size_t)count * (size_t)t->size);
     return VM_OK;
@@ -448,32 +421,26 @@ static int read_reals(vtkrd *r, const dtype *t, int64_t count, double *out, int 
   for (int64_t i = 0; i < count; i++) {
     double x;
     int st = vm_lex_double(&r->lx, &x, d->rec);
-    if (st)
-      return st;
+    if (st) return st;
     if (need_finite && !isfinite(x))
       return vm_lex_fail(&r->lx, "%s: %s %lld is not finite", d->rec, d->item,
                          (long long)(i / d->ncomp));
-    if (out)
-      out[i] = x;
+    if (out) out[i] = x;
   }
   return VM_OK;
 }
 
 static int hexval(char c) {
-  if (c >= '0' && c <= '9')
-    return c - '0';
-  if (c >= 'a' && c <= 'f')
-    return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F')
-    return c - 'A' + 10;
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
   return -1;
 }
 
 /* VTK writes special characters of array names as %XX. */
 static int decode_name(vtkrd *r, const char *s, size_t n, char **out) {
   char *d = vm_malloc(r->ctx, n + 1);
-  if (!d)
-    return VM_ERR_NOMEM;
+  if (!d) return VM_ERR_NOMEM;
   size_t k = 0;
   for (size_t i = 0; i < n; i++) {
     if (s[i] == '%' && i + 2 < n && hexval(s[i + 1]) >= 0 && hexval(s[i + 2]) >= 0) {
@@ -496,8 +463,7 @@ static int get_name(vtkrd *r, char **out, const char *what) {
   const char *s;
   size_t n;
   int st = vm_lex_word(&r->lx, &s, &n, what);
-  if (st)
-    return st;
+  if (st) return st;
   return decode_name(r, s, n, out);
 }
 
@@ -513,20 +479,17 @@ static int read_array(vtkrd *r, const char *fname, int64_t ntuples, int ncomp, c
                       double scale, const char *rec) {
   int64_t count;
   int st = fit_count(r, ntuples, ncomp, t->size, &count, rec);
-  if (st)
-    return st;
+  if (st) return st;
   rdesc d = {rec, "tuple", ncomp};
   vm_ctx *ctx = r->ctx;
   if (!fname || r->loc < 0) {
-    if (t->kind == 'f' || !r->binary)
-      return read_reals(r, t, count, NULL, 0, &d);
+    if (t->kind == 'f' || !r->binary) return read_reals(r, t, count, NULL, 0, &d);
     return read_ints(r, t, count, NULL, INT64_MIN, INT64_MAX, &d);
   }
   int isint = t->kind != 'f' && scale == 1.0;
   void *tmp =
       vm_alloc_array(ctx, count > 0 ? (size_t)count : 1, isint ? sizeof(int64_t) : sizeof(double));
-  if (!tmp)
-    return VM_ERR_NOMEM;
+  if (!tmp) return VM_ERR_NOMEM;
   if (isint)
     st = read_ints(r, t, count, tmp, INT32_MIN, INT32_MAX, &d);
   else
@@ -537,8 +500,7 @@ static int read_array(vtkrd *r, const char *fname, int64_t ntuples, int ncomp, c
   if (!st) {
     for (int64_t i = 0; i < ntuples; i++) {
       int64_t row = r->loc == VM_FIELD_ELEMENT ? r->map[i] : i;
-      if (row < 0)
-        continue;
+      if (row < 0) continue;
       for (int c = 0; c < ncomp; c++) {
         int64_t k = i * ncomp + c;
         if (isint)
@@ -556,19 +518,14 @@ static int read_array(vtkrd *r, const char *fname, int64_t ntuples, int ncomp, c
  * 5.1 layout with OFFSETS and CONNECTIVITY arrays. */
 static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
   vm_ctx *ctx = r->ctx;
-  if (s->present)
-    return vm_lex_fail(&r->lx, "%s appears twice", kw);
-  if (r->geom_done)
-    return vm_lex_fail(&r->lx, "%s after POINT_DATA or CELL_DATA", kw);
+  if (s->present) return vm_lex_fail(&r->lx, "%s appears twice", kw);
+  if (r->geom_done) return vm_lex_fail(&r->lx, "%s after POINT_DATA or CELL_DATA", kw);
   s->line = r->lx.line;
   int64_t a, b;
   int st = get_count(r, &a, kw);
-  if (!st)
-    st = get_count(r, &b, kw);
-  if (!st)
-    st = end_line(r, kw);
-  if (st)
-    return st;
+  if (!st) st = get_count(r, &b, kw);
+  if (!st) st = end_line(r, kw);
+  if (st) return st;
   s->present = 1;
   s->byte = rd_off(r);
   rdesc d = {kw, "entry", 1};
@@ -582,15 +539,12 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
       return st;
     s->n = a > 0 ? a - 1 : 0;
     s->off = vm_alloc_array(ctx, (size_t)s->n + 1, sizeof *s->off);
-    if (!s->off)
-      return VM_ERR_NOMEM;
+    if (!s->off) return VM_ERR_NOMEM;
     s->off[0] = 0;
     s->byte = rd_off(r);
     d.rec = rec;
-    if ((st = read_ints(r, &t, a, a > 0 ? s->off : NULL, 0, INT64_MAX, &d)))
-      return st;
-    if (s->off[0] != 0)
-      return rd_fail(r, rec, s->byte, "first offset is not 0");
+    if ((st = read_ints(r, &t, a, a > 0 ? s->off : NULL, 0, INT64_MAX, &d))) return st;
+    if (s->off[0] != 0) return rd_fail(r, rec, s->byte, "first offset is not 0");
     for (int64_t i = 0; i < s->n; i++)
       if (s->off[i + 1] < s->off[i])
         return rd_fail(r, rec, s->byte, "offsets decrease at cell %lld", (long long)i);
@@ -602,8 +556,7 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
         (st = end_line(r, rec)) || (st = fit_count(r, b, 1, t.size, &cnt, rec)))
       return st;
     s->conn = vm_alloc_array(ctx, b > 0 ? (size_t)b : 1, sizeof *s->conn);
-    if (!s->conn)
-      return VM_ERR_NOMEM;
+    if (!s->conn) return VM_ERR_NOMEM;
     d.rec = rec;
     return read_ints(r, &t, b, s->conn, INT64_MIN, INT64_MAX, &d);
   }
@@ -612,15 +565,12 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
                        (long long)b);
   int64_t cnt;
   dtype ti = {4, 'i'};
-  if ((st = fit_count(r, b, 1, 4, &cnt, kw)))
-    return st;
+  if ((st = fit_count(r, b, 1, 4, &cnt, kw))) return st;
   s->n = a;
   s->off = vm_alloc_array(ctx, (size_t)a + 1, sizeof *s->off);
   s->conn = vm_alloc_array(ctx, b > 0 ? (size_t)b : 1, sizeof *s->conn);
-  if (!s->off || !s->conn)
-    return VM_ERR_NOMEM;
-  if ((st = read_ints(r, &ti, b, s->conn, INT32_MIN, INT32_MAX, &d)))
-    return st;
+  if (!s->off || !s->conn) return VM_ERR_NOMEM;
+  if ((st = read_ints(r, &ti, b, s->conn, INT32_MIN, INT32_MAX, &d))) return st;
   /* compact the list in place: conn keeps only the ids */
   int64_t in = 0, o = 0;
   s->off[0] = 0;
@@ -632,8 +582,7 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
     if (k < 0 || k > b - in)
       return rd_fail(r, kw, s->byte, "cell %lld: point count %lld overruns the list size %lld",
                      (long long)i, (long long)k, (long long)b);
-    for (int64_t j = 0; j < k; j++)
-      s->conn[o++] = s->conn[in++];
+    for (int64_t j = 0; j < k; j++) s->conn[o++] = s->conn[in++];
     s->off[i + 1] = o;
   }
   if (in != b)
@@ -643,43 +592,30 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
 }
 
 static int read_points(vtkrd *r) {
-  if (r->have_points)
-    return vm_lex_fail(&r->lx, "POINTS appears twice");
-  if (r->geom_done)
-    return vm_lex_fail(&r->lx, "POINTS after POINT_DATA or CELL_DATA");
+  if (r->have_points) return vm_lex_fail(&r->lx, "POINTS appears twice");
+  if (r->geom_done) return vm_lex_fail(&r->lx, "POINTS after POINT_DATA or CELL_DATA");
   int64_t n, cnt;
   dtype t;
   int st = get_count(r, &n, "POINTS");
-  if (!st)
-    st = get_dtype(r, &t, "POINTS");
-  if (!st)
-    st = end_line(r, "POINTS");
-  if (!st)
-    st = fit_count(r, n, 3, t.size, &cnt, "POINTS");
-  if (st)
-    return st;
-  if (n > INT32_MAX)
-    return vm_lex_fail(&r->lx, "POINTS: too many points (%lld)", (long long)n);
-  if ((st = vm_mesh_set_vertices(r->m, n)))
-    return st;
+  if (!st) st = get_dtype(r, &t, "POINTS");
+  if (!st) st = end_line(r, "POINTS");
+  if (!st) st = fit_count(r, n, 3, t.size, &cnt, "POINTS");
+  if (st) return st;
+  if (n > INT32_MAX) return vm_lex_fail(&r->lx, "POINTS: too many points (%lld)", (long long)n);
+  if ((st = vm_mesh_set_vertices(r->m, n))) return st;
   r->have_points = 1;
   rdesc d = {"POINTS", "point", 3};
   return read_reals(r, &t, cnt, r->m->xyz, 1, &d);
 }
 
 static int read_cell_types(vtkrd *r) {
-  if (r->have_types)
-    return vm_lex_fail(&r->lx, "CELL_TYPES appears twice");
-  if (r->geom_done)
-    return vm_lex_fail(&r->lx, "CELL_TYPES after POINT_DATA or CELL_DATA");
+  if (r->have_types) return vm_lex_fail(&r->lx, "CELL_TYPES appears twice");
+  if (r->geom_done) return vm_lex_fail(&r->lx, "CELL_TYPES after POINT_DATA or CELL_DATA");
   int64_t n, cnt;
   int st = get_count(r, &n, "CELL_TYPES");
-  if (!st)
-    st = end_line(r, "CELL_TYPES");
-  if (!st)
-    st = fit_count(r, n, 1, 4, &cnt, "CELL_TYPES");
-  if (st)
-    return st;
+  if (!st) st = end_line(r, "CELL_TYPES");
+  if (!st) st = fit_count(r, n, 1, 4, &cnt, "CELL_TYPES");
+  if (st) return st;
   int64_t *tmp = vm_alloc_array(r->ctx, n > 0 ? (size_t)n : 1, sizeof *tmp);
   r->types = vm_alloc_array(r->ctx, n > 0 ? (size_t)n : 1, sizeof *r->types);
   if (!tmp || !r->types) {
@@ -689,8 +625,7 @@ static int read_cell_types(vtkrd *r) {
   dtype ti = {4, 'i'};
   rdesc d = {"CELL_TYPES", "cell", 1};
   st = read_ints(r, &ti, n, tmp, 0, 255, &d);
-  for (int64_t i = 0; !st && i < n; i++)
-    r->types[i] = (int32_t)tmp[i];
+  for (int64_t i = 0; !st && i < n; i++) r->types[i] = (int32_t)tmp[i];
   vm_free(r->ctx, tmp);
   r->ntypes = n;
   r->have_types = 1;
@@ -707,27 +642,23 @@ static const char *where_of(const vtkrd *r, const cellsec *s, const char *kw, ch
 
 /* Turn the cell sections into mesh elements (once, before any data). */
 static int finish_geometry(vtkrd *r) {
-  if (r->geom_done)
-    return VM_OK;
+  if (r->geom_done) return VM_OK;
   r->geom_done = 1;
   vm_ctx *ctx = r->ctx;
-  if (!r->have_points)
-    return vm_lex_fail(&r->lx, "no POINTS section before this point");
+  if (!r->have_points) return vm_lex_fail(&r->lx, "no POINTS section before this point");
   char where[96];
   if (!r->polydata) {
     cellsec *s = &r->sec[SEC_CELLS];
     if (s->present != r->have_types)
       return vm_lex_fail(&r->lx, "%s without %s", s->present ? "CELLS" : "CELL_TYPES",
                          s->present ? "CELL_TYPES" : "CELLS");
-    if (!s->present)
-      s->n = 0;
+    if (!s->present) s->n = 0;
     if (s->present && r->ntypes != s->n)
       return vm_lex_fail(&r->lx, "CELL_TYPES has %lld cells but CELLS has %lld",
                          (long long)r->ntypes, (long long)s->n);
     vm_vtk_cells c = {s->n, s->off, s->conn, r->types};
     int64_t zero = 0;
-    if (!s->present)
-      c.off = &zero;
+    if (!s->present) c.off = &zero;
     r->nfilecells = s->n;
     return vm_vtk_build_elements(ctx, r->m, r->name, where_of(r, s, "CELLS", where, sizeof where),
                                  &c, &r->map);
@@ -748,8 +679,7 @@ static int finish_geometry(vtkrd *r) {
     off[0] = 0;
     for (int k = 0; k < NSEC; k++) {
       const cellsec *s = &r->sec[k];
-      if (!s->present)
-        continue;
+      if (!s->present) continue;
       for (int64_t i = 0; i < s->n; i++, c++) {
         int64_t len = s->off[i + 1] - s->off[i];
         memcpy(conn + o, s->conn + s->off[i], (size_t)len * sizeof *conn);
@@ -785,8 +715,7 @@ static void skip_metadata(vtkrd *r) {
   vm_lex_line(&r->lx, &l, &ln);
   do {
     vm_lex_line(&r->lx, &l, &ln);
-    while (ln && (l[ln - 1] == ' ' || l[ln - 1] == '\t' || l[ln - 1] == '\r'))
-      ln--;
+    while (ln && (l[ln - 1] == ' ' || l[ln - 1] == '\t' || l[ln - 1] == '\r')) ln--;
   } while (ln && r->lx.p < r->lx.end);
 }
 
@@ -797,10 +726,8 @@ static int read_field_block(vtkrd *r) {
   size_t n;
   int64_t narr;
   int st = vm_lex_word(&r->lx, &s, &n, "FIELD name");
-  if (!st)
-    st = get_count(r, &narr, "FIELD");
-  if (!st)
-    st = end_line(r, "FIELD");
+  if (!st) st = get_count(r, &narr, "FIELD");
+  if (!st) st = end_line(r, "FIELD");
   for (int64_t a = 0; !st && a < narr; a++) {
     if (take_word(r, "NULL_ARRAY")) {
       st = end_line(r, "NULL_ARRAY");
@@ -810,8 +737,7 @@ static int read_field_block(vtkrd *r) {
     int64_t ncomp, ntup;
     dtype t;
     char rec[96];
-    if ((st = get_name(r, &fname, "FIELD array name")))
-      break;
+    if ((st = get_name(r, &fname, "FIELD array name"))) break;
     snprintf(rec, sizeof rec, "FIELD array '%.40s'", fname);
     if (!(st = get_count(r, &ncomp, rec)) && !(st = get_count(r, &ntup, rec)) &&
         !(st = get_dtype(r, &t, rec)) && !(st = end_line(r, rec))) {
@@ -824,8 +750,7 @@ static int read_field_block(vtkrd *r) {
         st = read_array(r, fname, ntup, (int)ncomp, &t, 1.0, rec);
     }
     vm_free(ctx, fname);
-    if (!st && take_word(r, "METADATA"))
-      skip_metadata(r);
+    if (!st && take_word(r, "METADATA")) skip_metadata(r);
   }
   return st;
 }
@@ -835,30 +760,24 @@ static int read_attribute(vtkrd *r, const char *kw, size_t kwn) {
   vm_ctx *ctx = r->ctx;
   char kwbuf[32];
   snprintf(kwbuf, sizeof kwbuf, "%.*s", (int)(kwn < 31 ? kwn : 31), kw);
-  if (r->loc < 0)
-    return vm_lex_fail(&r->lx, "%s outside POINT_DATA / CELL_DATA", kwbuf);
+  if (r->loc < 0) return vm_lex_fail(&r->lx, "%s outside POINT_DATA / CELL_DATA", kwbuf);
   if (vm_tok_is(kw, kwn, "LOOKUP_TABLE")) {
     const char *s;
     size_t n;
     int64_t size, cnt;
     int st = vm_lex_word(&r->lx, &s, &n, "LOOKUP_TABLE name");
-    if (!st)
-      st = get_count(r, &size, "LOOKUP_TABLE");
-    if (!st)
-      st = end_line(r, "LOOKUP_TABLE");
+    if (!st) st = get_count(r, &size, "LOOKUP_TABLE");
+    if (!st) st = end_line(r, "LOOKUP_TABLE");
     dtype t = r->binary ? (dtype){1, 'u'} : (dtype){4, 'f'};
-    if (!st)
-      st = fit_count(r, size, 4, t.size, &cnt, "LOOKUP_TABLE");
+    if (!st) st = fit_count(r, size, 4, t.size, &cnt, "LOOKUP_TABLE");
     rdesc d = {"LOOKUP_TABLE", "entry", 4};
-    if (!st)
-      st = read_reals(r, &t, cnt, NULL, 0, &d);
+    if (!st) st = read_reals(r, &t, cnt, NULL, 0, &d);
     return st;
   }
   char *fname = NULL;
   char rec[96];
   int st = get_name(r, &fname, "array name");
-  if (st)
-    return st;
+  if (st) return st;
   snprintf(rec, sizeof rec, "%s '%.40s'", kwbuf, fname);
   dtype t = {4, 'f'};
   int64_t ncomp = 1;
@@ -871,32 +790,24 @@ static int read_attribute(vtkrd *r, const char *kw, size_t kwn) {
     }
   } else if (vm_tok_is(kw, kwn, "TEXTURE_COORDINATES")) {
     st = get_count(r, &ncomp, rec);
-    if (!st)
-      st = get_dtype(r, &t, rec);
+    if (!st) st = get_dtype(r, &t, rec);
   } else {
     st = get_dtype(r, &t, rec);
-    if (vm_tok_is(kw, kwn, "VECTORS") || vm_tok_is(kw, kwn, "NORMALS"))
-      ncomp = 3;
-    if (vm_tok_is(kw, kwn, "TENSORS"))
-      ncomp = 9;
-    if (vm_tok_is(kw, kwn, "TENSORS6"))
-      ncomp = 6;
-    if (!st && vm_tok_is(kw, kwn, "SCALARS") && line_has_more(r))
-      st = get_count(r, &ncomp, rec);
+    if (vm_tok_is(kw, kwn, "VECTORS") || vm_tok_is(kw, kwn, "NORMALS")) ncomp = 3;
+    if (vm_tok_is(kw, kwn, "TENSORS")) ncomp = 9;
+    if (vm_tok_is(kw, kwn, "TENSORS6")) ncomp = 6;
+    if (!st && vm_tok_is(kw, kwn, "SCALARS") && line_has_more(r)) st = get_count(r, &ncomp, rec);
   }
   if (!st && (ncomp < 1 || ncomp > (1 << 20)))
     st = vm_lex_fail(&r->lx, "%s: bad component count %lld", rec, (long long)ncomp);
-  if (!st)
-    st = end_line(r, rec);
+  if (!st) st = end_line(r, rec);
   if (!st && vm_tok_is(kw, kwn, "SCALARS") && take_word(r, "LOOKUP_TABLE")) {
     const char *s;
     size_t n;
     st = vm_lex_word(&r->lx, &s, &n, "LOOKUP_TABLE name");
-    if (!st)
-      st = end_line(r, rec);
+    if (!st) st = end_line(r, rec);
   }
-  if (!st)
-    st = read_array(r, fname, loc_count(r), (int)ncomp, &t, scale, rec);
+  if (!st) st = read_array(r, fname, loc_count(r), (int)ncomp, &t, scale, rec);
   vm_free(ctx, fname);
   return st;
 }
@@ -907,8 +818,7 @@ static int is_attribute(const char *s, size_t n) {
                               "COLOR_SCALARS", "LOOKUP_TABLE", "GLOBAL_IDS",
                               "PEDIGREE_IDS"};
   for (size_t i = 0; i < sizeof kws / sizeof kws[0]; i++)
-    if (vm_tok_is(s, n, kws[i]))
-      return 1;
+    if (vm_tok_is(s, n, kws[i])) return 1;
   return 0;
 }
 
@@ -932,20 +842,16 @@ static int read_header(vtkrd *r) {
     return vm_lex_fail(&r->lx, "VTK file version %d.%d is not supported (1.0 to 5.1 are)", major,
                        minor);
   }
-  if (r->lx.p >= r->lx.end)
-    return vm_lex_fail(&r->lx, "unexpected end of file after the header");
+  if (r->lx.p >= r->lx.end) return vm_lex_fail(&r->lx, "unexpected end of file after the header");
   vm_lex_line(&r->lx, &s, &n); /* title */
   int st = vm_lex_word(&r->lx, &s, &n, "ASCII or BINARY");
-  if (st)
-    return st;
+  if (st) return st;
   if (vm_tok_is(s, n, "BINARY"))
     r->binary = 1;
   else if (!vm_tok_is(s, n, "ASCII"))
     return vm_lex_fail(&r->lx, "expected ASCII or BINARY, found '%.*s'", (int)(n > 40 ? 40 : n), s);
-  if ((st = vm_lex_expect(&r->lx, "DATASET")))
-    return st;
-  if ((st = vm_lex_word(&r->lx, &s, &n, "dataset type")))
-    return st;
+  if ((st = vm_lex_expect(&r->lx, "DATASET"))) return st;
+  if ((st = vm_lex_word(&r->lx, &s, &n, "dataset type"))) return st;
   if (vm_tok_is(s, n, "POLYDATA"))
     r->polydata = 1;
   else if (!vm_tok_is(s, n, "UNSTRUCTURED_GRID"))
@@ -961,13 +867,11 @@ static int read_body(vtkrd *r) {
   while (!st && !vm_lex_eof(&r->lx)) {
     const char *s;
     size_t n;
-    if ((st = vm_lex_word(&r->lx, &s, &n, "a keyword")))
-      break;
+    if ((st = vm_lex_word(&r->lx, &s, &n, "a keyword"))) break;
     int sec = -1;
     if (r->polydata)
       for (int k = 0; k < NSEC; k++)
-        if (vm_tok_is(s, n, pd_kw[k]))
-          sec = k;
+        if (vm_tok_is(s, n, pd_kw[k])) sec = k;
     if (vm_tok_is(s, n, "POINTS")) {
       st = read_points(r);
     } else if (!r->polydata && vm_tok_is(s, n, "CELLS")) {
@@ -980,8 +884,7 @@ static int read_body(vtkrd *r) {
       int loc = vm_tok_is(s, n, "POINT_DATA") ? VM_FIELD_VERTEX : VM_FIELD_ELEMENT;
       const char *kw = loc == VM_FIELD_VERTEX ? "POINT_DATA" : "CELL_DATA";
       int64_t cnt;
-      if ((st = finish_geometry(r)) || (st = get_count(r, &cnt, kw)))
-        break;
+      if ((st = finish_geometry(r)) || (st = get_count(r, &cnt, kw))) break;
       r->loc = loc;
       if (cnt != loc_count(r))
         st = vm_lex_fail(&r->lx, "%s %lld does not match the %lld %s", kw, (long long)cnt,
@@ -998,8 +901,7 @@ static int read_body(vtkrd *r) {
       st = vm_lex_fail(&r->lx, "unknown keyword '%.*s'", (int)(n > 40 ? 40 : n), s);
     }
   }
-  if (!st)
-    st = finish_geometry(r);
+  if (!st) st = finish_geometry(r);
   return st;
 }
 
@@ -1013,12 +915,9 @@ int vm_read_vtk(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
   r.loc = -1;
   vm_lex_init(&r.lx, ctx, name, buf, len);
   int st = vm_mesh_create(ctx, &r.m);
-  if (!st)
-    st = read_header(&r);
-  if (!st)
-    st = read_body(&r);
-  if (!st)
-    st = vm_vtk_finish_mesh(ctx, r.m, name);
+  if (!st) st = read_header(&r);
+  if (!st) st = read_body(&r);
+  if (!st) st = vm_vtk_finish_mesh(ctx, r.m, name);
   for (int k = 0; k < NSEC; k++) {
     vm_free(ctx, r.sec[k].off);
     vm_free(ctx, r.sec[k].conn);
@@ -1037,8 +936,7 @@ int vm_read_vtk(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
 
 static void put_be(FILE *fp, uint64_t v, int size) {
   unsigned char b[8];
-  for (int i = size - 1; i >= 0; i--, v >>= 8)
-    b[i] = (unsigned char)(v & 0xff);
+  for (int i = size - 1; i >= 0; i--, v >>= 8) b[i] = (unsigned char)(v & 0xff);
   fwrite(b, 1, (size_t)size, fp);
 }
 
@@ -1071,8 +969,7 @@ static void put_name(FILE *fp, const char *s) {
 }
 
 static void put_sep(FILE *fp, int binary, int last) {
-  if (!binary)
-    fputc(last ? '\n' : ' ', fp);
+  if (!binary) fputc(last ? '\n' : ' ', fp);
 }
 
 static void write_field(FILE *fp, const char *fname, int ncomp, int64_t n, int type,
@@ -1087,8 +984,7 @@ static void write_field(FILE *fp, const char *fname, int ncomp, int64_t n, int t
         put_i32(fp, ((const int32_t *)data)[i * ncomp + c], binary);
       put_sep(fp, binary, c == ncomp - 1);
     }
-  if (binary)
-    fputc('\n', fp);
+  if (binary) fputc('\n', fp);
 }
 
 static void write_data_block(FILE *fp, const vm_mesh *m, int loc, int flags, int binary,
@@ -1098,15 +994,12 @@ static void write_data_block(FILE *fp, const vm_mesh *m, int loc, int flags, int
   for (int i = 0; i < m->nfield; i++)
     k += m->fields[i].location == loc && vm_vtk_field_written(&m->fields[i], flags);
   int withflags = loc == VM_FIELD_VERTEX && flags;
-  if (withflags)
-    k += 2;
-  if (n == 0 || k == 0)
-    return;
+  if (withflags) k += 2;
+  if (n == 0 || k == 0) return;
   fprintf(fp, "%s %lld\nFIELD FieldData %d\n", loc == VM_FIELD_VERTEX ? "POINT_DATA" : "CELL_DATA",
           (long long)n, k);
   if (withflags) {
-    for (int64_t v = 0; v < m->nv; v++)
-      fl[v] = m->vflag[v];
+    for (int64_t v = 0; v < m->nv; v++) fl[v] = m->vflag[v];
     write_field(fp, VM_VTK_FLAG_NAME, 1, n, VM_FIELD_I32, fl, binary);
     write_field(fp, VM_VTK_SURF_NAME, 1, n, VM_FIELD_I32, m->vsurf, binary);
   }
@@ -1123,8 +1016,7 @@ int vm_write_vtk(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
   int32_t *fl = NULL;
   if (flags) {
     fl = vm_alloc_array(ctx, (size_t)m->nv, sizeof *fl);
-    if (!fl)
-      return VM_ERR_NOMEM;
+    if (!fl) return VM_ERR_NOMEM;
   }
   vm_outfile *of;
   int st = vm_outfile_open(ctx, path, &of);
@@ -1141,8 +1033,7 @@ int vm_write_vtk(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
       put_f64(fp, m->xyz[3 * v + c], binary);
       put_sep(fp, binary, c == 2);
     }
-  if (binary && m->nv)
-    fputc('\n', fp);
+  if (binary && m->nv) fputc('\n', fp);
   int64_t nconn = m->eoff[m->ne];
   fprintf(fp, "CELLS %lld %lld\n", (long long)m->ne, (long long)(m->ne + nconn));
   for (int64_t e = 0; e < m->ne; e++) {
@@ -1154,20 +1045,17 @@ int vm_write_vtk(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
     }
     put_sep(fp, binary, 1);
   }
-  if (binary && m->ne)
-    fputc('\n', fp);
+  if (binary && m->ne) fputc('\n', fp);
   fprintf(fp, "CELL_TYPES %lld\n", (long long)m->ne);
   for (int64_t e = 0; e < m->ne; e++) {
     put_i32(fp, vm_elem_to_vtk(m->etype[e]), binary);
     put_sep(fp, binary, 1);
   }
-  if (binary && m->ne)
-    fputc('\n', fp);
+  if (binary && m->ne) fputc('\n', fp);
   write_data_block(fp, m, VM_FIELD_VERTEX, flags, binary, fl);
   write_data_block(fp, m, VM_FIELD_ELEMENT, flags, binary, NULL);
   vm_free(ctx, fl);
   st = vm_outfile_commit(&of);
-  if (st)
-    return st;
+  if (st) return st;
   return vm_vtk_report_lost(ctx, m, path, flags) ? VM_WARN_LOSSY : VM_OK;
 }

@@ -48,21 +48,17 @@ static uint32_t inf_bits(inflater *s, int n) {
 static int huff_build(huffman *h, const uint8_t *len, int n) {
   uint16_t offs[16];
   memset(h->count, 0, sizeof h->count);
-  for (int i = 0; i < n; i++)
-    h->count[len[i]]++;
+  for (int i = 0; i < n; i++) h->count[len[i]]++;
   h->count[0] = 0;
   int left = 1;
   for (int l = 1; l < 16; l++) {
     left = 2 * left - h->count[l];
-    if (left < 0)
-      return -1;
+    if (left < 0) return -1;
   }
   offs[1] = 0;
-  for (int l = 1; l < 15; l++)
-    offs[l + 1] = (uint16_t)(offs[l] + h->count[l]);
+  for (int l = 1; l < 15; l++) offs[l + 1] = (uint16_t)(offs[l] + h->count[l]);
   for (int i = 0; i < n; i++)
-    if (len[i])
-      h->symbol[offs[len[i]]++] = (uint16_t)i;
+    if (len[i]) h->symbol[offs[len[i]]++] = (uint16_t)i;
   return 0;
 }
 
@@ -71,11 +67,9 @@ static int huff_decode(inflater *s, const huffman *h) {
   int code = 0, first = 0, index = 0;
   for (int l = 1; l < 16; l++) {
     code |= (int)inf_bits(s, 1);
-    if (s->bad)
-      return -1;
+    if (s->bad) return -1;
     int cnt = h->count[l];
-    if (code - first < cnt)
-      return h->symbol[index + code - first];
+    if (code - first < cnt) return h->symbol[index + code - first];
     index += cnt;
     first = (first + cnt) << 1;
     code <<= 1;
@@ -98,27 +92,21 @@ static const uint8_t dist_extra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  
 static int inf_codes(inflater *s, const huffman *lit, const huffman *dist) {
   for (;;) {
     int sym = huff_decode(s, lit);
-    if (sym < 0)
-      return -1;
+    if (sym < 0) return -1;
     if (sym < 256) {
-      if (s->outpos >= s->outlen)
-        return -1;
+      if (s->outpos >= s->outlen) return -1;
       s->out[s->outpos++] = (uint8_t)sym;
     } else if (sym == 256) {
       return 0;
     } else {
       sym -= 257;
-      if (sym >= 29)
-        return -1;
+      if (sym >= 29) return -1;
       size_t len = len_base[sym] + inf_bits(s, len_extra[sym]);
       int ds = huff_decode(s, dist);
-      if (ds < 0 || ds >= 30)
-        return -1;
+      if (ds < 0 || ds >= 30) return -1;
       size_t d = dist_base[ds] + inf_bits(s, dist_extra[ds]);
-      if (s->bad || d > s->outpos || len > s->outlen - s->outpos)
-        return -1;
-      for (size_t i = 0; i < len; i++, s->outpos++)
-        s->out[s->outpos] = s->out[s->outpos - d];
+      if (s->bad || d > s->outpos || len > s->outlen - s->outpos) return -1;
+      for (size_t i = 0; i < len; i++, s->outpos++) s->out[s->outpos] = s->out[s->outpos - d];
     }
   }
 }
@@ -130,18 +118,14 @@ static int inf_dynamic(inflater *s) {
   huffman lit, dist;
   int nlen = (int)inf_bits(s, 5) + 257, ndist = (int)inf_bits(s, 5) + 1;
   int ncode = (int)inf_bits(s, 4) + 4;
-  if (s->bad || nlen > 286 || ndist > 30)
-    return -1;
+  if (s->bad || nlen > 286 || ndist > 30) return -1;
   memset(len, 0, sizeof len);
-  for (int i = 0; i < ncode; i++)
-    len[order[i]] = (uint8_t)inf_bits(s, 3);
-  if (s->bad || huff_build(&lit, len, 19))
-    return -1;
+  for (int i = 0; i < ncode; i++) len[order[i]] = (uint8_t)inf_bits(s, 3);
+  if (s->bad || huff_build(&lit, len, 19)) return -1;
   int i = 0;
   while (i < nlen + ndist) {
     int sym = huff_decode(s, &lit);
-    if (sym < 0)
-      return -1;
+    if (sym < 0) return -1;
     if (sym < 16) {
       len[i++] = (uint8_t)sym;
       continue;
@@ -149,8 +133,7 @@ static int inf_dynamic(inflater *s) {
     int rep;
     uint8_t v = 0;
     if (sym == 16) {
-      if (i == 0)
-        return -1;
+      if (i == 0) return -1;
       v = len[i - 1];
       rep = 3 + (int)inf_bits(s, 2);
     } else if (sym == 17) {
@@ -158,26 +141,20 @@ static int inf_dynamic(inflater *s) {
     } else {
       rep = 11 + (int)inf_bits(s, 7);
     }
-    if (s->bad || i + rep > nlen + ndist)
-      return -1;
-    while (rep--)
-      len[i++] = v;
+    if (s->bad || i + rep > nlen + ndist) return -1;
+    while (rep--) len[i++] = v;
   }
-  if (len[256] == 0)
-    return -1;
-  if (huff_build(&lit, len, nlen) || huff_build(&dist, len + nlen, ndist))
-    return -1;
+  if (len[256] == 0) return -1;
+  if (huff_build(&lit, len, nlen) || huff_build(&dist, len + nlen, ndist)) return -1;
   return inf_codes(s, &lit, &dist);
 }
 
 static int inf_fixed(inflater *s) {
   uint8_t len[288];
   huffman lit, dist;
-  for (int i = 0; i < 288; i++)
-    len[i] = i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8;
+  for (int i = 0; i < 288; i++) len[i] = i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8;
   huff_build(&lit, len, 288);
-  for (int i = 0; i < 30; i++)
-    len[i] = 5;
+  for (int i = 0; i < 30; i++) len[i] = 5;
   huff_build(&dist, len, 30);
   return inf_codes(s, &lit, &dist);
 }
@@ -185,8 +162,7 @@ static int inf_fixed(inflater *s) {
 static int inf_stored(inflater *s) {
   s->bits = 0;
   s->nbits = 0;
-  if (s->inlen - s->inpos < 4)
-    return -1;
+  if (s->inlen - s->inpos < 4) return -1;
   const uint8_t *p = s->in + s->inpos;
   unsigned len = p[0] | (unsigned)p[1] << 8, nlen = p[2] | (unsigned)p[3] << 8;
   s->inpos += 4;
@@ -200,11 +176,9 @@ static int inf_stored(inflater *s) {
 
 /* Inflate a zlib stream into exactly outlen bytes; 0 or -1. */
 static int zlib_inflate(const uint8_t *in, size_t inlen, uint8_t *out, size_t outlen) {
-  if (inlen < 6)
-    return -1;
+  if (inlen < 6) return -1;
   unsigned cmf = in[0], flg = in[1];
-  if ((cmf & 15) != 8 || (cmf >> 4) > 7 || (cmf * 256 + flg) % 31 || (flg & 32))
-    return -1;
+  if ((cmf & 15) != 8 || (cmf >> 4) > 7 || (cmf * 256 + flg) % 31 || (flg & 32)) return -1;
   inflater s = {in, inlen - 4, 2, 0, 0, out, outlen, 0, 0};
   int last;
   do {
@@ -215,11 +189,9 @@ static int zlib_inflate(const uint8_t *in, size_t inlen, uint8_t *out, size_t ou
              : type == 1 ? inf_fixed(&s)
              : type == 2 ? inf_dynamic(&s)
                          : -1;
-    if (st || s.bad)
-      return -1;
+    if (st || s.bad) return -1;
   } while (!last);
-  if (s.outpos != outlen)
-    return -1;
+  if (s.outpos != outlen) return -1;
   const uint8_t *a = in + inlen - 4;
   uint32_t want = (uint32_t)a[0] << 24 | (uint32_t)a[1] << 16 | (uint32_t)a[2] << 8 | a[3];
   uint32_t s1 = 1, s2 = 0;
@@ -233,16 +205,11 @@ static int zlib_inflate(const uint8_t *in, size_t inlen, uint8_t *out, size_t ou
 /* Base64. */
 
 static int b64_val(unsigned char c) {
-  if (c >= 'A' && c <= 'Z')
-    return c - 'A';
-  if (c >= 'a' && c <= 'z')
-    return c - 'a' + 26;
-  if (c >= '0' && c <= '9')
-    return c - '0' + 52;
-  if (c == '+')
-    return 62;
-  if (c == '/')
-    return 63;
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  if (c == '+') return 62;
+  if (c == '/') return 63;
   return -1;
 }
 
@@ -262,14 +229,12 @@ static int b64_decode(const char *s, const char *end, uint8_t *out, size_t need,
       continue;
     }
     if (c == '=') {
-      if (k < 2)
-        break;
+      if (k < 2) break;
       pad++;
       q[k++] = 0;
     } else {
       int v = b64_val(c);
-      if (v < 0 || pad)
-        break;
+      if (v < 0 || pad) break;
       q[k++] = v;
     }
     p++;
@@ -277,10 +242,8 @@ static int b64_decode(const char *s, const char *end, uint8_t *out, size_t need,
       uint32_t w =
           (uint32_t)q[0] << 18 | (uint32_t)q[1] << 12 | (uint32_t)q[2] << 6 | (uint32_t)q[3];
       out[n++] = (uint8_t)(w >> 16);
-      if (pad < 2)
-        out[n++] = (uint8_t)(w >> 8);
-      if (pad < 1)
-        out[n++] = (uint8_t)w;
+      if (pad < 2) out[n++] = (uint8_t)(w >> 8);
+      if (pad < 1) out[n++] = (uint8_t)w;
       k = 0;
       pad = 0;
     }
@@ -289,13 +252,11 @@ static int b64_decode(const char *s, const char *end, uint8_t *out, size_t need,
     *bad = p;
     return -1;
   }
-  if (k == 1 || pad)
-    return -2;
+  if (k == 1 || pad) return -2;
   if (k >= 2) {
     uint32_t w = (uint32_t)q[0] << 18 | (uint32_t)q[1] << 12 | (k == 3 ? (uint32_t)q[2] << 6 : 0);
     out[n++] = (uint8_t)(w >> 16);
-    if (k == 3)
-      out[n++] = (uint8_t)(w >> 8);
+    if (k == 3) out[n++] = (uint8_t)(w >> 8);
   }
   *got = n;
   return 0;
@@ -358,8 +319,7 @@ static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == 
 static const char *find_str(const char *p, const char *end, const char *s) {
   size_t n = strlen(s);
   for (; (size_t)(end - p) >= n; p++)
-    if (*p == *s && !memcmp(p, s, n))
-      return p;
+    if (*p == *s && !memcmp(p, s, n)) return p;
   return NULL;
 }
 
@@ -371,20 +331,15 @@ static int attr_raw(const char *a, size_t alen, const char *key, const char **v,
   const char *p = a, *end = a + alen;
   size_t kn = strlen(key);
   while (p < end) {
-    while (p < end && is_space(*p))
-      p++;
+    while (p < end && is_space(*p)) p++;
     const char *k = p;
-    while (p < end && *p != '=' && !is_space(*p))
-      p++;
+    while (p < end && *p != '=' && !is_space(*p)) p++;
     size_t klen = (size_t)(p - k);
-    while (p < end && *p != '"' && *p != '\'')
-      p++;
-    if (p >= end)
-      return 0;
+    while (p < end && *p != '"' && *p != '\'') p++;
+    if (p >= end) return 0;
     char qc = *p++;
     const char *vs = p;
-    while (p < end && *p != qc)
-      p++;
+    while (p < end && *p != qc) p++;
     if (klen == kn && !memcmp(k, key, kn)) {
       *v = vs;
       *vn = (size_t)(p - vs);
@@ -406,8 +361,7 @@ static int attr_text(const char *a, size_t alen, const char *key, char *buf, siz
   const char *v;
   size_t n, k = 0;
   buf[0] = 0;
-  if (!attr_raw(a, alen, key, &v, &n))
-    return 0;
+  if (!attr_raw(a, alen, key, &v, &n)) return 0;
   for (size_t i = 0; i < n && k + 5 < cap; i++) {
     static const struct {
       const char *ent;
@@ -433,8 +387,7 @@ static int attr_text(const char *a, size_t alen, const char *key, char *buf, siz
                 : hex && v[j] >= 'a' && v[j] <= 'f' ? v[j] - 'a' + 10
                 : hex && v[j] >= 'A' && v[j] <= 'F' ? v[j] - 'A' + 10
                                                     : -1;
-        if (d < 0)
-          break;
+        if (d < 0) break;
         cp = cp * (hex ? 16u : 10u) + (unsigned long)d;
         j++;
       }
@@ -458,8 +411,7 @@ static int attr_text(const char *a, size_t alen, const char *key, char *buf, siz
         done = 1;
       }
     }
-    if (!done)
-      buf[k++] = v[i];
+    if (!done) buf[k++] = v[i];
   }
   buf[k] = 0;
   return 1;
@@ -468,12 +420,10 @@ static int attr_text(const char *a, size_t alen, const char *key, char *buf, siz
 /* A non-negative integer attribute; -1 if absent, -2 if malformed. */
 static int64_t attr_int(const char *a, size_t alen, const char *key) {
   char buf[32];
-  if (!attr_text(a, alen, key, buf, sizeof buf))
-    return -1;
+  if (!attr_text(a, alen, key, buf, sizeof buf)) return -1;
   char *e;
   long long v = strtoll(buf, &e, 10);
-  if (e == buf || *e || v < 0)
-    return -2;
+  if (e == buf || *e || v < 0) return -2;
   return v;
 }
 
@@ -482,8 +432,7 @@ static int push_array(vturd *r, int parent, const char *at, const char *a, size_
   if (r->narr == r->carr) {
     int c = r->carr ? 2 * r->carr : 16;
     darr *n = vm_realloc(r->ctx, r->arr, (size_t)c * sizeof *n);
-    if (!n)
-      return VM_ERR_NOMEM;
+    if (!n) return VM_ERR_NOMEM;
     r->arr = n;
     r->carr = c;
   }
@@ -535,8 +484,7 @@ static int xml_scan(vturd *r) {
   const char *p = r->base, *end = r->end;
   for (;;) {
     const char *lt = memchr(p, '<', (size_t)(end - p));
-    if (!lt)
-      break;
+    if (!lt) break;
     p = lt;
     const char *close = NULL;
     if (end - p >= 4 && !memcmp(p, "<!--", 4))
@@ -549,60 +497,44 @@ static int xml_scan(vturd *r) {
       close = memchr(p, '>', (size_t)(end - p));
     else
       goto tag;
-    if (!close)
-      return vfail(r, p, "unterminated comment or declaration");
+    if (!close) return vfail(r, p, "unterminated comment or declaration");
     p = close + 1;
     continue;
   tag:;
     int is_end = end - p >= 2 && p[1] == '/';
     const char *n0 = p + 1 + is_end, *q = n0;
-    while (q < end && !is_space(*q) && *q != '>' && *q != '/')
-      q++;
+    while (q < end && !is_space(*q) && *q != '>' && *q != '/') q++;
     size_t nlen = (size_t)(q - n0);
-    if (nlen == 0)
-      return vfail(r, p, "malformed tag");
+    if (nlen == 0) return vfail(r, p, "malformed tag");
     /* attributes: name="value" pairs, up to '>' or '/>' */
     const char *a0 = q;
     int selfclose = 0;
     for (;;) {
-      while (q < end && is_space(*q))
-        q++;
-      if (q >= end)
-        return vfail(r, p, "unterminated tag <%.*s", (int)(nlen > 40 ? 40 : nlen), n0);
-      if (*q == '>')
-        break;
+      while (q < end && is_space(*q)) q++;
+      if (q >= end) return vfail(r, p, "unterminated tag <%.*s", (int)(nlen > 40 ? 40 : nlen), n0);
+      if (*q == '>') break;
       if (*q == '/' && !is_end) {
-        if (q + 1 >= end || q[1] != '>')
-          return vfail(r, p, "malformed tag");
+        if (q + 1 >= end || q[1] != '>') return vfail(r, p, "malformed tag");
         selfclose = 1;
         break;
       }
-      if (is_end)
-        return vfail(r, p, "malformed end tag");
+      if (is_end) return vfail(r, p, "malformed end tag");
       const char *k = q;
-      while (q < end && *q != '=' && !is_space(*q) && *q != '>' && *q != '/')
-        q++;
-      if (q == k)
-        return vfail(r, p, "malformed attribute");
-      while (q < end && is_space(*q))
-        q++;
-      if (q >= end || *q != '=')
-        return vfail(r, p, "attribute without a value");
+      while (q < end && *q != '=' && !is_space(*q) && *q != '>' && *q != '/') q++;
+      if (q == k) return vfail(r, p, "malformed attribute");
+      while (q < end && is_space(*q)) q++;
+      if (q >= end || *q != '=') return vfail(r, p, "attribute without a value");
       q++;
-      while (q < end && is_space(*q))
-        q++;
-      if (q >= end || (*q != '"' && *q != '\''))
-        return vfail(r, p, "attribute value not quoted");
+      while (q < end && is_space(*q)) q++;
+      if (q >= end || (*q != '"' && *q != '\'')) return vfail(r, p, "attribute value not quoted");
       const char *e = memchr(q + 1, *q, (size_t)(end - q - 1));
-      if (!e)
-        return vfail(r, p, "unterminated attribute value");
+      if (!e) return vfail(r, p, "unterminated attribute value");
       q = e + 1;
     }
     size_t alen = (size_t)(q - a0);
     const char *after = q + 1 + selfclose;
     if (is_end) {
-      if (depth == 0)
-        return vfail(r, p, "unexpected </%.*s>", (int)(nlen > 40 ? 40 : nlen), n0);
+      if (depth == 0) return vfail(r, p, "unexpected </%.*s>", (int)(nlen > 40 ? 40 : nlen), n0);
       depth--;
       if (tlen[depth] != nlen || memcmp(tname[depth], n0, nlen))
         return vfail(r, p, "</%.*s> closes <%.*s>", (int)(nlen > 40 ? 40 : nlen), n0,
@@ -616,20 +548,16 @@ static int xml_scan(vturd *r) {
         text_from = after;
       }
       p = after;
-      if (depth == 0)
-        break;
+      if (depth == 0) break;
       continue;
     }
 #define TAG_IS(s) (nlen == strlen(s) && !memcmp(n0, s, nlen))
     int parent = depth ? kind[depth - 1] : -1, k = K_OTHER;
     if (depth == 0) {
-      if (seen_root)
-        return vfail(r, p, "content after </VTKFile>");
-      if (!TAG_IS("VTKFile"))
-        return vfail(r, p, "not a VTK XML file (no <VTKFile>)");
+      if (seen_root) return vfail(r, p, "content after </VTKFile>");
+      if (!TAG_IS("VTKFile")) return vfail(r, p, "not a VTK XML file (no <VTKFile>)");
       int st = vtkfile_attrs(r, p, a0, alen);
-      if (st)
-        return st;
+      if (st) return st;
       seen_root = 1;
       k = K_FILE;
     } else if (parent == K_FILE && TAG_IS("UnstructuredGrid")) {
@@ -641,23 +569,20 @@ static int xml_scan(vturd *r) {
         return vfail(r, p, "AppendedData encoding '%s' is not supported (raw or base64)", enc);
       r->app_b64 = !strcmp(enc, "base64");
       const char *u = after;
-      while (u < end && is_space(*u))
-        u++;
+      while (u < end && is_space(*u)) u++;
       if (selfclose || u >= end || *u != '_')
         return vfail(r, p, "AppendedData does not start with '_'");
       r->appended = u + 1;
       /* the data are not scanned, but a truncated file must not pass */
       const char *t = end;
-      while (t > r->appended && is_space(t[-1]))
-        t--;
+      while (t > r->appended && is_space(t[-1])) t--;
       static const char tail[] = "</VTKFile>";
       size_t tl = sizeof tail - 1;
       if ((size_t)(t - r->appended) < tl || memcmp(t - tl, tail, tl))
         return vfail(r, end, "file truncated: no </VTKFile> after the appended data");
       return VM_OK;
     } else if (parent == K_GRID && TAG_IS("Piece")) {
-      if (++r->npieces > 1)
-        return vfail(r, p, "more than one Piece is not supported");
+      if (++r->npieces > 1) return vfail(r, p, "more than one Piece is not supported");
       r->piece_attrs = a0;
       r->piece_alen = alen;
       r->piece_at = p;
@@ -676,15 +601,13 @@ static int xml_scan(vturd *r) {
                TAG_IS("DataArray")) {
       k = K_ARRAY;
       int st = push_array(r, parent, p, a0, alen, NULL, NULL);
-      if (st)
-        return st;
+      if (st) return st;
       cur_arr = r->narr - 1;
       text_from = after;
     }
 #undef TAG_IS
     if (!selfclose) {
-      if (depth == MAXDEPTH)
-        return vfail(r, p, "XML nested too deeply");
+      if (depth == MAXDEPTH) return vfail(r, p, "XML nested too deeply");
       kind[depth] = k;
       tname[depth] = n0;
       tlen[depth] = nlen;
@@ -719,15 +642,13 @@ static const xtype *array_type(const darr *a) {
   char buf[16];
   attr_text(a->attrs, a->alen, "type", buf, sizeof buf);
   for (size_t i = 0; i < sizeof xtypes / sizeof xtypes[0]; i++)
-    if (!strcmp(buf, xtypes[i].name))
-      return &xtypes[i];
+    if (!strcmp(buf, xtypes[i].name)) return &xtypes[i];
   return NULL;
 }
 
 static uint64_t load_u(const uint8_t *p, int size, int big) {
   uint64_t v = 0;
-  for (int i = 0; i < size; i++)
-    v |= (uint64_t)p[big ? i : size - 1 - i] << (8 * (size - 1 - i));
+  for (int i = 0; i < size; i++) v |= (uint64_t)p[big ? i : size - 1 - i] << (8 * (size - 1 - i));
   return v;
 }
 
@@ -767,8 +688,7 @@ static int block_need(const actx *c, const uint8_t *src, size_t len, size_t *nee
       return VM_OK;
     }
     uint64_t n = hdr_word(c, src, 0);
-    if (n > SIZE_MAX - hs)
-      return afail(c, "block size %" PRIu64 " is impossible", n);
+    if (n > SIZE_MAX - hs) return afail(c, "block size %" PRIu64 " is impossible", n);
     *need = hs + (size_t)n;
     return VM_OK;
   }
@@ -803,10 +723,8 @@ static int block_payload(const actx *c, const uint8_t *src, size_t len, const ui
   size_t need, hs = (size_t)c->r->hsize;
   *owned = NULL;
   int st = block_need(c, src, len, &need);
-  if (st)
-    return st;
-  if (need > len)
-    return afail(c, "data truncated: needs %zu bytes, has %zu", need, len);
+  if (st) return st;
+  if (need > len) return afail(c, "data truncated: needs %zu bytes, has %zu", need, len);
   if (!c->r->zlib) {
     *data = src + hs;
     *nbytes = need - hs;
@@ -818,23 +736,18 @@ static int block_payload(const actx *c, const uint8_t *src, size_t len, const ui
     *nbytes = 0;
     return VM_OK;
   }
-  if (last == 0)
-    last = bs;
-  if (bs == 0 || last > bs)
-    return afail(c, "bad compression header");
+  if (last == 0) last = bs;
+  if (bs == 0 || last > bs) return afail(c, "bad compression header");
   /* deflate cannot expand data more than about 1032 times */
   size_t h = (3 + (size_t)nb) * hs;
   uint64_t limit = 1032 * ((uint64_t)(len - h) + nb), full = 0;
-  if (nb > 1 && bs > limit / (nb - 1))
-    limit = 0;
-  if (nb > 1 && limit)
-    full = (nb - 1) * bs;
+  if (nb > 1 && bs > limit / (nb - 1)) limit = 0;
+  if (nb > 1 && limit) full = (nb - 1) * bs;
   if (!limit || last > limit - full || limit > SIZE_MAX)
     return afail(c, "compression header claims more data than %zu bytes can hold", len - h);
   uint64_t total = full + last;
   uint8_t *out = vm_malloc(ctx, total ? (size_t)total : 1);
-  if (!out)
-    return VM_ERR_NOMEM;
+  if (!out) return VM_ERR_NOMEM;
   size_t in = h, o = 0;
   for (uint64_t b = 0; b < nb; b++) {
     size_t cs = (size_t)hdr_word(c, src, 3 + (int)b);
@@ -868,13 +781,11 @@ static int b64_block(const actx *c, const char *s, const char *end, uint8_t **bu
     }
     vm_free(ctx, b);
     b = vm_malloc(ctx, need + 3);
-    if (!b)
-      return VM_ERR_NOMEM;
+    if (!b) return VM_ERR_NOMEM;
     int bst = b64_decode(s, end, b, need, &got, &bad);
     if (bst) {
       vm_free(ctx, b);
-      if (bst == -2)
-        return afail(c, "bad base64: the text ends inside a group of 4 characters");
+      if (bst == -2) return afail(c, "bad base64: the text ends inside a group of 4 characters");
       return afail(c, "bad base64 character '%c' at line %lld",
                    (*bad >= 32 && *bad < 127) ? *bad : '?', (long long)line_at(c->r, bad));
     }
@@ -884,8 +795,7 @@ static int b64_block(const actx *c, const char *s, const char *end, uint8_t **bu
       vm_free(ctx, b);
       return st;
     }
-    if (more <= got)
-      break;
+    if (more <= got) break;
     need = more;
   }
   *buf = b;
@@ -908,8 +818,7 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
     attr_text(a->attrs, a->alen, "type", fmt, sizeof fmt);
     return afail(c, "type '%s' is not supported", fmt);
   }
-  if (want_int && t->kind == 'f')
-    return afail(c, "needs an integer type, has %s", t->name);
+  if (want_int && t->kind == 'f') return afail(c, "needs an integer type, has %s", t->name);
   attr_text(a->attrs, a->alen, "format", fmt, sizeof fmt);
   int ascii = !strcmp(fmt, "ascii"), app = !strcmp(fmt, "appended");
   if (!ascii && !app && strcmp(fmt, "binary"))
@@ -922,8 +831,7 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
     if ((uint64_t)count > (blen + 1) / 2)
       return afail(c, "%lld values cannot fit in %zu characters", (long long)count, blen);
     void *out = vm_alloc_array(ctx, count ? (size_t)count : 1, outsz);
-    if (!out)
-      return VM_ERR_NOMEM;
+    if (!out) return VM_ERR_NOMEM;
     vm_lex lx;
     vm_lex_init(&lx, ctx, r->name, body, blen);
     lx.line = a->body ? line_at(r, a->body) : line_at(r, a->at);
@@ -935,8 +843,7 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
         if (!st && (v < lo || v > hi))
           st = vm_lex_fail(&lx, "DataArray '%s': value %lld out of range [%lld, %lld]", c->label,
                            (long long)v, (long long)lo, (long long)hi);
-        if (!st)
-          ((int64_t *)out)[i] = v;
+        if (!st) ((int64_t *)out)[i] = v;
       } else {
         st = vm_lex_double(&lx, &((double *)out)[i], c->label);
       }
@@ -958,20 +865,17 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
   int st;
   if (!app) {
     size_t len;
-    if ((st = b64_block(c, body, bend, &dec, &len)))
-      return st;
+    if ((st = b64_block(c, body, bend, &dec, &len))) return st;
     st = block_payload(c, dec, len, &data, &nbytes, &owned);
   } else {
     int64_t off = attr_int(a->attrs, a->alen, "offset");
-    if (!r->appended)
-      return afail(c, "format 'appended' but no AppendedData");
+    if (!r->appended) return afail(c, "format 'appended' but no AppendedData");
     if (off < 0 || (uint64_t)off > (uint64_t)(r->end - r->appended))
       return afail(c, "bad appended data offset");
     const char *src = r->appended + off;
     if (r->app_b64) {
       size_t len;
-      if ((st = b64_block(c, src, r->end, &dec, &len)))
-        return st;
+      if ((st = b64_block(c, src, r->end, &dec, &len))) return st;
       st = block_payload(c, dec, len, &data, &nbytes, &owned);
     } else {
       st = block_payload(c, (const uint8_t *)src, (size_t)(r->end - src), &data, &nbytes, &owned);
@@ -984,8 +888,7 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
   void *out = NULL;
   if (!st) {
     out = vm_alloc_array(ctx, count ? (size_t)count : 1, outsz);
-    if (!out)
-      st = VM_ERR_NOMEM;
+    if (!out) st = VM_ERR_NOMEM;
   }
   for (int64_t i = 0; !st && i < count; i++) {
     uint64_t u = load_u(data + (size_t)i * (size_t)t->size, t->size, r->big);
@@ -1009,8 +912,7 @@ static int array_values(const actx *c, int64_t count, int want_int, int64_t lo, 
         memcpy(&v, &u, sizeof v);
       } else {
         v = (int64_t)u;
-        if (u >> (8 * t->size - 1))
-          v -= (int64_t)1 << (8 * t->size);
+        if (u >> (8 * t->size - 1)) v -= (int64_t)1 << (8 * t->size);
       }
       x = (double)v;
       if (want_int && (v < lo || v > hi)) {
@@ -1051,22 +953,18 @@ static const darr *find_cells_array(const vturd *r, const char *aname) {
 static int read_points(vturd *r, vm_mesh *m, int64_t np) {
   const darr *a = NULL;
   for (int i = 0; i < r->narr && !a; i++)
-    if (r->arr[i].parent == K_POINTS)
-      a = &r->arr[i];
+    if (r->arr[i].parent == K_POINTS) a = &r->arr[i];
   if (!a) {
-    if (np)
-      return vfail(r, r->piece_at, "no Points DataArray");
+    if (np) return vfail(r, r->piece_at, "no Points DataArray");
     return vm_mesh_set_vertices(m, 0);
   }
   actx c;
   actx_init(&c, r, a, "Points");
   int64_t nc = attr_int(a->attrs, a->alen, "NumberOfComponents");
-  if (nc != 3)
-    return afail(&c, "points need NumberOfComponents=\"3\"");
+  if (nc != 3) return afail(&c, "points need NumberOfComponents=\"3\"");
   void *v;
   int st = array_values(&c, 3 * np, 0, 0, 0, &v);
-  if (st)
-    return st;
+  if (st) return st;
   double *x = v;
   for (int64_t i = 0; i < 3 * np; i++)
     if (!isfinite(x[i])) {
@@ -1074,8 +972,7 @@ static int read_points(vturd *r, vm_mesh *m, int64_t np) {
       return afail(&c, "point %lld is not finite", (long long)(i / 3));
     }
   st = vm_mesh_set_vertices(m, np);
-  if (!st)
-    memcpy(m->xyz, x, (size_t)np * 3 * sizeof *x);
+  if (!st) memcpy(m->xyz, x, (size_t)np * 3 * sizeof *x);
   vm_free(r->ctx, v);
   return st;
 }
@@ -1100,13 +997,11 @@ static int read_cells(vturd *r, vm_mesh *m, int64_t nc, int64_t **map) {
   }
   if (!st) {
     off = vm_alloc_array(ctx, (size_t)nc + 1, sizeof *off);
-    if (!off)
-      st = VM_ERR_NOMEM;
+    if (!off) st = VM_ERR_NOMEM;
   }
   for (int64_t i = 0; !st && i <= nc; i++) {
     off[i] = i ? ((const int64_t *)vo)[i - 1] : 0;
-    if (i && off[i] < off[i - 1])
-      st = afail(&c, "offsets decrease at cell %lld", (long long)i - 1);
+    if (i && off[i] < off[i - 1]) st = afail(&c, "offsets decrease at cell %lld", (long long)i - 1);
   }
   if (!st && nc) {
     actx_init(&c, r, at, "types");
@@ -1114,11 +1009,9 @@ static int read_cells(vturd *r, vm_mesh *m, int64_t nc, int64_t **map) {
   }
   if (!st) {
     types = vm_alloc_array(ctx, nc ? (size_t)nc : 1, sizeof *types);
-    if (!types)
-      st = VM_ERR_NOMEM;
+    if (!types) st = VM_ERR_NOMEM;
   }
-  for (int64_t i = 0; !st && i < nc; i++)
-    types[i] = (int32_t)((const int64_t *)vt)[i];
+  for (int64_t i = 0; !st && i < nc; i++) types[i] = (int32_t)((const int64_t *)vt)[i];
   if (!st && nc) {
     actx_init(&c, r, ac, "connectivity");
     st = array_values(&c, off[nc], 1, INT64_MIN, INT64_MAX, &vc);
@@ -1144,8 +1037,7 @@ static int read_data(vturd *r, vm_mesh *m, int parent, int64_t n, const int64_t 
   int loc = parent == K_PDATA ? VM_FIELD_VERTEX : VM_FIELD_ELEMENT;
   for (int i = 0; i < r->narr; i++) {
     const darr *a = &r->arr[i];
-    if (a->parent != parent)
-      continue;
+    if (a->parent != parent) continue;
     actx c;
     actx_init(&c, r, a, "");
     const xtype *t = array_type(a);
@@ -1157,24 +1049,19 @@ static int read_data(vturd *r, vm_mesh *m, int parent, int64_t n, const int64_t 
       continue;
     }
     int64_t ncomp = attr_int(a->attrs, a->alen, "NumberOfComponents");
-    if (ncomp == -1)
-      ncomp = 1;
-    if (ncomp < 1 || ncomp > (1 << 20))
-      return afail(&c, "bad NumberOfComponents");
-    if (n > INT64_MAX / ncomp)
-      return afail(&c, "too many values");
+    if (ncomp == -1) ncomp = 1;
+    if (ncomp < 1 || ncomp > (1 << 20)) return afail(&c, "bad NumberOfComponents");
+    if (n > INT64_MAX / ncomp) return afail(&c, "too many values");
     int isint = t->kind != 'f';
     void *v;
     int st = array_values(&c, n * ncomp, isint, INT32_MIN, INT32_MAX, &v);
-    if (st)
-      return st;
+    if (st) return st;
     vm_field *f;
     st = vm_mesh_add_field(m, c.label, loc, isint ? VM_FIELD_I32 : VM_FIELD_F64, (int)ncomp, &f);
     if (!st)
       for (int64_t k = 0; k < n; k++) {
         int64_t row = map ? map[k] : k;
-        if (row < 0)
-          continue;
+        if (row < 0) continue;
         for (int64_t j = 0; j < ncomp; j++) {
           if (isint)
             ((int32_t *)f->data)[row * ncomp + j] = (int32_t)((int64_t *)v)[k * ncomp + j];
@@ -1183,8 +1070,7 @@ static int read_data(vturd *r, vm_mesh *m, int parent, int64_t n, const int64_t 
         }
       }
     vm_free(ctx, v);
-    if (st)
-      return st;
+    if (st) return st;
   }
   return VM_OK;
 }
@@ -1209,18 +1095,12 @@ int vm_read_vtu(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
     else if (np > INT32_MAX || nc > INT32_MAX)
       st = vfail(&r, r.piece_at, "too many points or cells");
   }
-  if (!st)
-    st = vm_mesh_create(ctx, &m);
-  if (!st)
-    st = read_points(&r, m, np);
-  if (!st)
-    st = read_cells(&r, m, nc, &map);
-  if (!st)
-    st = read_data(&r, m, K_PDATA, np, NULL);
-  if (!st)
-    st = read_data(&r, m, K_CDATA, nc, map);
-  if (!st)
-    st = vm_vtk_finish_mesh(ctx, m, name);
+  if (!st) st = vm_mesh_create(ctx, &m);
+  if (!st) st = read_points(&r, m, np);
+  if (!st) st = read_cells(&r, m, nc, &map);
+  if (!st) st = read_data(&r, m, K_PDATA, np, NULL);
+  if (!st) st = read_data(&r, m, K_CDATA, nc, map);
+  if (!st) st = vm_vtk_finish_mesh(ctx, m, name);
   vm_free(ctx, map);
   vm_free(ctx, r.arr);
   if (st) {
@@ -1242,8 +1122,7 @@ typedef struct {
 } b64out;
 
 static void b64_flush_line(b64out *b) {
-  if (b->col)
-    fwrite(b->line, 1, (size_t)b->col, b->fp);
+  if (b->col) fwrite(b->line, 1, (size_t)b->col, b->fp);
   b->col = 0;
 }
 
@@ -1251,8 +1130,7 @@ static void b64_quad(b64out *b, int nbytes) {
   static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   uint32_t w = (uint32_t)b->in[0] << 16 | (uint32_t)(nbytes > 1 ? b->in[1] : 0) << 8 |
                (uint32_t)(nbytes > 2 ? b->in[2] : 0);
-  if (b->col + 4 > (int)sizeof b->line)
-    b64_flush_line(b);
+  if (b->col + 4 > (int)sizeof b->line) b64_flush_line(b);
   b->line[b->col++] = tab[(w >> 18) & 63];
   b->line[b->col++] = tab[(w >> 12) & 63];
   b->line[b->col++] = nbytes > 1 ? tab[(w >> 6) & 63] : '=';
@@ -1270,8 +1148,7 @@ static void b64_put(b64out *b, uint64_t v, int size) {
 }
 
 static void b64_end(b64out *b) {
-  if (b->n)
-    b64_quad(b, b->n);
+  if (b->n) b64_quad(b, b->n);
   b->n = 0;
   b64_flush_line(b);
 }
@@ -1303,13 +1180,11 @@ static void write_array(FILE *fp, const char *indent, const char *type, const ch
     xml_name(fp, aname);
     fputc('"', fp);
   }
-  if (ncomp)
-    fprintf(fp, " NumberOfComponents=\"%d\"", ncomp);
+  if (ncomp) fprintf(fp, " NumberOfComponents=\"%d\"", ncomp);
   fprintf(fp, " format=\"binary\">\n%s  ", indent);
   b64out b = {fp, {0, 0, 0}, 0, {0}, 0};
   b64_put(&b, (uint64_t)nval * (uint64_t)size, 8);
-  for (int64_t i = 0; i < nval; i++)
-    b64_put(&b, get(data, i), size);
+  for (int64_t i = 0; i < nval; i++) b64_put(&b, get(data, i), size);
   b64_end(&b);
   fprintf(fp, "\n%s</DataArray>\n", indent);
 }
@@ -1336,8 +1211,7 @@ static void write_fields(FILE *fp, const vm_mesh *m, int loc, int flags) {
   int any = loc == VM_FIELD_VERTEX && flags;
   for (int i = 0; i < m->nfield; i++)
     any |= m->fields[i].location == loc && vm_vtk_field_written(&m->fields[i], flags);
-  if (!any)
-    return;
+  if (!any) return;
   const char *tag = loc == VM_FIELD_VERTEX ? "PointData" : "CellData";
   fprintf(fp, "      <%s>\n", tag);
   const char *ind = "        ";
@@ -1347,8 +1221,7 @@ static void write_fields(FILE *fp, const vm_mesh *m, int loc, int flags) {
   }
   for (int i = 0; i < m->nfield; i++) {
     const vm_field *f = &m->fields[i];
-    if (f->location != loc || !vm_vtk_field_written(f, flags))
-      continue;
+    if (f->location != loc || !vm_vtk_field_written(f, flags)) continue;
     if (f->type == VM_FIELD_F64)
       write_array(fp, ind, "Float64", f->name, f->ncomp, n * f->ncomp, 8, f->data, get_f64);
     else
@@ -1363,8 +1236,7 @@ int vm_write_vtu(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
   /* connectivity in VTK's vertex order (prisms differ) */
   int64_t nconn = m->eoff[m->ne];
   int32_t *conn = vm_alloc_array(ctx, (size_t)(nconn ? nconn : 1), sizeof *conn);
-  if (!conn)
-    return VM_ERR_NOMEM;
+  if (!conn) return VM_ERR_NOMEM;
   for (int64_t e = 0; e < m->ne; e++)
     for (int64_t j = 0; j < m->eoff[e + 1] - m->eoff[e]; j++)
       conn[m->eoff[e] + j] = m->conn[m->eoff[e] + vm_elem_vtk_node(m->etype[e], (int)j)];
@@ -1393,7 +1265,6 @@ int vm_write_vtu(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
   write_array(fp, "        ", "UInt8", "types", 0, m->ne, 1, m->etype, get_vtktype);
   fputs("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n", fp);
   st = vm_outfile_commit(&of);
-  if (st)
-    return st;
+  if (st) return st;
   return vm_vtk_report_lost(ctx, m, path, flags) ? VM_WARN_LOSSY : VM_OK;
 }

@@ -90,8 +90,8 @@ static int valid_name(const char *name) {
   if (n == 0 || n > 100) return 0;
   for (size_t i = 0; i < n; i++) {
     char c = name[i];
-    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-          c == '-' || c == '_'))
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+          c == '_'))
       return 0;
   }
   return 1;
@@ -282,10 +282,9 @@ int vm_report_quality_rows(vm_report *r, const char *heading, const vm_quality *
     for (int t = 0; t < VM_NTYPES && st >= 0; t++) {
       const vm_type_quality *tq = &q->type[t];
       if (!tq->count) continue;
-      st = vm_report_row(r, vm_elem_name(t),
-                         "%lld elements, M %lld, phi_min %.4e, scaled Jacobian min %.4f",
-                         (long long)tq->count, (long long)tq->inverted_nodes, tq->phi_min,
-                         tq->sj_min);
+      st = vm_report_row(
+          r, vm_elem_name(t), "%lld elements, M %lld, phi_min %.4e, scaled Jacobian min %.4f",
+          (long long)tq->count, (long long)tq->inverted_nodes, tq->phi_min, tq->sj_min);
     }
   }
   return st;
@@ -330,8 +329,10 @@ int vm_report_mesh(vm_report *r, const char *prefix, const char *label, const vm
     if (st >= 0 && vm_mesh_find_field(m, "layer", VM_FIELD_ELEMENT)) {
       /* prism layers: the same cut coloured by layer index */
       snprintf(name, sizeof name, "%sslice-layer", prefix);
-      cap = format(ctx, "%s: the same slice coloured by the element field 'layer' (0 at the "
-                        "wall).", label);
+      cap = format(ctx,
+                   "%s: the same slice coloured by the element field 'layer' (0 at the "
+                   "wall).",
+                   label);
       st = cap ? vm_report_slice(r, name, cap, m, axis, NAN, "layer") : VM_ERR_NOMEM;
       vm_free(ctx, cap);
     }
@@ -533,18 +534,18 @@ typedef struct {
 } rgb;
 
 /* Colormaps as evenly spaced control points, interpolated linearly. */
-static const double cmap_viridis[9][3] = {
-    {68, 1, 84},    {71, 45, 123},  {59, 82, 139},  {44, 114, 142}, {33, 145, 140},
-    {40, 174, 128}, {94, 201, 98},  {173, 220, 48}, {253, 231, 37}};
+static const double cmap_viridis[9][3] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},
+                                          {44, 114, 142}, {33, 145, 140}, {40, 174, 128},
+                                          {94, 201, 98},  {173, 220, 48}, {253, 231, 37}};
 /* blue (low) - white - red (high), for signed fields (curvature) */
-static const double cmap_diverging[9][3] = {
-    {33, 102, 172},  {67, 147, 195},  {146, 197, 222}, {209, 229, 240}, {247, 247, 247},
-    {253, 219, 199}, {244, 165, 130}, {214, 96, 77},   {178, 24, 43}};
+static const double cmap_diverging[9][3] = {{33, 102, 172},  {67, 147, 195},  {146, 197, 222},
+                                            {209, 229, 240}, {247, 247, 247}, {253, 219, 199},
+                                            {244, 165, 130}, {214, 96, 77},   {178, 24, 43}};
 /* red (inverted) - yellow (degenerate) - blue (ideal), for quality in [-1, 1] */
-static const double cmap_quality[11][3] = {
-    {165, 0, 38},    {215, 48, 39},   {244, 109, 67},  {253, 174, 97},
-    {254, 224, 144}, {255, 255, 191}, {224, 243, 248}, {171, 217, 233},
-    {116, 173, 209}, {69, 117, 180},  {49, 54, 149}};
+static const double cmap_quality[11][3] = {{165, 0, 38},    {215, 48, 39},   {244, 109, 67},
+                                           {253, 174, 97},  {254, 224, 144}, {255, 255, 191},
+                                           {224, 243, 248}, {171, 217, 233}, {116, 173, 209},
+                                           {69, 117, 180},  {49, 54, 149}};
 
 enum { CMAP_VIRIDIS, CMAP_DIVERGING, CMAP_QUALITY };
 
@@ -770,16 +771,16 @@ static void hist_panel(cairo_t *cr, panel *p, const double *v, const uint8_t *et
   }
   char buf[160];
   if (count)
-    snprintf(buf, sizeof buf, "%lld elements, min %.4f, %lld at or below 0", (long long)count,
-             vmin, (long long)neg);
+    snprintf(buf, sizeof buf, "%lld elements, min %.4f, %lld at or below 0", (long long)count, vmin,
+             (long long)neg);
   else
     snprintf(buf, sizeof buf, "no elements");
   cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
   text(cr, p->x0 + 8, p->y0 + 8, 11, 0, 0, buf);
 }
 
-int vm_report_histograms(vm_report *r, const char *name, const char *caption,
-                         const vm_mesh *m, const vm_quality_opts *opts) {
+int vm_report_histograms(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
+                         const vm_quality_opts *opts) {
   vm_ctx *ctx = r->ctx;
   if (!valid_name(name)) return vm_error(ctx, VM_ERR_ARG, "report: bad figure name");
   size_t ne = (size_t)(m->ne ? m->ne : 1);
@@ -899,9 +900,8 @@ int vm_report_convergence(vm_report *r, const char *name, const char *caption,
   for (int64_t i = 0; i < h->n; i++)
     if (h->M[i] > mmax) mmax = h->M[i];
   panel p[3];
-  static const char *const titles[3] = {
-      "M: inverted quadrature simplices", "F: the functional",
-      "epsilon (untangling; t in quasi-isometric continuation)"};
+  static const char *const titles[3] = {"M: inverted quadrature simplices", "F: the functional",
+                                        "epsilon (untangling; t in quasi-isometric continuation)"};
   static const char *const ylabels[3] = {"M", "F", "epsilon"};
   static const double colours[3][3] = {{0.75, 0.1, 0.1}, {0.1, 0.3, 0.7}, {0.1, 0.55, 0.25}};
   for (int k = 0; k < 3; k++) {
@@ -1035,8 +1035,7 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
   if (!valid_name(name)) return vm_error(ctx, VM_ERR_ARG, "report: bad figure name");
   vm_report_view vw = view ? *view : vm_report_view_default();
   if (vw.width < 100 || vw.width > 8000 || vw.height < 100 || vw.height > 8000)
-    return vm_error(ctx, VM_ERR_ARG, "report: image size %dx%d out of range", vw.width,
-                    vw.height);
+    return vm_error(ctx, VM_ERR_ARG, "report: image size %dx%d out of range", vw.width, vw.height);
   if (m->dim == 2) vw.elevation = 90; /* a planar mesh is seen from above */
   const vm_field *f = NULL;
   if (field) {
@@ -1127,7 +1126,8 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
   cairo_t *cr = c.cr;
   double ml = 20, mr = 150, mt = 50, mb = 20;
   double dx = bx1 - bx0, dy = by1 - by0;
-  double s = fmin((vw.width - ml - mr) / (dx > 0 ? dx : 1), (vw.height - mt - mb) / (dy > 0 ? dy : 1));
+  double s =
+      fmin((vw.width - ml - mr) / (dx > 0 ? dx : 1), (vw.height - mt - mb) / (dy > 0 ? dy : 1));
   double ox = ml + 0.5 * (vw.width - ml - mr - s * dx) - s * bx0;
   double oy = mt + 0.5 * (vw.height - mt - mb - s * dy) - s * by0;
   int edges = vw.edges > 0 || (vw.edges < 0 && nedge && s * elen / nedge >= 5);
@@ -1157,8 +1157,8 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
   }
   cairo_set_source_rgb(cr, 0, 0, 0);
   char buf[200];
-  snprintf(buf, sizeof buf, "%s: %lld faces, view azimuth %g, elevation %g", name,
-           (long long)nf, vw.azimuth, vw.elevation);
+  snprintf(buf, sizeof buf, "%s: %lld faces, view azimuth %g, elevation %g", name, (long long)nf,
+           vw.azimuth, vw.elevation);
   text(cr, 20, 14, 15, 0, 0, buf);
   colour_bar(cr, vw.width - 110, 90, 22, vw.height - 160, &sc, field ? field : "scaled Jacobian");
   st = canvas_finish(r, &c, name, caption);
@@ -1207,8 +1207,8 @@ static int cmp_angle(const void *a, const void *b) {
 /* Signed distance of a vertex from the plane; a vertex on it counts as above. */
 static int above(double d) { return d >= 0; }
 
-int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
-                    int axis, double value, const char *field) {
+int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m, int axis,
+                    double value, const char *field) {
   vm_ctx *ctx = r->ctx;
   if (!valid_name(name)) return vm_error(ctx, VM_ERR_ARG, "report: bad figure name");
   if (axis < 0 || axis > 2) return vm_error(ctx, VM_ERR_ARG, "report: slice axis %d", axis);
@@ -1396,12 +1396,13 @@ out:
 #else /* !VM_HAVE_CAIRO */
 
 static int no_cairo(vm_report *r) {
-  return vm_error(r->ctx, VM_ERR_UNSUPPORTED, "reports need cairo, and this varmesh was built "
-                                               "without it");
+  return vm_error(r->ctx, VM_ERR_UNSUPPORTED,
+                  "reports need cairo, and this varmesh was built "
+                  "without it");
 }
 
-int vm_report_histograms(vm_report *r, const char *name, const char *caption,
-                         const vm_mesh *m, const vm_quality_opts *opts) {
+int vm_report_histograms(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
+                         const vm_quality_opts *opts) {
   (void)name, (void)caption, (void)m, (void)opts;
   return no_cairo(r);
 }
@@ -1423,8 +1424,8 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
   return no_cairo(r);
 }
 
-int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
-                    int axis, double value, const char *field) {
+int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m, int axis,
+                    double value, const char *field) {
   (void)name, (void)caption, (void)m, (void)axis, (void)value, (void)field;
   return no_cairo(r);
 }

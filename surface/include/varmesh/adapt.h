@@ -58,13 +58,13 @@ vm_adapt_opts vm_adapt_opts_default(void);
 typedef struct vm_adapt_result {
   int iterations, rounds;
   double F_initial, F;
-  const char *stop; /* stop reason of the last round (static string) */
+  const char *stop;         /* stop reason of the last round (static string) */
   double c, threshold, cap; /* the values used */
   int64_t nsmooth, nline_vertices, ncorner, nfixed;
   int32_t nline;
   double min_angle_before, min_angle_after; /* degrees, over all triangle corners */
-  int64_t flipped;   /* elements whose orientation reversed during the adaptation
-                        (normal at the end . normal at the start <= 0) */
+  int64_t flipped;     /* elements whose orientation reversed during the adaptation
+                          (normal at the end . normal at the start <= 0) */
   double max_distance; /* largest vertex distance to the reference surface */
   double elapsed;
 } vm_adapt_result;

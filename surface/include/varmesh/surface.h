@@ -28,18 +28,18 @@ typedef enum {
 enum { VM_SURFACE_AUTO = 0, VM_SURFACE_YES = 1, VM_SURFACE_NO = 2 };
 
 typedef struct vm_surface_opts {
-  vm_surface_step step;  /* default VM_SURFACE_ALL */
-  int repair;            /* AUTO (default): if `soup`, and always for the steps
-                            all, repair and remesh; the step repair always repairs */
-  int soup;              /* the input came as a polygon soup (.stl .obj .off .ply) */
-  int remesh;            /* in step all; AUTO (default): if the smallest angle
-                            is below sliver_angle */
-  double sliver_angle;   /* degrees (default 15) */
+  vm_surface_step step; /* default VM_SURFACE_ALL */
+  int repair;           /* AUTO (default): if `soup`, and always for the steps
+                           all, repair and remesh; the step repair always repairs */
+  int soup;             /* the input came as a polygon soup (.stl .obj .off .ply) */
+  int remesh;           /* in step all; AUTO (default): if the smallest angle
+                           is below sliver_angle */
+  double sliver_angle;  /* degrees (default 15) */
   vm_repair_opts repair_opts;
   vm_remesh_opts remesh_opts; /* target_edge_length <= 0 (default): the mean
                                  edge length of the (repaired) input */
-  vm_adapt_opts adapt;   /* also the feature angles of the remeshing and the
-                            curvature filter of the step curvature */
+  vm_adapt_opts adapt;        /* also the feature angles of the remeshing and the
+                                 curvature filter of the step curvature */
 } vm_surface_opts;
 
 vm_surface_opts vm_surface_opts_default(void);
@@ -47,18 +47,18 @@ vm_surface_opts vm_surface_opts_default(void);
 /* What the steps did; a step that did not run leaves its part zero. */
 typedef struct vm_surface_summary {
   int repaired;
-  vm_repair_report repair;        /* self_intersections -1 if not repaired */
-  double min_angle_input;         /* smallest angle (degrees) after the repair */
+  vm_repair_report repair; /* self_intersections -1 if not repaired */
+  double min_angle_input;  /* smallest angle (degrees) after the repair */
   int remeshed;
-  double target_edge_length;      /* of the remeshing */
+  double target_edge_length; /* of the remeshing */
   int64_t nv_before_remesh;
-  int curvature;                  /* the step curvature ran */
+  int curvature; /* the step curvature ran */
   vm_curvature_stats curvature_stats;
-  double threshold, cap;          /* step curvature: the filter used */
+  double threshold, cap; /* step curvature: the filter used */
   int adapted;
   vm_adapt_result adapt;
-  int open;                       /* refused: an open surface that nothing repaired
-                                     and opts did not accept (see the error text) */
+  int open; /* refused: an open surface that nothing repaired
+               and opts did not accept (see the error text) */
 } vm_surface_summary;
 
 /* Run opts->step on the surface m (dim 3, triangles and/or quads) in

@@ -32,16 +32,16 @@ typedef enum {
 
 /* Progress, reported every iteration of every phase. */
 typedef struct vm_volume_progress {
-  const char *phase;  /* "untangle", "local", "optimize", "quasi-iso" */
-  int iter;           /* iteration within the phase */
-  int total_iter;     /* iterations over all phases */
+  const char *phase; /* "untangle", "local", "optimize", "quasi-iso" */
+  int iter;          /* iteration within the phase */
+  int total_iter;    /* iterations over all phases */
   double F;
-  int64_t inverted;   /* M: quadrature nodes with det C <= 0 */
+  int64_t inverted; /* M: quadrature nodes with det C <= 0 */
   double min_det;
-  double eps;         /* current epsilon (untangling), or t (quasi-iso) */
-  double tau;         /* accepted step */
+  double eps; /* current epsilon (untangling), or t (quasi-iso) */
+  double tau; /* accepted step */
   int pcg_iters;
-  double elapsed;     /* seconds since the start */
+  double elapsed; /* seconds since the start */
 } vm_volume_progress;
 
 typedef void (*vm_volume_progress_fn)(void *user, const vm_volume_progress *p);
@@ -84,23 +84,23 @@ typedef struct vm_volume_opts {
 vm_volume_opts vm_volume_opts_default(void);
 
 typedef struct vm_volume_report {
-  int64_t nodes;            /* quadrature nodes */
+  int64_t nodes; /* quadrature nodes */
   int64_t M_init, M_max, M_final;
-  int iter_untangle;        /* global untangling iterations */
-  int iter_local;           /* local untangling iterations */
-  int iter_opt;             /* optimization (and quasi-iso) iterations */
-  double time_untangle;     /* seconds until M = 0 (or the end) */
+  int iter_untangle;    /* global untangling iterations */
+  int iter_local;       /* local untangling iterations */
+  int iter_opt;         /* optimization (and quasi-iso) iterations */
+  double time_untangle; /* seconds until M = 0 (or the end) */
   double time_total;
-  int timed_out;            /* the run was cut short by opts.time_limit */
+  int timed_out;                    /* the run was cut short by opts.time_limit */
   double phi_min, psi_min, min_det; /* final, over all nodes */
-  double t_reached;         /* quasi-iso: the largest t with a finite W_t (0 if off) */
-  int valid;                /* M_final == 0 */
-  int64_t split_M_init;     /* staged: inverted split tets at the start */
-  int64_t split_M_max;      /* staged: the most while untangling the split (M_max
-                               counts the rule's nodes, split stage excluded) */
-  int split_valid;          /* staged: the split was untangled */
-  double time_split;        /* staged: seconds until then */
-  vm_stop_reason last_stop; /* how the last minimizer run stopped */
+  double t_reached;                 /* quasi-iso: the largest t with a finite W_t (0 if off) */
+  int valid;                        /* M_final == 0 */
+  int64_t split_M_init;             /* staged: inverted split tets at the start */
+  int64_t split_M_max;              /* staged: the most while untangling the split (M_max
+                                       counts the rule's nodes, split stage excluded) */
+  int split_valid;                  /* staged: the split was untangled */
+  double time_split;                /* staged: seconds until then */
+  vm_stop_reason last_stop;         /* how the last minimizer run stopped */
 } vm_volume_report;
 
 /* Untangle and optimize mesh m in place. Which vertices move comes from
@@ -110,8 +110,8 @@ typedef struct vm_volume_report {
  * Returns VM_OK when the result is valid (M = 0), VM_WARN_INVERTED when
  * inverted nodes remain, VM_ERR_INTERRUPTED (m holds the best state so
  * far), or a negative error. report may be NULL. */
-int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf,
-                  const vm_volume_opts *opts, vm_volume_report *report);
+int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_volume_opts *opts,
+                  vm_volume_report *report);
 
 const char *vm_untangle_method_name(vm_untangle_method m);
 

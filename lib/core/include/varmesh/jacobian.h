@@ -51,8 +51,7 @@ typedef enum {
  * cube (in 2D the square) of the cell's longest edge: a lower bound of the
  * scaled det J where the cell is valid. Other element types:
  * VM_JAC_VALID. */
-vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth,
-                                   double *min_bound);
+vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, double *min_bound);
 
 /* Counts over the cells of a mesh (elements of its top dimension: volume
  * elements in a mesh that has any, else the 2D elements of a planar mesh;

@@ -33,9 +33,9 @@ void vm_csr_matvec(vm_ctx *ctx, const vm_csr *A, const double *x, double *y);
 
 /* Preconditioner kinds. */
 typedef enum {
-  VM_PRECOND_NONE = 0,   /* identity */
-  VM_PRECOND_JACOBI = 1, /* inverse diagonal */
-  VM_PRECOND_AMG = 2,    /* smoothed-aggregation algebraic multigrid V-cycle */
+  VM_PRECOND_NONE = 0,        /* identity */
+  VM_PRECOND_JACOBI = 1,      /* inverse diagonal */
+  VM_PRECOND_AMG = 2,         /* smoothed-aggregation algebraic multigrid V-cycle */
   VM_PRECOND_BLOCK_JACOBI = 3 /* inverse 3x3 diagonal blocks: unknowns 3i, 3i+1,
                                  3i+2 form block i (n a multiple of 3) */
 } vm_precond_kind;

@@ -70,8 +70,8 @@ const vm_measure_ops *vm_measure_by_name(const char *name);
  * G[i*d+j] = dW/dC_ij) if G != NULL and the Hessian H (d^4,
  * H[(i*d+j)*d*d + k*d+l] = d2W/dC_ij dC_kl) if H != NULL.
  * Returns 0 inside the domain, nonzero outside (*W = +INFINITY). */
-int vm_measure_eval(const vm_measure_ops *ops, const vm_measure_params *p, int d,
-                    const double *C, double *W, double *G, double *H);
+int vm_measure_eval(const vm_measure_ops *ops, const vm_measure_params *p, int d, const double *C,
+                    double *W, double *G, double *H);
 
 /* The penalty's chi_eps(det) = (det + sqrt(eps^2 + det^2))/2 of (14). */
 double vm_chi_eps(double det, double eps);

@@ -42,18 +42,18 @@ typedef enum {
 
 /* Reported to the monitor after every iteration. */
 typedef struct vm_iter_info {
-  int iter;            /* 1, 2, ... */
-  double F;            /* F after the step */
-  double F_before;     /* F at the start of the iteration (after before_iteration) */
-  double grad_norm;    /* |L grad F|_2 at the start of the iteration */
-  double tau;          /* accepted step length */
-  int ls_evals;        /* functional evaluations of the line search */
-  int ls_infeasible;   /* of those, trial points outside the measure's domain (F = +inf) */
-  int pcg_iters;       /* implicit: CG iterations summed over the coordinate systems;
-                          newton: CG iterations of the coupled system */
-  double elapsed;      /* seconds since vm_minimizer_run started */
-  int64_t inverted;    /* quadrature nodes with det C <= 0 after the step (-1: not computed) */
-  double min_det;      /* min det C over all nodes after the step (NAN: not computed) */
+  int iter;          /* 1, 2, ... */
+  double F;          /* F after the step */
+  double F_before;   /* F at the start of the iteration (after before_iteration) */
+  double grad_norm;  /* |L grad F|_2 at the start of the iteration */
+  double tau;        /* accepted step length */
+  int ls_evals;      /* functional evaluations of the line search */
+  int ls_infeasible; /* of those, trial points outside the measure's domain (F = +inf) */
+  int pcg_iters;     /* implicit: CG iterations summed over the coordinate systems;
+                        newton: CG iterations of the coupled system */
+  double elapsed;    /* seconds since vm_minimizer_run started */
+  int64_t inverted;  /* quadrature nodes with det C <= 0 after the step (-1: not computed) */
+  double min_det;    /* min det C over all nodes after the step (NAN: not computed) */
 } vm_iter_info;
 
 typedef void (*vm_monitor_fn)(void *user, const vm_iter_info *info);
@@ -71,9 +71,9 @@ typedef struct vm_minimize_options {
   double grad_atol;        /* stop when |L grad|_2 <= grad_atol (default 0: off) */
   double grad_rtol;        /* ... or <= grad_rtol |L grad_0|_2 (default 1e-10) */
   /* line search */
-  double armijo;           /* sufficient decrease constant c1 (default 1e-4) */
-  int ls_max_evals;        /* evaluations per line search (default 40) */
-  int ls_extrapolate;      /* tries of a longer step after tau = 1 passed (default 2) */
+  double armijo;      /* sufficient decrease constant c1 (default 1e-4) */
+  int ls_max_evals;   /* evaluations per line search (default 40) */
+  int ls_extrapolate; /* tries of a longer step after tau = 1 passed (default 2) */
   /* implicit and newton minimizers */
   double pcg_rtol;         /* relative residual of the inexact Newton step (default 1e-2) */
   int pcg_maxit;           /* CG iteration cap per system (default 100) */
@@ -89,10 +89,10 @@ typedef struct vm_minimize_options {
                               0.96 s instead of 2.25 s, at 17 instead of 9 CG
                               iterations (see bench/bench_solver.c) */
   /* reporting and hooks */
-  int stats_every;         /* node statistics (M, min det) every k iterations (default 1; 0 off) */
+  int stats_every; /* node statistics (M, min det) every k iterations (default 1; 0 off) */
   vm_monitor_fn monitor;
   vm_before_iteration_fn before_iteration;
-  void *user;              /* passed to monitor and before_iteration */
+  void *user; /* passed to monitor and before_iteration */
 } vm_minimize_options;
 
 vm_minimize_options vm_minimize_options_default(void);
@@ -100,12 +100,12 @@ vm_minimize_options vm_minimize_options_default(void);
 typedef struct vm_minimize_result {
   int iterations;
   vm_stop_reason reason;
-  double F_initial;     /* F at the start of the first iteration */
-  double F;             /* final F */
-  double grad_norm;     /* |L grad|_2 at the last evaluation */
+  double F_initial;       /* F at the start of the first iteration */
+  double F;               /* final F */
+  double grad_norm;       /* |L grad|_2 at the last evaluation */
   int64_t pcg_iterations; /* total over the run */
-  double elapsed;       /* seconds */
-  int64_t inverted;     /* final node statistics (computed at the end) */
+  double elapsed;         /* seconds */
+  int64_t inverted;       /* final node statistics (computed at the end) */
   double min_det;
 } vm_minimize_result;
 

@@ -64,7 +64,7 @@ int vm_problem_update_normals(vm_problem *p, const double *vertex_normals);
 
 /* Sizes. */
 int64_t vm_problem_num_nodes(const vm_problem *p); /* quadrature nodes */
-int vm_problem_dim(const vm_problem *p);            /* 2 or 3 */
+int vm_problem_dim(const vm_problem *p);           /* 2 or 3 */
 const vm_mesh *vm_problem_mesh(const vm_problem *p);
 /* Sum of w beta kappa det T over all nodes: the value of F where W = 1
  * everywhere (the total target volume, or area, for unit weights). */

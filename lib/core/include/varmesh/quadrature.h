@@ -10,13 +10,13 @@ extern "C" {
 #endif
 
 typedef enum {
-  VM_RULE_CORNER = 0,    /* corner simplices: tri/tet itself, quad 4 triangles,
-                            hex 8 tets, prism 6 tets, pyramid 4 base-corner tets */
-  VM_RULE_GEOMETRIC = 1, /* (24): hex 64 compound matrices, prism 12; other
-                            types use their corner rule, which is geometric */
-  VM_RULE_SPLIT = 2,     /* hex: the 6 Kuhn tets around the 0-6 diagonal (the
-                            mesh's 6-tet split); other types their corner rule.
-                            For untangling only: no quality meaning of its own */
+  VM_RULE_CORNER = 0,         /* corner simplices: tri/tet itself, quad 4 triangles,
+                                 hex 8 tets, prism 6 tets, pyramid 4 base-corner tets */
+  VM_RULE_GEOMETRIC = 1,      /* (24): hex 64 compound matrices, prism 12; other
+                                 types use their corner rule, which is geometric */
+  VM_RULE_SPLIT = 2,          /* hex: the 6 Kuhn tets around the 0-6 diagonal (the
+                                 mesh's 6-tet split); other types their corner rule.
+                                 For untangling only: no quality meaning of its own */
   VM_RULE_CORNER_SPLIT = 3,   /* hex: the 8 corner tets, then the 6 Kuhn
                                  tets (nodes 8..13); other types corner */
   VM_RULE_GEOMETRIC_SPLIT = 4 /* hex: the 64 nodes of (24), then the 6 Kuhn
@@ -42,11 +42,11 @@ typedef struct vm_qnode {
 enum { VM_QRULE_MAX_NODES = 70 };
 
 typedef struct vm_qrule {
-  int type;      /* element type */
-  int rule;      /* the rule actually used (VM_RULE_CORNER or _GEOMETRIC) */
-  int dim;       /* 2 or 3: columns per node */
+  int type; /* element type */
+  int rule; /* the rule actually used (VM_RULE_CORNER or _GEOMETRIC) */
+  int dim;  /* 2 or 3: columns per node */
   int nnodes;
-  double kappa;  /* 1/2 tri, 1 quad, 1/6 tet, 1/3 pyramid, 1/2 prism, 1 hex */
+  double kappa; /* 1/2 tri, 1 quad, 1/6 tet, 1/3 pyramid, 1/2 prism, 1 hex */
   const vm_qnode *nodes;
 } vm_qrule;
 

@@ -22,22 +22,22 @@ typedef struct vm_quality_opts {
 #define VM_QUALITY_NBINS 20 /* scaled-Jacobian histogram over [-1, 1] */
 
 typedef struct vm_type_quality {
-  int64_t count;           /* elements of this type */
-  int64_t nodes;           /* quadrature nodes measured */
-  int64_t inverted_nodes;  /* nodes with det C <= 0 */
-  int64_t inverted_elems;  /* elements with at least one such node */
-  double phi_min;          /* min det C/(tr C^T C/d)^{d/2} */
-  double psi_min;          /* min 2 det C/(1 + det C^2), NAN without a target size */
-  double sj_min;           /* min scaled Jacobian */
+  int64_t count;          /* elements of this type */
+  int64_t nodes;          /* quadrature nodes measured */
+  int64_t inverted_nodes; /* nodes with det C <= 0 */
+  int64_t inverted_elems; /* elements with at least one such node */
+  double phi_min;         /* min det C/(tr C^T C/d)^{d/2} */
+  double psi_min;         /* min 2 det C/(1 + det C^2), NAN without a target size */
+  double sj_min;          /* min scaled Jacobian */
 } vm_type_quality;
 
 typedef struct vm_quality {
-  int top_dim;             /* elements of this dimension are measured */
-  int64_t measured;        /* elements measured */
-  int64_t skipped;         /* lower-dimensional elements, not measured */
+  int top_dim;      /* elements of this dimension are measured */
+  int64_t measured; /* elements measured */
+  int64_t skipped;  /* lower-dimensional elements, not measured */
   vm_type_quality type[VM_NTYPES];
   vm_type_quality all;
-  double min_det;          /* min det C over nodes (target-scaled if a size is known) */
+  double min_det; /* min det C over nodes (target-scaled if a size is known) */
   double sj_p01, sj_p05, sj_p25, sj_p50; /* scaled-Jacobian percentiles */
   int64_t sj_hist[VM_QUALITY_NBINS];
 } vm_quality;

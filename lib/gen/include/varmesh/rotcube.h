@@ -35,8 +35,7 @@ vm_rotcube_opts vm_rotcube_opts_default(void);
  * untangling problem of Section 6.1). An int vertex field "fixed" mirrors
  * the flags. If xyz_ref != NULL it receives the Cartesian coordinates (the
  * target; 3*nv doubles, vm_free). */
-int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out,
-                        double **xyz_ref);
+int vm_gen_rotated_cube(vm_ctx *ctx, const vm_rotcube_opts *o, vm_mesh **out, double **xyz_ref);
 
 #ifdef __cplusplus
 }

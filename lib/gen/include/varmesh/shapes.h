@@ -48,8 +48,8 @@ enum {
  * vertex on the sphere; mean curvature H = 1/radius. jitter: every vertex
  * moved by up to amount * (about the mean edge length, 1.1 radius /
  * 2^level) per coordinate, then put back on the sphere. */
-int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int level,
-                     unsigned flags, const vm_gen_jitter *jitter);
+int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int level, unsigned flags,
+                     const vm_gen_jitter *jitter);
 
 /* vm_gen_torus cells. */
 enum {
@@ -65,14 +65,13 @@ enum {
  * jitter: u and v each moved by up to amount * (their grid step), so the
  * vertices stay on the torus. H (may be NULL): nu * nv values, the exact
  * mean curvature at each generated vertex, (R + 2 r cos v) / (2 r (R + r cos v)). */
-int vm_gen_torus(vm_mesh *m, const double centre[3], double R, double r, int nu, int nv,
-                 int cells, const vm_gen_jitter *jitter, double *H);
+int vm_gen_torus(vm_mesh *m, const double centre[3], double R, double r, int nu, int nv, int cells,
+                 const vm_gen_jitter *jitter, double *H);
 
 /* Open cylinder about the z axis, radius r, from z = 0 to z = h: nz >= 2
  * rows of na >= 3 vertices; normal outward; H = 1/(2 r). jitter: vertices
  * of the inner rows moved by up to amount * (grid step) in angle and z. */
-int vm_gen_cylinder(vm_mesh *m, double r, double h, int na, int nz,
-                    const vm_gen_jitter *jitter);
+int vm_gen_cylinder(vm_mesh *m, double r, double h, int na, int nz, const vm_gen_jitter *jitter);
 
 /* The closed unit cube [0,1]^3, n >= 1 squares a side per face, each split
  * into two triangles; vertices in lattice order (x slowest). */

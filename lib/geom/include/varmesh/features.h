@@ -64,8 +64,7 @@ void vm_surface_features_free(vm_ctx *ctx, vm_surface_features *f);
  * LINE on line k -> VM_VERTEX_SLIP on surface line_map ? line_map[k] : k,
  * CORNER -> VM_VERTEX_FIXED. Vertices already FIXED stay fixed, vertices
  * used by no 2D element become FIXED. */
-int vm_surface_features_apply(vm_mesh *m, const vm_surface_features *f,
-                              const int32_t *line_map);
+int vm_surface_features_apply(vm_mesh *m, const vm_surface_features *f, const int32_t *line_map);
 
 #ifdef __cplusplus
 }

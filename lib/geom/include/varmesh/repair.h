@@ -14,7 +14,7 @@ extern "C" {
 #endif
 
 typedef struct vm_repair_opts {
-  int require_closed; /* refuse a surface that stays open (default 1) */
+  int require_closed;           /* refuse a surface that stays open (default 1) */
   int check_self_intersections; /* (default 1): found ones are an error if
                                    require_closed, else a warning */
 } vm_repair_opts;
@@ -23,19 +23,19 @@ vm_repair_opts vm_repair_opts_default(void);
 
 /* What vm_surface_repair found and did. */
 typedef struct vm_repair_report {
-  int64_t nv_in, nf_in;          /* vertices and faces before */
-  int64_t nv, nf;                /* after (triangles) */
-  int64_t merged_vertices;       /* duplicate points merged */
-  int64_t removed_polygons;      /* duplicate or invalid (repeated vertex) faces removed */
-  int64_t removed_degenerate;    /* zero-area faces found and removed (by edge collapses/flips) */
-  int64_t removed_isolated;      /* vertices used by no face */
-  int64_t reoriented;            /* faces whose orientation was reversed */
-  int64_t stitched;              /* border edge pairs stitched */
-  int64_t border_edges;          /* left after repair (0: closed) */
-  int64_t holes;                 /* border cycles */
-  int64_t components;            /* connected components */
-  int64_t self_intersections;    /* pairs of intersecting faces (if checked, else -1) */
-  double volume;                 /* enclosed volume (closed surfaces; else 0) */
+  int64_t nv_in, nf_in;       /* vertices and faces before */
+  int64_t nv, nf;             /* after (triangles) */
+  int64_t merged_vertices;    /* duplicate points merged */
+  int64_t removed_polygons;   /* duplicate or invalid (repeated vertex) faces removed */
+  int64_t removed_degenerate; /* zero-area faces found and removed (by edge collapses/flips) */
+  int64_t removed_isolated;   /* vertices used by no face */
+  int64_t reoriented;         /* faces whose orientation was reversed */
+  int64_t stitched;           /* border edge pairs stitched */
+  int64_t border_edges;       /* left after repair (0: closed) */
+  int64_t holes;              /* border cycles */
+  int64_t components;         /* connected components */
+  int64_t self_intersections; /* pairs of intersecting faces (if checked, else -1) */
+  double volume;              /* enclosed volume (closed surfaces; else 0) */
 } vm_repair_report;
 
 /* Repair the surface m in place (its 2D elements; volume elements are an
@@ -77,11 +77,10 @@ vm_remesh_opts vm_remesh_opts_default(void);
  * feature edges are constrained (split, or collapsed along their line,
  * never flipped; their vertices never move off the line) and corners, and
  * line vertices where the line turns by more than o->keep_angle, are kept
- * in place (so a line loses only vertices where it is nearly straight). On success m holds the new mesh (fields and flags
- * dropped) and f, if given, the features of the new mesh (same corners,
- * the constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG
- * (not a closed-or-open manifold triangle mesh, bad options), VM_ERR_NOMEM,
- * VM_ERR_BACKEND. */
+ * in place (so a line loses only vertices where it is nearly straight). On success m holds the new
+ * mesh (fields and flags dropped) and f, if given, the features of the new mesh (same corners, the
+ * constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG (not a closed-or-open manifold
+ * triangle mesh, bad options), VM_ERR_NOMEM, VM_ERR_BACKEND. */
 int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_remesh_opts *o,
                       double corner_deg);
 

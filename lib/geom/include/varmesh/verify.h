@@ -53,8 +53,8 @@ int vm_verify_orientation(const vm_mesh *m, int rule, int64_t *bad_nodes, int64_
  *    first, then outer-wall; lowest prism indices), {-1, -1} if none.
  * Any output may be NULL. Returns VM_OK when the check ran (read the
  * counts), VM_ERR_ARG, VM_ERR_NOMEM or VM_ERR_BACKEND. */
-int vm_verify_prism_layer(const vm_mesh *m, int64_t *intersecting_pairs,
-                          int64_t *wall_crossings, int64_t first_pair[2]);
+int vm_verify_prism_layer(const vm_mesh *m, int64_t *intersecting_pairs, int64_t *wall_crossings,
+                          int64_t first_pair[2]);
 
 #ifdef __cplusplus
 }

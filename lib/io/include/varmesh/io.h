@@ -65,8 +65,8 @@ typedef int (*vm_writer_fn)(vm_ctx *ctx, const vm_mesh *m, const char *path,
  * file size before allocating. Errors are one line: "path: record: what". */
 int vm_mesh_read(vm_ctx *ctx, const char *path, int format, vm_mesh **out);
 /* The same from a buffer (fuzzing, tests). */
-int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
-                        int format, vm_mesh **out);
+int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, int format,
+                        vm_mesh **out);
 /* Write a mesh atomically: either the complete file appears at `path` or
  * nothing there changes. Returns VM_WARN_LOSSY (> 0) if the format could not
  * carry something (each loss is logged at VM_LOG_WARN). opts may be NULL. */

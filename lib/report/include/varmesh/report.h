@@ -55,8 +55,8 @@ int vm_report_write(vm_report *r);
  * scaled Jacobian over [-1, 1] (inverted elements in red), and one panel
  * per element type present of phi = min over the element's quadrature
  * simplices of det C/(tr C^T C/d)^{d/2}. opts as for vm_mesh_quality. */
-int vm_report_histograms(vm_report *r, const char *name, const char *caption,
-                         const vm_mesh *m, const vm_quality_opts *opts);
+int vm_report_histograms(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
+                         const vm_quality_opts *opts);
 
 /* Convergence history: one sample per iteration of an iterative stage. */
 typedef struct vm_report_history vm_report_history;
@@ -81,11 +81,11 @@ int vm_report_convergence(vm_report *r, const char *name, const char *caption,
  * given by azimuth (about +z, from +x) and elevation (above the xy plane),
  * in degrees. */
 typedef struct vm_report_view {
-  double azimuth;   /* default -60 */
-  double elevation; /* default 25 */
+  double azimuth;    /* default -60 */
+  double elevation;  /* default 25 */
   int width, height; /* pixels (default 1000 x 700) */
-  int edges;        /* draw element edges: 1 always, 0 never, -1 (default)
-                       when the mean projected edge is long enough to see */
+  int edges;         /* draw element edges: 1 always, 0 never, -1 (default)
+                        when the mean projected edge is long enough to see */
 } vm_report_view;
 
 vm_report_view vm_report_view_default(void);
@@ -113,8 +113,8 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
  * ideal), with their edges drawn. VM_ERR_ARG if the field is absent or
  * there are no volume elements; a plane that misses the mesh draws an
  * empty frame. */
-int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
-                    int axis, double value, const char *field);
+int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m, int axis,
+                    double value, const char *field);
 
 /* The standard pictures of one mesh, named "<prefix>quality", "<prefix>slice",
  * "<prefix>surface": the rows of vm_report_quality_rows under `label`,
