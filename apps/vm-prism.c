@@ -3,6 +3,7 @@
  * multi-layer prismatic mesh out (Section 6.2 of the paper). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -276,6 +277,9 @@ int main(int argc, char **argv) {
   progress_state ps = {&cli, -1, hist, 0, NAN};
   o.progress = progress;
   o.user = &ps;
+  /* the prism tests check every incremental intersection query */
+  const char *chk = getenv("VM_PRISM_CHECK_INCREMENTAL");
+  o.check_incremental = chk && *chk && strcmp(chk, "0");
   if (vm_prism_create(cli.ctx, m, &o, &p) < 0) {
     vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
     rc = VM_EXIT_INPUT;

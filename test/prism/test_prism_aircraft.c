@@ -29,6 +29,7 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
   o.thickness = frac * length; /* the model's length: nose at 0, tail at L */
   o.nlayers = 20;
   o.growth = 1.2;
+  o.check_incremental = 1; /* every incremental intersection query checked */
   vm_prism *p = NULL;
   memset(out, 0, sizeof *out);
   int st = vm_prism_create(ctx, w, &o, &p);

@@ -46,6 +46,7 @@ static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, 
   o.thickness = T;
   o.nlayers = layers;
   o.growth = 1.2;
+  o.check_incremental = 1; /* every incremental intersection query checked */
   vm_prism *p = NULL;
   int st = vm_prism_create(ctx, w, &o, &p);
   CHECK(st == 0, "%s: create: %d %s", name, st, vm_ctx_error(ctx));
@@ -182,6 +183,7 @@ int main(void) {
     po.nlayers = 3;
     po.max_cut_rounds = 1;
     po.springback_iter = 1; /* short of T: restoring has work to do */
+    po.check_incremental = 1;
     vm_prism *p = NULL;
     int st = vm_prism_create(ctx, w, &po, &p);
     CHECK(st == 0, "two spheres, 1 cut round: create: %s", vm_ctx_error(ctx));

@@ -81,10 +81,17 @@ typedef struct vm_prism_opts {
   double full_tol;      /* a column is at full thickness if >= (1 - full_tol) T
                            (default 0.01) */
   double time_limit;    /* seconds for the whole run, <= 0: none */
+  int check_incremental; /* 1: compare every incremental intersection query
+                            with a full one, an error (VM_ERR_NUMERIC) if
+                            they differ; for tests (default 0: the
+                            incremental answer is trusted, twice as fast) */
   vm_prism_progress_fn progress;
   void *user;
 } vm_prism_opts;
 
+/* The defaults above. The stage's internal tunables (tolerances, rounds,
+ * quality floors, ...) are not options; they are named, with their
+ * defaults and reasons, in prism/src/params.h. */
 vm_prism_opts vm_prism_opts_default(void);
 
 /* The summary of a run (every figure is measured, not assumed). */
