@@ -403,8 +403,8 @@ void pr_set_top(vm_prism *p, const double *t, const double *d) {
     for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
 }
 
-int vm_prism_run(vm_prism *p) {
-  if (!p) return VM_ERR_ARG;
+/* Every phase not done yet, in order: the first warning, or an error. */
+static int run_phases(vm_prism *p) {
   int warn = 0, st;
   int (*const phase[])(vm_prism *) = {vm_prism_thin, vm_prism_springback, vm_prism_cut,
                                       vm_prism_restore, vm_prism_march};
@@ -415,4 +415,25 @@ int vm_prism_run(vm_prism *p) {
   }
   if (vm_ctx_interrupted(p->ctx)) return VM_ERR_INTERRUPTED;
   return warn;
+}
+
+int vm_prism_run(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_mesh **out,
+                 vm_prism_report *report) {
+  if (report) memset(report, 0, sizeof *report);
+  if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_prism_run: out is NULL");
+  *out = NULL;
+  vm_prism *p = NULL;
+  int st = vm_prism_create(ctx, wall, opts, &p);
+  if (st < 0) return st;
+  st = run_phases(p);
+  /* the figures first: time_total is the run's, not the result's */
+  vm_prism_report r;
+  vm_prism_get_report(p, &r);
+  if (report) *report = r;
+  if (st >= 0 || st == VM_ERR_INTERRUPTED) {
+    int s2 = vm_prism_result(p, out);
+    if (s2 < 0) st = s2;
+  }
+  vm_prism_destroy(&p);
+  return st;
 }
