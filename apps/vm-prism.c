@@ -3,6 +3,7 @@
  * multi-layer prismatic mesh out (Section 6.2 of the paper). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -58,10 +59,25 @@ typedef struct {
   vm_report_history *hist; /* --report: every solver iteration and cutting round */
   int total;               /* samples so far (the history's x axis) */
   double F;                /* the last functional, carried through cutting rounds */
+  const char *in;          /* the run's first line, once the wall is accepted */
+  const vm_mesh *m;
+  double L;
+  const vm_prism_opts *o;
 } progress_state;
+
+/* The run's first line, before its first progress (or error) line: the
+ * wall was accepted. */
+static void announce(progress_state *ps) {
+  if (!ps->in) return;
+  if (!ps->cli->quiet)
+    fprintf(stderr, "vm-prism: %s: %lld wall triangles, model length %g, thickness %g, %d layers\n",
+            ps->in, (long long)ps->m->ne, ps->L, ps->o->thickness, ps->o->nlayers);
+  ps->in = NULL;
+}
 
 static void progress(void *user, const vm_prism_progress *p) {
   progress_state *ps = user;
+  announce(ps);
   if (ps->hist) {
     /* M: intersecting pairs while cutting (the barrier keeps every prism
      * valid, so 0 elsewhere) */
@@ -145,7 +161,6 @@ int main(int argc, char **argv) {
   double T_abs = 0, T_rel = 0.05;
   int json = 0, rc = VM_EXIT_OK;
   vm_mesh *m = NULL, *res = NULL;
-  vm_prism *p = NULL;
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
   for (int i = 1; i < argc; i++) {
@@ -273,31 +288,27 @@ int main(int argc, char **argv) {
     if ((rc = vm_cli_report_open(&cli, report_dir, title, &report, &hist)) != VM_EXIT_OK)
       goto done;
   }
-  progress_state ps = {&cli, -1, hist, 0, NAN};
+  progress_state ps = {&cli, -1, hist, 0, NAN, in, m, L, &o};
   o.progress = progress;
   o.user = &ps;
-  if (vm_prism_create(cli.ctx, m, &o, &p) < 0) {
-    vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
-    rc = VM_EXIT_INPUT;
-    goto done;
-  }
-  if (!cli.quiet)
-    fprintf(stderr, "vm-prism: %s: %lld wall triangles, model length %g, thickness %g, %d layers\n",
-            in, (long long)m->ne, L, o.thickness, o.nlayers);
+  /* the prism tests check every incremental intersection query */
+  const char *chk = getenv("VM_PRISM_CHECK_INCREMENTAL");
+  o.check_incremental = chk && *chk && strcmp(chk, "0");
   vm_cli_catch_interrupts(&cli);
-  int st = vm_prism_run(p);
-  if (st < 0 && st != VM_ERR_INTERRUPTED) {
-    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
-    rc = VM_EXIT_INPUT;
-    goto done;
-  }
   vm_prism_report r;
-  vm_prism_get_report(p, &r);
-  if (vm_prism_result(p, &res) < 0) {
-    vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+  int st = vm_prism_run(cli.ctx, m, &o, &res, &r);
+  if (st < 0 && st != VM_ERR_INTERRUPTED) {
+    /* no wall triangles counted: the wall or the options were refused */
+    if (r.wall_triangles == 0) {
+      vm_cli_error(&cli, "%s: %s", in, vm_ctx_error(cli.ctx));
+    } else {
+      announce(&ps);
+      vm_cli_error(&cli, "%s", vm_ctx_error(cli.ctx));
+    }
     rc = VM_EXIT_INPUT;
     goto done;
   }
+  announce(&ps);
   /* nothing is lost: the wall's vertex fields (the surface stage's
    * curvature, ...) go up every column */
   if (pass_wall_fields(m, res, r.wall_vertices) < 0) {
@@ -453,7 +464,6 @@ done:
   vm_report_destroy(&report);
   vm_report_history_destroy(&hist);
   vm_mesh_destroy(&res);
-  vm_prism_destroy(&p);
   vm_mesh_destroy(&m);
   vm_cli_finish(&cli);
   return rc;

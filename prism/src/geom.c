@@ -1,9 +1,10 @@
 /* prism/src/geom.c: prism validity and quality over quadrature simplices,
- * blended column directions, and per-prism target shapes. */
+ * blended column directions and per-prism target shapes, on plain arrays. */
+#include "geom.h"
+
 #include <math.h>
 #include <string.h>
 
-#include "prism_private.h"
 #include "varmesh/quadrature.h"
 
 static double node_ratio(const vm_qnode *q, const double *x) {
@@ -47,24 +48,14 @@ double pr_prism_corner_quality(const double *x, int *inverted) {
   return q / (sqrt(3.0) / 2);
 }
 
-int64_t pr_count_invalid(const vm_mesh *m, double *qmin) {
-  int64_t bad = 0;
-  double qm = INFINITY;
-  for (int64_t e = 0; e < m->ne; e++) {
-    if (m->etype[e] != VM_PRISM) continue;
-    double x[18];
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-    double q = pr_prism_quality(x);
-    if (!(q > 0)) bad++;
-    if (q < qm) qm = q;
-  }
-  if (qmin) *qmin = qm;
-  return bad;
+double pr_tilt_deg(const double *o, const double *x, const double *n) {
+  double e[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
+  double l = pr_norm(e), cs = l > 0 ? pr_dot(e, n) / l : -1;
+  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
 }
 
 /* min over the incident faces of n . f */
-static double min_visibility(const vm_prism *p, int64_t v, const double *fn, const double *n) {
+static double min_visibility(const pr_surf *p, int64_t v, const double *fn, const double *n) {
   double m = INFINITY;
   for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
     double d = pr_dot(n, fn + 3 * (int64_t)p->vt[k]);
@@ -75,11 +66,11 @@ static double min_visibility(const vm_prism *p, int64_t v, const double *fn, con
 
 /* Direction maximizing the minimum of n . f over the incident faces: the
  * centre of the smallest spherical cap holding them (Badoiu-Clarkson). */
-static double best_visible(const vm_prism *p, int64_t v, const double *fn, double *n) {
+static double best_visible(const pr_surf *p, int64_t v, const double *fn, int iters, double *n) {
   double best[3] = {n[0], n[1], n[2]};
   double bm = min_visibility(p, v, fn, n);
   double c[3] = {n[0], n[1], n[2]};
-  for (int it = 1; it <= 200; it++) {
+  for (int it = 1; it <= iters; it++) {
     double wm = INFINITY;
     int32_t wt = -1;
     for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
@@ -107,9 +98,9 @@ static double best_visible(const vm_prism *p, int64_t v, const double *fn, doubl
   return bm;
 }
 
-int64_t pr_surface_dirs(const vm_prism *p, const double *xyz, double *fn, double *vnrm,
-                        double *dir, int blend_passes) {
-  int64_t nw = p->nw, nt = p->nt;
+int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, const double *xyz,
+                        double *fn, double *vnrm, double *dir, int blend_passes) {
+  int64_t nw = p->nv, nt = p->nt;
   for (int64_t t = 0; t < nt; t++) {
     const int32_t *c = p->tri + 3 * t;
     const double *a = xyz + 3 * (int64_t)c[0], *b = xyz + 3 * (int64_t)c[1],
@@ -143,31 +134,32 @@ int64_t pr_surface_dirs(const vm_prism *p, const double *xyz, double *fn, double
     double *n = dir + 3 * v;
     if (pr_normalize(n) == 0) n[2] = 1;
     if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
-    if (min_visibility(p, v, fn, n) < 0.2 && best_visible(p, v, fn, n) <= 0) blind++;
+    if (min_visibility(p, v, fn, n) < kp->visible_min && best_visible(p, v, fn, kp->visible_iter, n) <= 0)
+      blind++;
   }
   /* blend near sharp edges: Jacobi averaging with the neighbours, kept only
    * where every incident face still sees the new direction well */
-  double *tmp = vm_alloc_array(p->ctx, (size_t)(3 * nw), sizeof *tmp);
+  double *tmp = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *tmp);
   if (!tmp) return blind;
   for (int pass = 0; pass < blend_passes; pass++) {
     memcpy(tmp, dir, (size_t)(3 * nw) * sizeof *tmp);
     for (int64_t v = 0; v < nw; v++) {
       double m0 = min_visibility(p, v, fn, dir + 3 * v);
-      int sharp = m0 < 0.94;
+      int sharp = m0 < kp->sharp_visibility;
       for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1] && !sharp; k++)
-        sharp = min_visibility(p, p->vv[k], fn, dir + 3 * (int64_t)p->vv[k]) < 0.94;
+        sharp = min_visibility(p, p->vv[k], fn, dir + 3 * (int64_t)p->vv[k]) < kp->sharp_visibility;
       if (!sharp) continue;
       double s[3] = {dir[3 * v], dir[3 * v + 1], dir[3 * v + 2]};
       for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++)
-        for (int c = 0; c < 3; c++) s[c] += 0.5 * dir[3 * (int64_t)p->vv[k] + c] /
+        for (int c = 0; c < 3; c++) s[c] += kp->blend_weight * dir[3 * (int64_t)p->vv[k] + c] /
                                            (double)(p->vv_off[v + 1] - p->vv_off[v]);
       if (pr_normalize(s) == 0) continue;
       double m1 = min_visibility(p, v, fn, s);
-      if (m1 >= 0.3 || m1 >= m0) memcpy(tmp + 3 * v, s, sizeof s);
+      if (m1 >= kp->blend_keep || m1 >= m0) memcpy(tmp + 3 * v, s, sizeof s);
     }
     memcpy(dir, tmp, (size_t)(3 * nw) * sizeof *tmp);
   }
-  vm_free(p->ctx, tmp);
+  vm_free(ctx, tmp);
   return blind;
 }
 
@@ -185,26 +177,27 @@ static int widens(const double *x) {
   return pr_dot(nt, nt) >= pr_dot(nb, nb);
 }
 
-void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
-                      const double *dir, const double *h, double *tgt) {
-  static const double blend[] = {0, 0.25, 0.5, 0.75, 1};
+void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, const double *base,
+                      const double *fn, const double *dir, const double *h, double *tgt) {
+  const double *blend = k->target_blend;
+  const int nblend = (int)(sizeof k->target_blend / sizeof *k->target_blend);
 #pragma omp parallel for schedule(static)
-  for (int64_t t = 0; t < p->nt; t++) {
-    const int32_t *c = p->tri + 3 * t;
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *c = tri + 3 * t;
     double x[18], bx[18];
     double bq = -INFINITY;
     for (int i = 0; i < 3; i++) memcpy(x + 3 * i, base + 3 * (int64_t)c[i], 3 * sizeof *x);
     int taken = 0;
-    for (int s = 0; s < 5 && !taken; s++) {
+    for (int s = 0; s < nblend && !taken; s++) {
       for (int i = 0; i < 3; i++) {
         double u[3];
-        for (int k = 0; k < 3; k++)
-          u[k] = (1 - blend[s]) * dir[3 * (int64_t)c[i] + k] + blend[s] * fn[3 * t + k];
+        for (int r = 0; r < 3; r++)
+          u[r] = (1 - blend[s]) * dir[3 * (int64_t)c[i] + r] + blend[s] * fn[3 * t + r];
         if (blend[s] == 1 || pr_normalize(u) == 0) memcpy(u, fn + 3 * t, sizeof u);
-        for (int k = 0; k < 3; k++) x[9 + 3 * i + k] = x[3 * i + k] + h[c[i]] * u[k];
+        for (int r = 0; r < 3; r++) x[9 + 3 * i + r] = x[3 * i + r] + h[c[i]] * u[r];
       }
       double q = pr_prism_quality(x);
-      if (q >= 0.5 || (s == 0 && q > PR_FAIR_QUALITY && widens(x))) taken = 1;
+      if (q >= k->target_quality || (s == 0 && q > k->fair_quality && widens(x))) taken = 1;
       if (taken || q > bq) {
         bq = q;
         memcpy(bx, x, sizeof bx);
@@ -214,7 +207,7 @@ void pr_build_targets(const vm_prism *p, const double *base, const double *fn,
       /* the face-normal extrusion is valid in exact arithmetic */
       memcpy(bx, x, 9 * sizeof *bx);
       for (int i = 0; i < 3; i++)
-        for (int k = 0; k < 3; k++) bx[9 + 3 * i + k] = bx[3 * i + k] + h[c[i]] * fn[3 * t + k];
+        for (int r = 0; r < 3; r++) bx[9 + 3 * i + r] = bx[3 * i + r] + h[c[i]] * fn[3 * t + r];
     }
     memcpy(tgt + 18 * t, bx, sizeof bx);
   }

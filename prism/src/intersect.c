@@ -3,18 +3,81 @@
  * the triangles in double precision; each candidate on the ray's path is
  * decided by sign tests in double; hits are collected, then sorted, so the
  * result never depends on thread timing. */
+#include "intersect.h"
+
 #include <embree3/rtcore.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "prism_private.h"
+#include "geom.h"
+#include "varmesh/prism.h"
 #include "varmesh/topology.h"
+
+struct pr_rt {
+  vm_ctx *ctx;
+  RTCDevice dev;
+  /* the first error Embree reported since the last query looked (written
+   * under a critical section: the callback may run on any thread) */
+  int failed;
+  enum RTCError code;
+  char msg[256];
+};
+
+static void rt_error(void *user, enum RTCError code, const char *str) {
+  pr_rt *rt = user;
+#pragma omp critical(vm_prism_embree_error)
+  if (!rt->failed) {
+    rt->failed = 1;
+    rt->code = code;
+    snprintf(rt->msg, sizeof rt->msg, "%s", str ? str : "");
+  }
+}
+
+int pr_rt_create(vm_ctx *ctx, pr_rt **out) {
+  *out = NULL;
+  pr_rt *rt = vm_calloc(ctx, 1, sizeof *rt);
+  if (!rt) return VM_ERR_NOMEM;
+  rt->dev = rtcNewDevice(NULL);
+  if (!rt->dev) {
+    enum RTCError code = rtcGetDeviceError(NULL);
+    vm_free(ctx, rt);
+    return vm_error(ctx, VM_ERR_BACKEND, "embree: cannot create a device (error %d)", (int)code);
+  }
+  rtcSetDeviceErrorFunction(rt->dev, rt_error, rt);
+  rt->ctx = ctx;
+  *out = rt;
+  return VM_OK;
+}
+
+void pr_rt_destroy(pr_rt **prt) {
+  if (!prt || !*prt) return;
+  pr_rt *rt = *prt;
+  rtcReleaseDevice(rt->dev);
+  vm_free(rt->ctx, rt);
+  *prt = NULL;
+}
+
+/* The device's error since the last look, copied to the context (VM_OK if
+ * none); `code` is what rtcGetDeviceError returned. */
+static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *what) {
+  if (!rt->failed && code == RTC_ERROR_NONE) return VM_OK;
+  int st;
+  if (rt->failed)
+    st = vm_error(ctx, VM_ERR_BACKEND, "embree: %s failed (error %d: %s)", what, (int)rt->code,
+                  rt->msg);
+  else
+    st = vm_error(ctx, VM_ERR_BACKEND, "embree: %s failed (error %d)", what, (int)code);
+  rt->failed = 0;
+  return st;
+}
 
 typedef struct {
   const double *xyz;
   const int32_t *tri;
   const int32_t *group;
+  double orient_tol_sq;
   int64_t ntri;
   const int32_t *map; /* primitive -> triangle (NULL: the identity) */
   float *box;         /* 6 per primitive, rounded outwards and padded */
@@ -34,7 +97,8 @@ static void tri_bounds(const struct RTCBoundsFunctionArguments *a) {
 /* orient(a, b, c, d) = (a - d) . ((b - d) x (c - d)), with a tolerance
  * relative to the lengths involved: 0 when the four points are coplanar
  * within rounding. */
-static int orient(const double *a, const double *b, const double *c, const double *d) {
+static int orient(const double *a, const double *b, const double *c, const double *d,
+                  double tol_sq) {
   double u[3], v[3], w[3], x[3];
   for (int k = 0; k < 3; k++) {
     u[k] = a[k] - d[k];
@@ -43,18 +107,19 @@ static int orient(const double *a, const double *b, const double *c, const doubl
   }
   pr_cross(v, w, x);
   double o = pr_dot(u, x);
-  /* |o| <= 1e-12 |u| |v| |w|, squared: no square roots on this hot path */
+  /* |o| <= tol |u| |v| |w|, squared: no square roots on this hot path */
   double s2 = pr_dot(u, u) * pr_dot(v, v) * pr_dot(w, w);
-  if (o * o <= 1e-24 * s2) return 0;
+  if (o * o <= tol_sq * s2) return 0;
   return o > 0 ? 1 : -1;
 }
 
 /* Does segment pq cross the interior of triangle abc (strictly)? */
 static int seg_tri(const double *p, const double *q, const double *a, const double *b,
-                   const double *c) {
-  int o1 = orient(a, b, c, p), o2 = orient(a, b, c, q);
+                   const double *c, double tol_sq) {
+  int o1 = orient(a, b, c, p, tol_sq), o2 = orient(a, b, c, q, tol_sq);
   if (o1 == 0 || o2 == 0 || o1 == o2) return 0;
-  int s1 = orient(p, q, a, b), s2 = orient(p, q, b, c), s3 = orient(p, q, c, a);
+  int s1 = orient(p, q, a, b, tol_sq), s2 = orient(p, q, b, c, tol_sq),
+      s3 = orient(p, q, c, a, tol_sq);
   return s1 != 0 && s1 == s2 && s2 == s3;
 }
 
@@ -97,7 +162,7 @@ static void edge_intersect(const struct RTCIntersectFunctionNArguments *args) {
   if (r->group >= 0 && d->group && d->group[t] == r->group) return;
   const double *x = d->xyz;
   if (seg_tri(x + 3 * (int64_t)r->a, x + 3 * (int64_t)r->b, x + 3 * (int64_t)T[0],
-              x + 3 * (int64_t)T[1], x + 3 * (int64_t)T[2]))
+              x + 3 * (int64_t)T[1], x + 3 * (int64_t)T[2], d->orient_tol_sq))
     push_hit(r, t);
   /* the hit is never committed, so traversal visits every candidate */
 }
@@ -109,6 +174,8 @@ typedef struct {
 } half_edge;
 
 struct pr_soup {
+  pr_rt *rt;           /* borrowed */
+  pr_isect_params k;
   int64_t ntri, ned;
   int32_t *tri;   /* 3 per triangle */
   int32_t *group; /* NULL or 1 per triangle */
@@ -159,7 +226,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
   if (!prims) nprim = so->ntri;
   if (!edges) nedge = so->ned;
   if (nprim < 1 || nedge < 1) return VM_OK;
-  soup d = {xyz, tri, group, so->ntri, prims, NULL};
+  soup d = {xyz, tri, group, so->k.orient_tol_sq, so->ntri, prims, NULL};
   d.box = vm_alloc_array(ctx, (size_t)nprim * 6, sizeof *d.box);
   if (!d.box) return VM_ERR_NOMEM;
   double glo[3] = {INFINITY, INFINITY, INFINITY}, ghi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -170,7 +237,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
       ghi[k] = v > ghi[k] ? v : ghi[k];
     }
   /* padding covers the rounding of the rays to float */
-  double pad = 1e-6 * (ghi[0] - glo[0] + ghi[1] - glo[1] + ghi[2] - glo[2]);
+  double pad = so->k.box_pad * (ghi[0] - glo[0] + ghi[1] - glo[1] + ghi[2] - glo[2]);
   for (int64_t q = 0; q < nprim; q++) {
     int64_t t = prims ? prims[q] : q;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -185,14 +252,9 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
       d.box[6 * q + 3 + k] = up(hi[k] + pad);
     }
   }
-  RTCDevice dev = rtcNewDevice(NULL);
-  if (!dev) {
-    vm_free(ctx, d.box);
-    free(*found_out);
-    *found_out = NULL;
-    *nfound_out = 0;
-    return vm_error(ctx, VM_ERR_BACKEND, "embree: cannot create a device");
-  }
+  RTCDevice dev = so->rt->dev;
+  const int chunk = so->k.ray_chunk;
+  const double extend = so->k.ray_extend;
   RTCScene scene = rtcNewScene(dev);
   rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
@@ -220,7 +282,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
       r.d = &d;
       int64_t ln = 0, lcap = 0;
       int64_t *loc = NULL;
-#pragma omp for schedule(dynamic, 256)
+#pragma omp for schedule(dynamic, chunk)
       for (int64_t q = 0; q < nedge; q++) {
         int64_t e = edges ? edges[q] : q;
         int32_t a = he[eb[e]].a, b = he[eb[e]].b;
@@ -249,7 +311,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
         rh.ray.dir_y = (float)dir[1];
         rh.ray.dir_z = (float)dir[2];
         rh.ray.tnear = 0;
-        rh.ray.tfar = (float)(len * (1 + 1e-5) + 2 * pad);
+        rh.ray.tfar = (float)(len * (1 + extend) + 2 * pad);
         rh.ray.mask = 0xFFFFFFFFu;
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -296,14 +358,16 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
     err = rtcGetDeviceError(dev);
   }
   rtcReleaseScene(scene);
-  rtcReleaseDevice(dev);
   vm_free(ctx, d.box);
-  if (err != RTC_ERROR_NONE || nomem) {
+  if (err != RTC_ERROR_NONE || so->rt->failed || nomem) {
     free(found);
     *found_out = NULL;
     *nfound_out = 0;
-    if (nomem) return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting hits");
-    return vm_error(ctx, VM_ERR_BACKEND, "embree: ray query failed (error %d)", (int)err);
+    if (nomem) {
+      so->rt->failed = 0;
+      return vm_error(ctx, VM_ERR_NOMEM, "embree: out of memory collecting hits");
+    }
+    return rt_status(ctx, so->rt, err, "ray query");
   }
   *found_out = found;
   *nfound_out = nfound;
@@ -435,7 +499,7 @@ int pr_soup_intersections_cached(vm_ctx *ctx, pr_soup *so, const double *xyz, in
       nchg += chg[t];
     }
   }
-  if (!so->cached || 4 * nchg > ntri) {
+  if (!so->cached || so->k.full_query_ratio * nchg > ntri) {
     /* nothing to start from, or most faces moved: the full query */
     st = pr_soup_intersections(ctx, so, xyz, &n, &pp);
   } else {
@@ -515,14 +579,17 @@ void pr_soup_destroy(vm_ctx *ctx, pr_soup **ps) {
   *ps = NULL;
 }
 
-int pr_soup_create(vm_ctx *ctx, int64_t ntri, const int32_t *tri, const int32_t *group,
-                   pr_soup **out) {
+int pr_soup_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int64_t ntri,
+                   const int32_t *tri, const int32_t *group, int check, pr_soup **out) {
   *out = NULL;
   if (ntri < 0 || ntri > INT32_MAX / 4)
     return vm_error(ctx, VM_ERR_ARG, "intersections: %lld triangles", (long long)ntri);
   pr_soup *s = vm_calloc(ctx, 1, sizeof *s);
   if (!s) return VM_ERR_NOMEM;
   size_t n = (size_t)(ntri ? ntri : 1);
+  s->rt = rt;
+  s->k = *k;
+  s->check = check != 0;
   s->ntri = ntri;
   s->tri = vm_alloc_array(ctx, 3 * n, sizeof *s->tri);
   s->group = group ? vm_alloc_array(ctx, n, sizeof *s->group) : NULL;
@@ -546,8 +613,6 @@ int pr_soup_create(vm_ctx *ctx, int64_t ntri, const int32_t *tri, const int32_t 
   s->eb[s->ned] = 3 * ntri;
   for (int64_t k = 0; k < 3 * ntri; k++)
     if (tri[k] >= s->nv) s->nv = tri[k] + 1;
-  const char *chk = getenv("VM_PRISM_CHECK_INCREMENTAL");
-  s->check = chk && *chk && strcmp(chk, "0");
   *out = s;
   return VM_OK;
 }
@@ -560,15 +625,38 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
   if (!xyz || !tri || ntri < 0 || !npairs)
     return vm_error(ctx, VM_ERR_ARG, "vm_prism_find_intersections: bad argument");
   if (ntri < 2) return VM_OK;
+  /* one query: its own device, the stage's default parameters */
+  pr_params k = pr_params_default();
+  pr_rt *rt = NULL;
   pr_soup *s = NULL;
-  int st = pr_soup_create(ctx, ntri, tri, group, &s);
-  if (st) return st;
-  st = pr_soup_intersections(ctx, s, xyz, npairs, pairs);
+  int st = pr_rt_create(ctx, &rt);
+  if (!st) st = pr_soup_create(ctx, rt, &k.isect, ntri, tri, group, 0, &s);
+  if (!st) st = pr_soup_intersections(ctx, s, xyz, npairs, pairs);
   pr_soup_destroy(ctx, &s);
+  pr_rt_destroy(&rt);
   return st;
 }
 
 #define QUAD_TRIS 4 /* triangles per side quad */
+
+struct pr_layer_faces {
+  int64_t nw, nt, ned;
+  int32_t *tri;  /* 3 nt wall triangles */
+  int32_t *edge; /* 2 ned wall edges */
+  pr_soup *soup;
+  double *xyz;   /* 3 (2 nw + ned): wall, top, then the side quads' centres */
+};
+
+void pr_layer_faces_destroy(vm_ctx *ctx, pr_layer_faces **plf) {
+  if (!plf || !*plf) return;
+  pr_layer_faces *lf = *plf;
+  pr_soup_destroy(ctx, &lf->soup);
+  vm_free(ctx, lf->tri);
+  vm_free(ctx, lf->edge);
+  vm_free(ctx, lf->xyz);
+  vm_free(ctx, lf);
+  *plf = NULL;
+}
 
 /* The faces of the single layer: [0, nt) tops, [nt, nt + 4 ned) sides,
  * then the wall (group 0). A side face is the bilinear quad over a wall
@@ -578,31 +666,41 @@ int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
  * diagonal split makes the two side quads of a valid prism that meet at
  * that column cross each other, and cutting would shorten a column that
  * nothing blocks. */
-static int layer_soup(vm_prism *p) {
-  vm_ctx *ctx = p->ctx;
-  int64_t nw = p->nw, nt = p->nt, ned = p->ned;
+int pr_layer_faces_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int check, int64_t nw,
+                          int64_t nt, const int32_t *wtri, int64_t ned, const int32_t *edge,
+                          pr_layer_faces **out) {
+  *out = NULL;
   int64_t nf = nt + QUAD_TRIS * ned + nt;
   if (2 * nw + ned > INT32_MAX)
     return vm_error(ctx, VM_ERR_ARG, "intersections: %lld layer vertices", (long long)(2 * nw + ned));
+  pr_layer_faces *lf = vm_calloc(ctx, 1, sizeof *lf);
+  if (!lf) return VM_ERR_NOMEM;
+  lf->nw = nw;
+  lf->nt = nt;
+  lf->ned = ned;
+  lf->tri = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *lf->tri);
+  lf->edge = vm_alloc_array(ctx, (size_t)(2 * ned), sizeof *lf->edge);
+  lf->xyz = vm_alloc_array(ctx, (size_t)(3 * (2 * nw + ned)), sizeof *lf->xyz);
   int32_t *tri = vm_alloc_array(ctx, (size_t)(3 * nf), sizeof *tri);
   int32_t *grp = vm_alloc_array(ctx, (size_t)nf, sizeof *grp);
-  if (!p->soup_xyz)
-    p->soup_xyz = vm_alloc_array(ctx, (size_t)(3 * (2 * nw + ned)), sizeof *p->soup_xyz);
-  if (!tri || !grp || !p->soup_xyz) {
+  if (!tri || !grp || !lf->tri || !lf->edge || !lf->xyz) {
     vm_free(ctx, tri);
     vm_free(ctx, grp);
+    pr_layer_faces_destroy(ctx, &lf);
     return VM_ERR_NOMEM;
   }
+  memcpy(lf->tri, wtri, (size_t)(3 * nt) * sizeof *wtri);
+  memcpy(lf->edge, edge, (size_t)(2 * ned) * sizeof *edge);
   for (int64_t t = 0; t < nt; t++) {
     for (int i = 0; i < 3; i++) {
-      tri[3 * t + i] = (int32_t)(p->tri[3 * t + i] + nw);
-      tri[3 * (nt + QUAD_TRIS * ned + t) + i] = p->tri[3 * t + i];
+      tri[3 * t + i] = (int32_t)(wtri[3 * t + i] + nw);
+      tri[3 * (nt + QUAD_TRIS * ned + t) + i] = wtri[3 * t + i];
     }
     grp[t] = -1;
     grp[nt + QUAD_TRIS * ned + t] = 0;
   }
   for (int64_t e = 0; e < ned; e++) {
-    int32_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
+    int32_t a = edge[2 * e], b = edge[2 * e + 1];
     int32_t q[4] = {a, b, (int32_t)(b + nw), (int32_t)(a + nw)}, c = (int32_t)(2 * nw + e);
     int32_t *s = tri + 3 * (nt + QUAD_TRIS * e);
     for (int i = 0; i < QUAD_TRIS; i++) {
@@ -612,30 +710,30 @@ static int layer_soup(vm_prism *p) {
       grp[nt + QUAD_TRIS * e + i] = -1;
     }
   }
-  int st = pr_soup_create(ctx, nf, tri, grp, &p->soup);
+  int st = pr_soup_create(ctx, rt, k, nf, tri, grp, check, &lf->soup);
   vm_free(ctx, tri);
   vm_free(ctx, grp);
-  return st;
+  if (st) {
+    pr_layer_faces_destroy(ctx, &lf);
+    return st;
+  }
+  *out = lf;
+  return VM_OK;
 }
 
-int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
-  vm_ctx *ctx = p->ctx;
-  int64_t nw = p->nw, nt = p->nt, ned = p->ned;
-  if (!p->soup) {
-    int st = layer_soup(p);
-    if (st) return st;
-  }
-  double *y = p->soup_xyz;
-  const double *x = p->layer->xyz;
+int pr_layer_faces_query(vm_ctx *ctx, pr_layer_faces *lf, const double *x, uint8_t *mark,
+                         int64_t *npairs) {
+  int64_t nw = lf->nw, nt = lf->nt, ned = lf->ned;
+  double *y = lf->xyz;
   memcpy(y, x, (size_t)(6 * nw) * sizeof *y);
   for (int64_t e = 0; e < ned; e++) {
-    int64_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
+    int64_t a = lf->edge[2 * e], b = lf->edge[2 * e + 1];
     for (int k = 0; k < 3; k++)
       y[3 * (2 * nw + e) + k] =
           0.25 * (x[3 * a + k] + x[3 * b + k] + x[3 * (a + nw) + k] + x[3 * (b + nw) + k]);
   }
   int64_t np = 0, *pairs = NULL;
-  int st = pr_soup_intersections_cached(ctx, p->soup, y, &np, mark ? &pairs : NULL);
+  int st = pr_soup_intersections_cached(ctx, lf->soup, y, &np, mark ? &pairs : NULL);
   if (st) return st;
   if (mark) {
     memset(mark, 0, (size_t)nw);
@@ -646,11 +744,11 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
     for (int64_t k = 0; k < 2 * np; k++) {
       int64_t f = pairs[k];
       if (f < nt) {
-        for (int i = 0; i < 3; i++) mark[p->tri[3 * f + i]] = 1;
+        for (int i = 0; i < 3; i++) mark[lf->tri[3 * f + i]] = 1;
       } else if (f < nt + QUAD_TRIS * ned) {
         int64_t e = (f - nt) / QUAD_TRIS;
-        mark[p->edge[2 * e]] = 1;
-        mark[p->edge[2 * e + 1]] = 1;
+        mark[lf->edge[2 * e]] = 1;
+        mark[lf->edge[2 * e + 1]] = 1;
       }
     }
   }

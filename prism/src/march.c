@@ -4,12 +4,12 @@
  * sublayer kept; repeated until the schedule of layer heights is met. Then
  * the first layer is made orthogonal at the wall on smooth parts: columns
  * stood up geometrically where their prisms allow it, the rest solved for
- * with their neighbours. Also the result mesh and the report. */
+ * with their neighbours. */
 #include <math.h>
 #include <omp.h>
 #include <string.h>
 
-#include "prism_private.h"
+#include "state.h"
 
 /* Minimum corner quality of the prisms between levels a and b. */
 static double level_quality(const vm_prism *p, const double *la, const double *lb) {
@@ -44,14 +44,6 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
   return q;
 }
 
-#define TILT_LIMIT 5.0 /* degrees: the first layer's orthogonality target */
-/* Angle in degrees between side edge o -> x and the unit normal n (180 for
- * an edge of zero length). */
-static double tilt_deg(const double *o, const double *x, const double *n) {
-  double e[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
-  double l = pr_norm(e), cs = l > 0 ? pr_dot(e, n) / l : -1;
-  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
-}
 
 /* Column v stood up at the wall (along its normal; a column at a sharp
  * edge or corner along its blended direction, p->dir): each of levels
@@ -99,8 +91,9 @@ static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
 }
 
 /* Where column v's first level (in `old`) stands more than twice as high
- * above the tangent plane as its neighbours' (as they are now) on average,
- * the share of its height that brings it down to that mean; else 1. */
+ * (1 / k.ortho_high_ratio) above the tangent plane as its neighbours' (as
+ * they are now) on average, the share of its height that brings it down
+ * to that mean; else 1. */
 static double first_level_share(const vm_prism *p, int64_t v, const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   double e[3], sum = 0;
@@ -113,7 +106,7 @@ static double first_level_share(const vm_prism *p, int64_t v, const double *old)
     sum += pr_dot(f, p->vnrm + 3 * u);
   }
   double mean = sum / (double)(p->vv_off[v + 1] - p->vv_off[v]);
-  return a > 0 && mean > 0 && mean < 0.5 * a ? mean / a : 1;
+  return a > 0 && mean > 0 && mean < p->k.ortho_high_ratio * a ? mean / a : 1;
 }
 
 static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) {
@@ -123,20 +116,19 @@ static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) 
            3 * sizeof *old);
 }
 
-#define ORTHO_QMIN 0.3
-#define RING_MAX 64 /* columns that may stand up together */
-#define LEAN 0.07870170682461844 /* tan(4.5 degrees) */
-/* The quality a prism of quality q0 before may fall to: min(0.3, share q0). */
-static double quality_floor(double q0, double share) {
-  return share * q0 < ORTHO_QMIN ? share * q0 : ORTHO_QMIN;
+/* The quality a prism of quality q0 before may fall to: min(k.ortho_qmin,
+ * share q0). */
+static double quality_floor(const vm_prism *p, double q0, double share) {
+  return share * q0 < p->k.ortho_qmin ? share * q0 : p->k.ortho_qmin;
 }
 
 /* Is every prism of layers 0..nm on column v better than 0.3 or a quarter
- * of its quality before (q0)? The test a column that stood up must pass. */
+ * of its quality before (q0; k.ortho_qmin, k.ortho_alone_share)? The test
+ * a column that stood up must pass. */
 static int column_ok(const vm_prism *p, int64_t v, int nm, const double *q0) {
   for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
     int64_t t = p->vt[j];
-    if (layers_quality(p, t, 0, nm) < quality_floor(q0[t], 0.25)) return 0;
+    if (layers_quality(p, t, 0, nm) < quality_floor(p, q0[t], p->k.ortho_alone_share)) return 0;
   }
   return 1;
 }
@@ -149,15 +141,15 @@ static int column_ok(const vm_prism *p, int64_t v, int nm, const double *q0) {
 static int stand_with_ring(vm_prism *p, int64_t v, int bend, int nm, const double *q0,
                            uint8_t *moved, const double *old) {
   int64_t j0 = p->vv_off[v], deg = p->vv_off[v + 1] - j0;
-  if (deg + 1 > RING_MAX) return 0;
-  int64_t set[RING_MAX], n = 0;
-  uint8_t in[RING_MAX];
+  if (deg + 1 > PR_RING_MAX) return 0;
+  int64_t set[PR_RING_MAX], n = 0;
+  uint8_t in[PR_RING_MAX];
   set[n++] = v;
   for (int64_t j = 0; j < deg; j++)
     if (!moved[p->vv[j0 + j]]) set[n++] = p->vv[j0 + j];
   /* every share is taken before any column moves: it compares a column's
    * first level with its neighbours' as they are */
-  double hs[RING_MAX];
+  double hs[PR_RING_MAX];
   for (int64_t i = 0; i < n; i++) hs[i] = first_level_share(p, set[i], old);
   for (int64_t i = 0; i < n; i++) in[i] = (uint8_t)stand_column(p, set[i], bend, 0, hs[i], old);
   int ok = in[0];
@@ -196,7 +188,9 @@ static int stand_with_ring(vm_prism *p, int64_t v, int bend, int nm, const doubl
 static int orthogonal_first_level(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
-  int nm = p->nlev - 2 < 24 ? p->nlev - 2 : 24, nb = nm < 6 ? nm : 6;
+  const pr_params *kp = &p->k;
+  int nm = p->nlev - 2 < kp->ortho_layers ? p->nlev - 2 : kp->ortho_layers;
+  int nb = nm < kp->ortho_bend ? nm : kp->ortho_bend;
   size_t lsz = (size_t)(3 * nw);
   double *old = vm_alloc_array(ctx, (size_t)nm * lsz, sizeof *old);
   double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
@@ -221,12 +215,12 @@ static int orthogonal_first_level(vm_prism *p) {
   }
   for (int64_t v = 0; v < nw; v++)
     if (p->smooth[v]) moved[v] = (uint8_t)stand_column(p, v, nb, 0, 1, old);
-  for (int round = 0; round < 100; round++) {
+  for (int round = 0; round < kp->ortho_rounds; round++) {
     memset(back, 0, (size_t)nw);
     int64_t nback = 0;
     for (int64_t t = 0; t < nt; t++) {
       double q = layers_quality(p, t, 0, nb);
-      if ((q < qup[t] ? q : qup[t]) >= quality_floor(q0[t], 0.5)) continue;
+      if ((q < qup[t] ? q : qup[t]) >= quality_floor(p, q0[t], kp->ortho_round_share)) continue;
       for (int i = 0; i < 3; i++) {
         int32_t v = p->tri[3 * t + i];
         if (moved[v]) {
@@ -243,13 +237,15 @@ static int orthogonal_first_level(vm_prism *p) {
       }
   }
   /* bends tried in this order, each length once (nm may repeat one) */
-  int tries[8] = {6, 12, 9, 18, nm, 3, 2, 1}, ntry = 0;
-  for (int k = 0; k < 8; k++) {
+  int tries[PR_NBENDS], ntry = 0;
+  for (int k = 0; k < PR_NBENDS; k++) tries[k] = kp->ortho_bends[k] ? kp->ortho_bends[k] : nm;
+  for (int k = 0; k < PR_NBENDS; k++) {
     int seen = tries[k] > nm;
     for (int j = 0; j < ntry && !seen; j++) seen = tries[j] == tries[k];
     if (!seen) tries[ntry++] = tries[k];
   }
-  for (int pass = 0, again = 1; pass < 4 && again; pass++) {
+  const double lean = tan(kp->ortho_lean_deg * PR_PI / 180);
+  for (int pass = 0, again = 1; pass < kp->ortho_passes && again; pass++) {
     again = 0;
     for (int64_t v = 0; v < nw; v++) {
       if (!p->smooth[v] || moved[v]) continue;
@@ -262,7 +258,7 @@ static int orthogonal_first_level(vm_prism *p) {
       int nfam = hs < 1 ? 3 : 2;
       for (int k = 0; k < nfam * ntry && !moved[v]; k++) {
         int fam = k / ntry;
-        if (!stand_column(p, v, tries[k % ntry], fam == 1 ? LEAN : 0, fam == 2 ? hs : 1, old))
+        if (!stand_column(p, v, tries[k % ntry], fam == 1 ? lean : 0, fam == 2 ? hs : 1, old))
           continue;
         if (column_ok(p, v, nm, q0))
           moved[v] = again = 1;
@@ -287,28 +283,23 @@ static int orthogonal_first_level(vm_prism *p) {
 
 /* Tilt of column v's first side edge from its wall normal, in degrees. */
 static double first_tilt(const vm_prism *p, int64_t v) {
-  return tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
+  return pr_tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
 }
-
-#define TILT_SOLVE 4.5    /* degrees: smooth columns the patch solve takes */
-#define SOLVE_RINGS 2     /* rings of neighbours that move with them */
-#define SOLVE_WEIGHT 1e4  /* weight (12) of the first layer in the patch */
-#define SOLVE_ITER 50     /* Newton iterations per chunk of a patch solve */
-#define SOLVE_TRIES 4     /* solves at most, holding neighbours it tilted */
-#define SOLVE_CHUNKS 6    /* chunks at most (each restarts Newton) */
 
 /* One variational solve of the columns with ring[v] >= 0 (levels
  * 1..nlev-2 free; the wall, the outer surface and every other column
  * fixed) over all layers of the triangles that touch them. The first
  * layer's targets stand along the column's own direction (the vertex
  * normal on smooth parts, the blended direction at sharp edges) with the
- * column's present height above its tangent plane and weigh SOLVE_WEIGHT;
- * the other layers' targets are their present shapes where those are fair
- * prisms (quality > 0.05), else orthogonal ones on their base surface, as
- * in marching. The result replaces the levels (*applied = 1) only if every
+ * column's present height above its tangent plane and weigh
+ * k.solve_weight; the other layers' targets are their present shapes
+ * where those are fair prisms (quality > k.dir.fair_quality), else
+ * orthogonal ones on their base surface, as in marching. The result replaces the levels (*applied = 1) only if every
  * quadrature node and every corner tet of the patch is positive. */
 static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
   vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
+  const pr_surf ws = pr_wall_surf(p);
   int64_t nw = p->nw, nt = p->nt;
   int nl = p->nlev - 1;
   size_t lsz = (size_t)(3 * nw);
@@ -362,14 +353,14 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
       for (int64_t v = 0; v < nw; v++)
         memcpy(dn + 3 * v, (p->smooth[v] ? p->vnrm : p->dir) + 3 * v, 3 * sizeof *dn);
     else
-      pr_surface_dirs(p, base, fn, dn, dn + lsz, 0);
+      pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, dn, dn + lsz, 0);
     for (int64_t v = 0; v < nw; v++) {
       double e[3];
       for (int c = 0; c < 3; c++) e[c] = up[3 * v + c] - base[3 * v + c];
       hv[v] = k == 0 ? pr_dot(e, dn + 3 * v) : pr_norm(e);
-      if (!(hv[v] >= 1e-4 * p->elen[v])) hv[v] = 1e-4 * p->elen[v];
+      if (!(hv[v] >= kp->min_target_height * p->elen[v])) hv[v] = kp->min_target_height * p->elen[v];
     }
-    pr_build_targets(p, base, k == 0 ? p->fnrm : fn, dn, hv, tg);
+    pr_build_targets(nt, p->tri, &kp->dir, base, k == 0 ? p->fnrm : fn, dn, hv, tg);
     for (int64_t j = 0; j < ntl; j++) {
       int64_t t = tl[j], e = k * ntl + j;
       double x[18];
@@ -382,9 +373,9 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
         memcpy(x + 3 * i, base + 3 * v, 3 * sizeof *x);
         memcpy(x + 9 + 3 * i, up + 3 * v, 3 * sizeof *x);
       }
-      int own = k > 0 && pr_prism_quality(x) > PR_FAIR_QUALITY;
+      int own = k > 0 && pr_prism_quality(x) > kp->dir.fair_quality;
       memcpy((double *)tf->data + 18 * e, own ? x : tg + 18 * t, sizeof x);
-      w[e] = k == 0 ? SOLVE_WEIGHT : 1;
+      w[e] = k == 0 ? kp->solve_weight : 1;
     }
   }
   vm_measure_params prm = vm_measure_params_default();
@@ -394,21 +385,21 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
       (st = vm_problem_set_rule(pb, VM_RULE_GEOMETRIC)) || (st = vm_problem_set_weights(pb, w)) ||
       (st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD)))
     goto done;
-  /* in chunks of SOLVE_ITER iterations while the count of free smooth
-   * columns tilted beyond TILT_LIMIT falls (restarting Newton gets further
+  /* in chunks of k.solve_iter iterations while the count of free smooth
+   * columns tilted beyond k.tilt_limit_deg falls (restarting Newton gets further
    * than one long solve: on the demo aircraft read from STL at T = 20 %,
    * 300 iterations in one solve left 1 such column and took 13 s, chunks of
    * 50 left none in 4 s) */
   int64_t prev = INT64_MAX;
-  for (int chunk = 0; chunk < SOLVE_CHUNKS; chunk++) {
+  for (int chunk = 0; chunk < kp->solve_chunks; chunk++) {
     int it = 0;
-    st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, SOLVE_ITER, VM_PRISM_PHASE_MARCH, &it);
-    if (st < 0 || it < SOLVE_ITER) break;
+    st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, kp->solve_iter, VM_PRISM_PHASE_MARCH, &it);
+    if (st < 0 || it < kp->solve_iter) break;
     int64_t left = 0;
     for (int64_t v = 0; v < nw; v++)
       if (ring[v] >= 0 && p->smooth[v])
-        left += tilt_deg(p->wall + 3 * v, m->xyz + 3 * (nc + vid[v]), p->vnrm + 3 * v) >
-                TILT_LIMIT;
+        left += pr_tilt_deg(p->wall + 3 * v, m->xyz + 3 * (nc + vid[v]), p->vnrm + 3 * v) >
+                kp->tilt_limit_deg;
     if (!left || left >= prev) break;
     prev = left;
   }
@@ -448,16 +439,17 @@ done:
 }
 
 /* The smooth columns that standing up left tilted (first_tilt above
- * TILT_SOLVE) and their neighbours up to SOLVE_RINGS rings are moved
- * together by one variational solve (solve_patch), the paper's way:
+ * k.tilt_solve_deg) and their neighbours up to k.solve_rings rings are
+ * moved together by one variational solve (solve_patch), the paper's way:
  * the barrier keeps every prism valid while the first layer's orthogonal
  * targets pull the columns up, their upper layers making room. A smooth
- * column the solve tilts beyond TILT_LIMIT that was within it before (a
- * neighbour, or a selected one between TILT_SOLVE and TILT_LIMIT) is held
- * fixed and the solve redone from the levels before, at most SOLVE_TRIES
+ * column the solve tilts beyond k.tilt_limit_deg that was within it before
+ * (a neighbour, or a selected one between the two angles) is held fixed
+ * and the solve redone from the levels before, at most k.solve_tries
  * times; if that never comes out clean the levels stay as they were. */
 static int orthogonal_solve(vm_prism *p) {
   vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
   int64_t nw = p->nw;
   size_t nlsz = (size_t)p->nlev * (size_t)(3 * nw);
   int8_t *ring = vm_alloc_array(ctx, (size_t)nw, sizeof *ring);
@@ -471,22 +463,23 @@ static int orthogonal_solve(vm_prism *p) {
   int64_t ntilt = 0;
   for (int64_t v = 0; v < nw; v++) {
     tilt[v] = first_tilt(p, v);
-    ring[v] = p->smooth[v] && tilt[v] > TILT_SOLVE ? 0 : -1;
+    ring[v] = p->smooth[v] && tilt[v] > kp->tilt_solve_deg ? 0 : -1;
     ntilt += ring[v] == 0;
   }
   if (!ntilt || pr_time_left(p) <= 0) goto done;
-  for (int r = 0; r < SOLVE_RINGS; r++)
+  for (int r = 0; r < kp->solve_rings; r++)
     for (int64_t v = 0; v < nw; v++)
       if (ring[v] == r)
         for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)
           if (ring[p->vv[j]] < 0) ring[p->vv[j]] = (int8_t)(r + 1);
   memcpy(keep, p->lev, nlsz * sizeof *keep);
-  for (int attempt = 0; attempt < SOLVE_TRIES; attempt++) {
+  for (int attempt = 0; attempt < kp->solve_tries; attempt++) {
     int applied;
     if ((st = solve_patch(p, ring, &applied)) < 0 || !applied) break;
     int64_t worse = 0;
     for (int64_t v = 0; v < nw; v++)
-      if (ring[v] >= 0 && p->smooth[v] && tilt[v] <= TILT_LIMIT && first_tilt(p, v) > TILT_LIMIT) {
+      if (ring[v] >= 0 && p->smooth[v] && tilt[v] <= kp->tilt_limit_deg &&
+          first_tilt(p, v) > kp->tilt_limit_deg) {
         ring[v] = -1;
         worse++;
       }
@@ -505,6 +498,8 @@ int vm_prism_march(vm_prism *p) {
   if (p->done != 4) return vm_error(p->ctx, VM_ERR_ARG, "prism: marching needs the restored layer");
   double t0 = omp_get_wtime();
   vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
+  const pr_surf ws = pr_wall_surf(p);
   int64_t nw = p->nw, nt = p->nt;
   int n = p->rep.layers_requested;
   size_t lsz = (size_t)(3 * nw);
@@ -568,16 +563,17 @@ int vm_prism_march(vm_prism *p) {
      * where the remainder's map folds between its own nodes), slightly
      * thinner or thicker splits are tried; the schedule's later layers
      * absorb the difference */
-    static const double fmul[5] = {1, 0.8, 1.25, 0.64, 1.5};
+    const double *fmul = kp->split_mul;
+    const int nmul = (int)(sizeof kp->split_mul / sizeof *kp->split_mul);
     double f0 = p->sched[k] / rem;
     rem -= p->sched[k];
     const char *why = NULL;
     vm_node_stats ns;
     int it = 0;
-    pr_surface_dirs(p, base, fn, vn, dr, 0);
-    for (int j = 0; j < 5; j++) {
+    pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, vn, dr, 0);
+    for (int j = 0; j < nmul; j++) {
       double f = f0 * fmul[j];
-      if (j > 0 && f > 0.9) continue;
+      if (j > 0 && f > kp->split_max_frac) continue;
       memcpy(m2->xyz, base, lsz * sizeof *m2->xyz);
       for (int64_t v = 0; v < nw; v++) {
         double *mv = m2->xyz + lsz + 3 * v;
@@ -585,7 +581,7 @@ int vm_prism_march(vm_prism *p) {
           mv[c] = base[3 * v + c] + f * (outer[3 * v + c] - base[3 * v + c]);
         /* a column cut to (almost) nothing still gets a proper target */
         hk[v] = f * pr_dist(outer + 3 * v, base + 3 * v);
-        if (!(hk[v] >= 1e-4 * p->elen[v])) hk[v] = 1e-4 * p->elen[v];
+        if (!(hk[v] >= kp->min_target_height * p->elen[v])) hk[v] = kp->min_target_height * p->elen[v];
       }
       /* inner targets: orthogonal to the base surface (vertex normals,
        * bent towards the face normal only where needed); outer targets:
@@ -593,12 +589,12 @@ int vm_prism_march(vm_prism *p) {
        * column split along straight side edges can give a flat or
        * inverted sub-prism) the inner target's shape, which is always
        * valid */
-      pr_build_targets(p, base, fn, vn, hk, tg);
+      pr_build_targets(nt, p->tri, &kp->dir, base, fn, vn, hk, tg);
       for (int64_t t = 0; t < nt; t++) {
         const int32_t *c = m2->conn + 6 * (nt + t);
         double x[18];
         for (int q = 0; q < 6; q++) memcpy(x + 3 * q, m2->xyz + 3 * (int64_t)c[q], 3 * sizeof *x);
-        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > PR_FAIR_QUALITY ? x : tg + 18 * t, sizeof x);
+        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > kp->dir.fair_quality ? x : tg + 18 * t, sizeof x);
       }
       /* a split that cannot be made valid ends the marching early (the
        * paper's option): levels 0..k are valid, and so is the remainder
@@ -662,151 +658,3 @@ done:
   return st;
 }
 
-/* Levels of the current state: after marching the levels; before, the
- * single layer (2 levels, pointing into the layer mesh). */
-static const double *levels(const vm_prism *p, int *nlev) {
-  if (p->done >= 5) {
-    *nlev = p->nlev;
-    return p->lev;
-  }
-  *nlev = p->layer ? 2 : 0;
-  return p->layer ? p->layer->xyz : NULL;
-}
-
-int vm_prism_result(vm_prism *p, vm_mesh **out) {
-  if (!out) return VM_ERR_ARG;
-  *out = NULL;
-  if (!p) return VM_ERR_ARG;
-  vm_ctx *ctx = p->ctx;
-  int nlev;
-  const double *L = levels(p, &nlev);
-  if (nlev < 2) return vm_error(ctx, VM_ERR_ARG, "prism: no layer built yet");
-  int64_t nw = p->nw, nt = p->nt, nl = nlev - 1;
-  int64_t ne = nl * nt + 2 * nt;
-  vm_mesh *m = NULL;
-  int st = vm_mesh_create(ctx, &m);
-  if (st) return st;
-  if ((st = vm_mesh_set_vertices(m, nlev * nw)) ||
-      (st = vm_mesh_set_elements(m, ne, 6 * nl * nt + 6 * nt)))
-    goto fail;
-  memcpy(m->xyz, L, (size_t)(3 * nw * nlev) * sizeof *m->xyz);
-  memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
-  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
-  int64_t e = 0, c = 0;
-  for (int64_t k = 0; k < nl; k++)
-    for (int64_t t = 0; t < nt; t++, e++) {
-      m->etype[e] = VM_PRISM;
-      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + k * nw);
-      for (int i = 0; i < 3; i++) m->conn[c + 3 + i] = (int32_t)(p->tri[3 * t + i] + (k + 1) * nw);
-      c += 6;
-      m->eoff[e + 1] = c;
-    }
-  for (int s = 0; s < 2; s++)
-    for (int64_t t = 0; t < nt; t++, e++) {
-      m->etype[e] = VM_TRI;
-      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + (s ? nl * nw : 0));
-      c += 3;
-      m->eoff[e + 1] = c;
-    }
-  /* vm_mesh_add_field may move the mesh's field table, so keep the data
-   * pointers (separate allocations), never the vm_field pointers */
-  vm_field *f;
-  int32_t *lay = NULL, *ph = NULL;
-  double *th = NULL;
-  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
-    goto fail;
-  lay = f->data;
-  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
-    goto fail;
-  ph = f->data;
-  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
-    goto fail;
-  th = f->data;
-  for (int64_t k = 0; k < ne; k++) {
-    lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
-    ph[k] = k < nl * nt ? VM_PRISM_TAG_VOLUME : k < nl * nt + nt ? VM_PRISM_TAG_WALL
-                                                                  : VM_PRISM_TAG_OUTER;
-  }
-  for (int64_t v = 0; v < nw; v++) {
-    double d = pr_dist(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
-    for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
-  }
-  if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
-      (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
-      (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
-    goto fail;
-  *out = m;
-  return VM_OK;
-fail:
-  vm_mesh_destroy(&m);
-  return st;
-}
-
-int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
-  if (!p || !r) return VM_ERR_ARG;
-  int nlev;
-  const double *L = levels(p, &nlev);
-  vm_prism_report R = p->rep;
-  R.time_total = pr_elapsed(p);
-  if (nlev >= 2) {
-    int64_t nw = p->nw, nt = p->nt;
-    size_t lsz = (size_t)(3 * nw);
-    double T = p->o.thickness;
-    const double *top = L + (size_t)(nlev - 1) * lsz;
-    int64_t full = 0;
-    double tmin = INFINITY, tmax = 0, tsum = 0;
-    for (int64_t v = 0; v < nw; v++) {
-      double d = pr_dist(p->wall + 3 * v, top + 3 * v) / T;
-      if (d >= 1 - p->o.full_tol) full++;
-      tmin = d < tmin ? d : tmin;
-      tmax = d > tmax ? d : tmax;
-      tsum += d;
-    }
-    R.full_fraction = (double)full / (double)nw;
-    R.thick_min = tmin;
-    R.thick_mean = tsum / (double)nw;
-    R.thick_max = tmax;
-    R.prisms = (nlev - 1) * nt;
-    R.layers = nlev - 1;
-    int64_t inv = 0;
-    double sj = INFINITY;
-    for (int k = 0; k + 1 < nlev; k++)
-      for (int64_t t = 0; t < nt; t++) {
-        double x[18];
-        for (int i = 0; i < 3; i++) {
-          memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-          memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-        }
-        int bad;
-        double q = pr_prism_corner_quality(x, &bad);
-        inv += bad;
-        sj = q < sj ? q : sj;
-      }
-    R.inverted = inv;
-    R.sj_min = sj;
-    double dmax = 0, dsum = 0;
-    int64_t ns = 0, over = 0;
-    for (int64_t v = 0; v < nw; v++) {
-      if (!p->smooth[v]) continue;
-      double a = tilt_deg(p->wall + 3 * v, L + lsz + 3 * v, p->vnrm + 3 * v);
-      dmax = a > dmax ? a : dmax;
-      dsum += a;
-      ns++;
-      over += a > TILT_LIMIT;
-    }
-    R.normal_dev_over5 = over;
-    R.normal_dev_max = dmax;
-    R.normal_dev_mean = ns ? dsum / (double)ns : 0;
-    R.smooth_vertices = ns;
-    double gmax = 0;
-    for (int64_t v = 0; v < nw && nlev > 2; v++)
-      for (int k = 0; k + 2 < nlev; k++) {
-        double h0 = pr_dist(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
-        double h1 = pr_dist(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
-        if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
-      }
-    R.growth_max = gmax;
-  }
-  *r = R;
-  return VM_OK;
-}

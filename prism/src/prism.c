@@ -1,11 +1,12 @@
-/* prism/src/prism.c: the layer builder: options, wall import and
- * adjacency, the thin layer (phase 1), the result mesh and the report. */
+/* prism/src/prism.c: the layer builder's run: options, wall import and
+ * adjacency, the schedule of heights, the state's life, the phases in
+ * order (vm_prism_run). */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "prism_private.h"
+#include "state.h"
 
 const char *vm_prism_phase_name(vm_prism_phase ph) {
   static const char *const names[] = {"thin", "springback", "cut", "restore", "march"};
@@ -30,6 +31,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.drop_quality = 0;
   o.full_tol = 0.01;
   o.time_limit = 0;
+  o.check_incremental = 0;
   return o;
 }
 
@@ -76,6 +78,7 @@ static int check_opts(vm_ctx *ctx, const vm_prism_opts *o) {
 /* The schedule of layer heights h_k = h1 r^k summing to T. */
 static int build_schedule(vm_prism *p) {
   const vm_prism_opts *o = &p->o;
+  const pr_params *kp = &p->k;
   int n = o->nlayers;
   double T = o->thickness, r = o->growth, h1 = o->first_height;
   if (h1 > 0 && r >= 1) {
@@ -83,7 +86,7 @@ static int build_schedule(vm_prism *p) {
      * last one takes the remainder */
     double s = 0;
     int k = 0;
-    while (k < n && s + h1 * pow(r, k) < T * (1 - 1e-9)) s += h1 * pow(r, k++);
+    while (k < n && s + h1 * pow(r, k) < T * (1 - kp->sched_fit_tol)) s += h1 * pow(r, k++);
     if (k < n) n = k + 1;
   } else if (h1 > 0) {
     /* solve h1 (r^n - 1)/(r - 1) = T for r >= 1 by bisection */
@@ -93,7 +96,7 @@ static int build_schedule(vm_prism *p) {
     } else {
       double lo = 1, hi = 2;
       while (h1 * (pow(hi, n) - 1) / (hi - 1) < T) hi *= 2;
-      for (int it = 0; it < 200; it++) {
+      for (int it = 0; it < kp->sched_bisect_iter; it++) {
         double mid = 0.5 * (lo + hi);
         if (h1 * (pow(mid, n) - 1) / (mid - 1) < T)
           lo = mid;
@@ -261,6 +264,7 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   if (!p) return VM_ERR_NOMEM;
   p->ctx = ctx;
   p->o = o;
+  p->k = pr_params_default();
   p->t0 = omp_get_wtime();
   p->nt = nt;
   int32_t *map = vm_alloc_array(ctx, (size_t)(wall->nv ? wall->nv : 1), sizeof *map);
@@ -327,7 +331,7 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     }
     pr_cross(e1, e2, n);
     double a = pr_norm(n), l = pr_dot(e1, e1) + pr_dot(e2, e2);
-    if (!(a > 1e-14 * l)) {
+    if (!(a > p->k.degenerate_area * l)) {
       vm_prism_destroy(&p);
       return vm_error(ctx, VM_ERR_ARG, "prism: wall triangle %lld is degenerate", (long long)t);
     }
@@ -346,17 +350,20 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     return vm_error(ctx, VM_ERR_ARG, "prism: the wall is oriented inwards (enclosed volume %g)",
                     vol / 6);
   }
-  int64_t blind = pr_surface_dirs(p, p->wall, p->fnrm, p->vnrm, p->dir, 3);
+  pr_surf ws = pr_wall_surf(p);
+  int64_t blind = pr_surface_dirs(ctx, &ws, &p->k.dir, p->wall, p->fnrm, p->vnrm, p->dir,
+                                  p->k.dir_blend_passes);
   if (blind) {
     vm_prism_destroy(&p);
     return vm_error(ctx, VM_ERR_ARG,
                     "prism: at %lld wall vertices no direction sees every incident triangle",
                     (long long)blind);
   }
+  const double smooth_cos = cos(p->k.smooth_angle_deg * PR_PI / 180);
   for (int64_t v = 0; v < nw; v++) {
     int sm = 1;
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
-      if (pr_dot(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < cos(10 * PR_PI / 180)) sm = 0;
+      if (pr_dot(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < smooth_cos) sm = 0;
     p->smooth[v] = (uint8_t)sm;
     p->h[v] = o.thickness;
     p->cap[v] = o.thickness;
@@ -377,11 +384,12 @@ void vm_prism_destroy(vm_prism **pp) {
   vm_prism *p = *pp;
   vm_ctx *ctx = p->ctx;
   vm_problem_destroy(&p->prob);
-  pr_soup_destroy(ctx, &p->soup);
+  pr_layer_faces_destroy(ctx, &p->faces);
+  pr_rt_destroy(&p->rt);
   vm_mesh_destroy(&p->layer);
   void *arrays[] = {p->wall, p->tri, p->fnrm, p->vnrm, p->dir, p->elen, p->smooth,
                     p->vt_off, p->vt, p->vv_off, p->vv, p->edge, p->etri, p->h,
-                    p->cap, p->cut, p->lev, p->sched, p->soup_xyz};
+                    p->cap, p->cut, p->lev, p->sched};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;
@@ -395,110 +403,8 @@ void pr_set_top(vm_prism *p, const double *t, const double *d) {
     for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
 }
 
-/* Phase 1: top_v = wall_v + h_v dir_v with h_v a small fraction of the local
- * edge length, halved where a prism is degenerate or poor. */
-int vm_prism_thin(vm_prism *p) {
-  if (!p) return VM_ERR_ARG;
-  if (p->done != 0) return vm_error(p->ctx, VM_ERR_ARG, "prism: thin layer already built");
-  double t0 = omp_get_wtime();
-  vm_ctx *ctx = p->ctx;
-  int64_t nw = p->nw, nt = p->nt;
-  int st = vm_mesh_create(ctx, &p->layer);
-  if (st) return st;
-  vm_mesh *m = p->layer;
-  if ((st = vm_mesh_set_vertices(m, 2 * nw)) || (st = vm_mesh_set_elements(m, nt, 6 * nt)))
-    return st;
-  memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
-  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
-  for (int64_t t = 0; t < nt; t++) {
-    m->etype[t] = VM_PRISM;
-    m->eoff[t + 1] = 6 * (t + 1);
-    for (int i = 0; i < 3; i++) {
-      m->conn[6 * t + i] = p->tri[3 * t + i];
-      m->conn[6 * t + 3 + i] = (int32_t)(p->tri[3 * t + i] + nw);
-    }
-  }
-  double *hv = vm_alloc_array(ctx, (size_t)nw, sizeof *hv);
-  uint8_t *bad = vm_alloc_array(ctx, (size_t)nw, sizeof *bad);
-  if (!hv || !bad) {
-    vm_free(ctx, hv);
-    vm_free(ctx, bad);
-    return VM_ERR_NOMEM;
-  }
-  for (int64_t v = 0; v < nw; v++) {
-    double h = 0.5 * p->elen[v];
-    hv[v] = h < p->o.thickness ? h : p->o.thickness;
-  }
-  /* the quality each prism tends to as its height goes to 0: the bound the
-   * thin layer may approach but not reach */
-  double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
-  if (!q0) {
-    vm_free(ctx, hv);
-    vm_free(ctx, bad);
-    return VM_ERR_NOMEM;
-  }
-  for (int64_t v = 0; v < nw; v++) bad[v] = 0;
-  {
-    double *hs = vm_alloc_array(ctx, (size_t)nw, sizeof *hs);
-    if (!hs) {
-      vm_free(ctx, q0);
-      vm_free(ctx, hv);
-      vm_free(ctx, bad);
-      return VM_ERR_NOMEM;
-    }
-    for (int64_t v = 0; v < nw; v++) hs[v] = 1e-6 * hv[v];
-    pr_set_top(p, hs, p->dir);
-    vm_free(ctx, hs);
-    for (int64_t t = 0; t < nt; t++) {
-      double x[18];
-      const int32_t *c = m->conn + 6 * t;
-      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-      q0[t] = pr_prism_quality(x);
-    }
-  }
-  int64_t nbad = 0;
-  for (int round = 0; round < 60; round++) {
-    pr_set_top(p, hv, p->dir);
-    memset(bad, 0, (size_t)nw);
-    nbad = 0;
-    for (int64_t t = 0; t < nt; t++) {
-      double x[18];
-      const int32_t *c = m->conn + 6 * t;
-      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-      double lim = 0.5 * q0[t] < 0.3 ? 0.5 * q0[t] : 0.3;
-      if (pr_prism_quality(x) > lim && lim > 0) continue;
-      nbad++;
-      for (int i = 0; i < 3; i++) bad[c[i]] = 1;
-    }
-    if (!nbad) break;
-    for (int64_t v = 0; v < nw; v++)
-      if (bad[v]) hv[v] *= 0.5;
-  }
-  double hmin = INFINITY, hmax = 0;
-  for (int64_t v = 0; v < nw; v++) {
-    hmin = hv[v] < hmin ? hv[v] : hmin;
-    hmax = hv[v] > hmax ? hv[v] : hmax;
-  }
-  vm_free(ctx, hv);
-  vm_free(ctx, bad);
-  vm_free(ctx, q0);
-  if (nbad)
-    return vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld thin prisms stay degenerate",
-                    (long long)nbad);
-  vm_field *f;
-  if ((st = vm_mesh_add_field(m, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT, VM_FIELD_F64, 18, &f)))
-    return st;
-  p->rep.thin_min = hmin;
-  p->rep.thin_max = hmax;
-  p->rep.prisms = nt;
-  p->done = 1;
-  p->rep.time[VM_PRISM_PHASE_THIN] = omp_get_wtime() - t0;
-  pr_progress(p, VM_PRISM_PHASE_THIN, 1, hmax, 0, 0);
-  return VM_OK;
-}
-
-int vm_prism_run(vm_prism *p) {
-  if (!p) return VM_ERR_ARG;
+/* Every phase not done yet, in order: the first warning, or an error. */
+static int run_phases(vm_prism *p) {
   int warn = 0, st;
   int (*const phase[])(vm_prism *) = {vm_prism_thin, vm_prism_springback, vm_prism_cut,
                                       vm_prism_restore, vm_prism_march};
@@ -509,4 +415,25 @@ int vm_prism_run(vm_prism *p) {
   }
   if (vm_ctx_interrupted(p->ctx)) return VM_ERR_INTERRUPTED;
   return warn;
+}
+
+int vm_prism_run(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_mesh **out,
+                 vm_prism_report *report) {
+  if (report) memset(report, 0, sizeof *report);
+  if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_prism_run: out is NULL");
+  *out = NULL;
+  vm_prism *p = NULL;
+  int st = vm_prism_create(ctx, wall, opts, &p);
+  if (st < 0) return st;
+  st = run_phases(p);
+  /* the figures first: time_total is the run's, not the result's */
+  vm_prism_report r;
+  vm_prism_get_report(p, &r);
+  if (report) *report = r;
+  if (st >= 0 || st == VM_ERR_INTERRUPTED) {
+    int s2 = vm_prism_result(p, out);
+    if (s2 < 0) st = s2;
+  }
+  vm_prism_destroy(&p);
+  return st;
 }

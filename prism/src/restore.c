@@ -7,7 +7,7 @@
 #include <omp.h>
 #include <string.h>
 
-#include "prism_private.h"
+#include "state.h"
 
 /* Mean-value (Floater) average of the outer neighbours of every vertex,
  * projected on its side edge: tp[v] = (q_v - wall_v) . d_v. */
@@ -57,20 +57,20 @@ static void layer_quality(const vm_prism *p, double *q) {
 }
 
 /* Set the top from t; where a prism became worse than a tenth of its
- * quality at the start q0 (QSHARE), put its vertices back to t_old and
- * halve their step, until no prism is (t_old passed the same test). A
- * share rather than a fixed floor: a fan prism at a sharp trailing edge
- * starts near 0.01 and must lengthen, a good prism must not fall to 0.03. */
-#define QSHARE 0.1
+ * quality at the start q0 (k.restore_qshare), put its vertices back to
+ * t_old and halve their step, until no prism is (t_old passed the same
+ * test). A share rather than a fixed floor: a fan prism at a sharp
+ * trailing edge starts near 0.01 and must lengthen, a good prism must not
+ * fall to 0.03. */
 static void apply_quality(vm_prism *p, double *t, const double *t_old, const double *d,
                           const double *q0, double *q, double *alpha, uint8_t *bad) {
-  for (int round = 0; round < 200; round++) {
+  for (int round = 0; round < p->k.restore_quality_rounds; round++) {
     pr_set_top(p, t, d);
     layer_quality(p, q);
     memset(bad, 0, (size_t)p->nw);
     int64_t nbad = 0;
     for (int64_t e = 0; e < p->nt; e++) {
-      if (q[e] >= QSHARE * q0[e]) continue;
+      if (q[e] >= p->k.restore_qshare * q0[e]) continue;
       nbad++;
       for (int i = 0; i < 3; i++) bad[p->tri[3 * e + i]] = 1;
     }
@@ -79,7 +79,7 @@ static void apply_quality(vm_prism *p, double *t, const double *t_old, const dou
     for (int64_t v = 0; v < p->nw; v++)
       if (bad[v] && t[v] != t_old[v]) {
         t[v] = t_old[v];
-        alpha[v] *= 0.5;
+        alpha[v] *= p->k.restore_backoff;
         back++;
       }
     if (!back) { /* cannot happen from a valid start; be safe */
@@ -140,9 +140,9 @@ int vm_prism_restore(vm_prism *p) {
    * gives back the old prism bit for bit */
   pr_set_top(p, t, d);
   layer_quality(p, qold);
-  mark_zone(p, 3, zone, tmp);
+  mark_zone(p, p->k.restore_zone_rings, zone, tmp);
   for (int64_t v = 0; v < nw; v++)
-    if (zone[v]) alpha[v] = 0.5;
+    if (zone[v]) alpha[v] = p->k.restore_zone_alpha;
   /* pairs cutting left (it ran out of rounds): their columns stay where
    * they are, and only new pairs send columns back */
   int64_t np = 0, np0 = 0;
@@ -166,7 +166,7 @@ int vm_prism_restore(vm_prism *p) {
       double goal = p->cap[v] < T ? p->cap[v] : T;
       /* cut columns: one Laplace-Beltrami step (mean-value weights) of the
        * offset surface along the side edge; all: restoration towards T */
-      double s = p->cut[v] ? 0.5 * (t[v] + tp[v]) : t[v];
+      double s = p->cut[v] ? p->k.restore_smooth_weight * (t[v] + tp[v]) : t[v];
       double nt = s + alpha[v] * (goal - s);
       if (nt > goal) nt = goal;
       /* never below the length cutting left: that layer is valid and free
@@ -174,10 +174,10 @@ int vm_prism_restore(vm_prism *p) {
        * neighbours lie behind the vertex, so repeated smoothing would
        * shrink the column towards zero */
       if (nt < tcut[v]) nt = tcut[v];
-      /* steps below 1e-3 T are not taken: the layer then settles with
-       * few columns moving, and the intersection query only looks at
-       * those (a full query every pass cost 0.6 s at T = 20 %) */
-      if (fabs(nt - t[v]) >= 1e-3 * T) t[v] = nt;
+      /* steps below k.restore_min_step T are not taken: the layer then
+       * settles with few columns moving, and the intersection query only
+       * looks at those (a full query every pass cost 0.6 s at T = 20 %) */
+      if (fabs(nt - t[v]) >= p->k.restore_min_step * T) t[v] = nt;
     }
     /* no worse prisms and no new intersections: the columns involved go
      * back and halve their steps; after many halvings their cap is frozen
@@ -190,11 +190,11 @@ int vm_prism_restore(vm_prism *p) {
       for (int64_t v = 0; v < nw; v++)
         if (tmp[v] && t[v] != told[v]) {
           t[v] = told[v];
-          alpha[v] *= 0.5;
-          if (alpha[v] < 1.0 / 64) p->cap[v] = told[v];
+          alpha[v] *= p->k.restore_backoff;
+          if (alpha[v] < p->k.restore_freeze_alpha) p->cap[v] = told[v];
           back++;
         }
-      if (!back || round >= 20) {
+      if (!back || round >= p->k.restore_back_rounds) {
         memcpy(t, told, (size_t)nw * sizeof *t);
         pr_set_top(p, t, d);
         if ((st = pr_layer_intersections(p, NULL, &np))) goto done;
@@ -208,7 +208,7 @@ int vm_prism_restore(vm_prism *p) {
       change = c > change ? c : change;
     }
     pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np, 0);
-    if (np > np0 || change < 1e-6 * T) break;
+    if (np > np0 || change < p->k.restore_stop_change * T) break;
   }
   p->rep.intersections = np;
   if (np && st == VM_OK) st = VM_WARN_MAXITER;

@@ -29,15 +29,13 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
   o.thickness = frac * length; /* the model's length: nose at 0, tail at L */
   o.nlayers = 20;
   o.growth = 1.2;
-  vm_prism *p = NULL;
+  o.check_incremental = 1; /* every incremental intersection query checked */
   memset(out, 0, sizeof *out);
-  int st = vm_prism_create(ctx, w, &o, &p);
-  CHECK(st == 0, "create: %d %s", st, vm_ctx_error(ctx));
-  if (st) return;
-  st = vm_prism_run(p);
-  CHECK(st == 0, "T = %g L, run: %d %s", frac, st, vm_ctx_error(ctx));
   vm_prism_report r;
-  vm_prism_get_report(p, &r);
+  vm_mesh *res = NULL;
+  int st = vm_prism_run(ctx, w, &o, &res, &r);
+  CHECK(st == 0, "T = %g L, run: %d %s", frac, st, vm_ctx_error(ctx));
+  if (st < 0 && r.wall_triangles == 0) return; /* the wall was refused */
   fprintf(stderr, "aircraft at %g L: %lld prisms, %d layers, full %.3f, growth max %.3f, %.1f s\n",
           frac, (long long)r.prisms, r.layers, r.full_fraction, r.growth_max, r.time_total);
   CHECK(r.layers == 20, "T = %g L: %d layers of 20", frac, r.layers);
@@ -51,8 +49,7 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
   CHECK(r.inverted == 0, "T = %g L: %lld inverted corner tets", frac, (long long)r.inverted);
   CHECK(r.intersections == 0, "T = %g L: %lld intersections left", frac,
         (long long)r.intersections);
-  vm_mesh *res = NULL;
-  CHECK(vm_prism_result(p, &res) == 0, "result: %s", vm_ctx_error(ctx));
+  CHECK(res, "result: %s", vm_ctx_error(ctx));
   if (res) {
     CHECK(res->ne == 20 * r.wall_triangles + 2 * r.wall_triangles, "%lld elements",
           (long long)res->ne);
@@ -61,7 +58,6 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
           "T = %g L: the wall moved", frac);
     vm_mesh_destroy(&res);
   }
-  vm_prism_destroy(&p);
   *out = r;
 }
 

@@ -47,17 +47,13 @@ static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, 
   o.thickness = T;
   o.nlayers = layers;
   o.growth = 1.2;
-  vm_prism *p = NULL;
-  int st = vm_prism_create(ctx, w, &o, &p);
-  CHECK(st == 0, "%s: create: %d %s", name, st, vm_ctx_error(ctx));
-  if (st) {
+  o.check_incremental = 1; /* every incremental intersection query checked */
+  int st = vm_prism_run(ctx, w, &o, &out->res, &out->r);
+  CHECK(st == 0, "%s: run: %d %s", name, st, vm_ctx_error(ctx));
+  if (st < 0 && out->r.wall_triangles == 0) { /* the wall was refused */
     free(w0);
     return st;
   }
-  st = vm_prism_run(p);
-  CHECK(st == 0, "%s: run: %d %s", name, st, vm_ctx_error(ctx));
-  vm_prism_get_report(p, &out->r);
-  vm_prism_result(p, &out->res);
   out->nw = out->r.wall_vertices;
   const vm_prism_report *r = &out->r;
   fprintf(stderr,
@@ -78,7 +74,6 @@ static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, 
     CHECK(ni == 0, "%s: %lld intersecting boundary face pairs (independent check)", name,
           (long long)ni);
   }
-  vm_prism_destroy(&p);
   free(w0);
   return 0;
 }
@@ -184,6 +179,7 @@ int main(void) {
     po.nlayers = 3;
     po.max_cut_rounds = 1;
     po.springback_iter = 1; /* short of T: restoring has work to do */
+    po.check_incremental = 1;
     vm_prism *p = NULL;
     int st = vm_prism_create(ctx, w, &po, &p);
     CHECK(st == 0, "two spheres, 1 cut round: create: %s", vm_ctx_error(ctx));

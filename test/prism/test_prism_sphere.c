@@ -46,6 +46,7 @@ int main(void) {
   o.thickness = 0.5;
   o.nlayers = 5;
   o.growth = 1.3;
+  o.check_incremental = 1; /* every incremental intersection query checked */
   vm_prism *p = NULL;
   int st = vm_prism_create(ctx, w, &o, &p);
   CHECK(st == 0, "create: %d %s", st, vm_ctx_error(ctx));

@@ -81,10 +81,17 @@ typedef struct vm_prism_opts {
   double full_tol;      /* a column is at full thickness if >= (1 - full_tol) T
                            (default 0.01) */
   double time_limit;    /* seconds for the whole run, <= 0: none */
+  int check_incremental; /* 1: compare every incremental intersection query
+                            with a full one, an error (VM_ERR_NUMERIC) if
+                            they differ; for tests (default 0: the
+                            incremental answer is trusted, twice as fast) */
   vm_prism_progress_fn progress;
   void *user;
 } vm_prism_opts;
 
+/* The defaults above. The stage's internal tunables (tolerances, rounds,
+ * quality floors, ...) are not options; they are named, with their
+ * defaults and reasons, in prism/src/params.h. */
 vm_prism_opts vm_prism_opts_default(void);
 
 /* The summary of a run (every figure is measured, not assumed). */
@@ -113,6 +120,25 @@ typedef struct vm_prism_report {
   double time_total;
 } vm_prism_report;
 
+/* The stage in one call: the layers on the wall `wall` (see
+ * vm_prism_create for what it accepts) with options `opts` (NULL: the
+ * defaults; thickness is required).
+ * Output: *out the result mesh (see vm_prism_result; free with
+ * vm_mesh_destroy), *report its figures (see vm_prism_get_report; may be
+ * NULL).
+ * Returns VM_OK; a warning (VM_WARN_MAXITER: a limit stopped a phase with
+ * valid layers, e.g. cutting out of rounds or marching ending early;
+ * VM_WARN_TIME), with *out and *report filled; VM_ERR_INTERRUPTED (the
+ * context was interrupted), also with *out and *report filled as far as
+ * the run came; or an error, with *out NULL: the wall or the options
+ * refused (VM_ERR_ARG, *report all zero) or a phase failed
+ * (VM_ERR_NUMERIC, VM_ERR_BACKEND, VM_ERR_NOMEM; *report holds the
+ * figures so far, report->wall_triangles > 0). */
+int vm_prism_run(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_mesh **out,
+                 vm_prism_report *report);
+
+/* ---- step by step (tests, tools that look at the layer between phases) ---- */
+
 typedef struct vm_prism vm_prism;
 
 /* Create the layer builder for a wall: the triangles (VM_TRI; quads are
@@ -136,7 +162,6 @@ int vm_prism_springback(vm_prism *p);
 int vm_prism_cut(vm_prism *p);
 int vm_prism_restore(vm_prism *p);
 int vm_prism_march(vm_prism *p);
-int vm_prism_run(vm_prism *p);
 
 /* The current single layer (before marching) as a prism mesh: vertices
  * 0..nw-1 the wall (FIXED), nw..2nw-1 the outer surface; one prism per

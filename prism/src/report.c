@@ -1,0 +1,155 @@
+/* prism/src/report.c: the result mesh of a run (the levels as prisms, the
+ * wall and outer triangles, fields and names) and its measured figures. */
+#include <math.h>
+#include <string.h>
+
+#include "state.h"
+
+/* Levels of the current state: after marching the levels; before, the
+ * single layer (2 levels, pointing into the layer mesh). */
+static const double *levels(const vm_prism *p, int *nlev) {
+  if (p->done >= 5) {
+    *nlev = p->nlev;
+    return p->lev;
+  }
+  *nlev = p->layer ? 2 : 0;
+  return p->layer ? p->layer->xyz : NULL;
+}
+
+int vm_prism_result(vm_prism *p, vm_mesh **out) {
+  if (!out) return VM_ERR_ARG;
+  *out = NULL;
+  if (!p) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  int nlev;
+  const double *L = levels(p, &nlev);
+  if (nlev < 2) return vm_error(ctx, VM_ERR_ARG, "prism: no layer built yet");
+  int64_t nw = p->nw, nt = p->nt, nl = nlev - 1;
+  int64_t ne = nl * nt + 2 * nt;
+  vm_mesh *m = NULL;
+  int st = vm_mesh_create(ctx, &m);
+  if (st) return st;
+  if ((st = vm_mesh_set_vertices(m, nlev * nw)) ||
+      (st = vm_mesh_set_elements(m, ne, 6 * nl * nt + 6 * nt)))
+    goto fail;
+  memcpy(m->xyz, L, (size_t)(3 * nw * nlev) * sizeof *m->xyz);
+  memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
+  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
+  int64_t e = 0, c = 0;
+  for (int64_t k = 0; k < nl; k++)
+    for (int64_t t = 0; t < nt; t++, e++) {
+      m->etype[e] = VM_PRISM;
+      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + k * nw);
+      for (int i = 0; i < 3; i++) m->conn[c + 3 + i] = (int32_t)(p->tri[3 * t + i] + (k + 1) * nw);
+      c += 6;
+      m->eoff[e + 1] = c;
+    }
+  for (int s = 0; s < 2; s++)
+    for (int64_t t = 0; t < nt; t++, e++) {
+      m->etype[e] = VM_TRI;
+      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + (s ? nl * nw : 0));
+      c += 3;
+      m->eoff[e + 1] = c;
+    }
+  /* vm_mesh_add_field may move the mesh's field table, so keep the data
+   * pointers (separate allocations), never the vm_field pointers */
+  vm_field *f;
+  int32_t *lay = NULL, *ph = NULL;
+  double *th = NULL;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
+    goto fail;
+  lay = f->data;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
+    goto fail;
+  ph = f->data;
+  if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
+    goto fail;
+  th = f->data;
+  for (int64_t k = 0; k < ne; k++) {
+    lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
+    ph[k] = k < nl * nt ? VM_PRISM_TAG_VOLUME : k < nl * nt + nt ? VM_PRISM_TAG_WALL
+                                                                  : VM_PRISM_TAG_OUTER;
+  }
+  for (int64_t v = 0; v < nw; v++) {
+    double d = pr_dist(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
+    for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
+  }
+  if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
+      (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
+      (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
+    goto fail;
+  *out = m;
+  return VM_OK;
+fail:
+  vm_mesh_destroy(&m);
+  return st;
+}
+
+int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
+  if (!p || !r) return VM_ERR_ARG;
+  int nlev;
+  const double *L = levels(p, &nlev);
+  vm_prism_report R = p->rep;
+  R.time_total = pr_elapsed(p);
+  if (nlev >= 2) {
+    int64_t nw = p->nw, nt = p->nt;
+    size_t lsz = (size_t)(3 * nw);
+    double T = p->o.thickness;
+    const double *top = L + (size_t)(nlev - 1) * lsz;
+    int64_t full = 0;
+    double tmin = INFINITY, tmax = 0, tsum = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      double d = pr_dist(p->wall + 3 * v, top + 3 * v) / T;
+      if (d >= 1 - p->o.full_tol) full++;
+      tmin = d < tmin ? d : tmin;
+      tmax = d > tmax ? d : tmax;
+      tsum += d;
+    }
+    R.full_fraction = (double)full / (double)nw;
+    R.thick_min = tmin;
+    R.thick_mean = tsum / (double)nw;
+    R.thick_max = tmax;
+    R.prisms = (nlev - 1) * nt;
+    R.layers = nlev - 1;
+    int64_t inv = 0;
+    double sj = INFINITY;
+    for (int k = 0; k + 1 < nlev; k++)
+      for (int64_t t = 0; t < nt; t++) {
+        double x[18];
+        for (int i = 0; i < 3; i++) {
+          memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+          memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+        }
+        int bad;
+        double q = pr_prism_corner_quality(x, &bad);
+        inv += bad;
+        sj = q < sj ? q : sj;
+      }
+    R.inverted = inv;
+    R.sj_min = sj;
+    double dmax = 0, dsum = 0;
+    int64_t ns = 0, over = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (!p->smooth[v]) continue;
+      double a = pr_tilt_deg(p->wall + 3 * v, L + lsz + 3 * v, p->vnrm + 3 * v);
+      dmax = a > dmax ? a : dmax;
+      dsum += a;
+      ns++;
+      over += a > p->k.tilt_limit_deg;
+    }
+    R.normal_dev_over5 = over;
+    R.normal_dev_max = dmax;
+    R.normal_dev_mean = ns ? dsum / (double)ns : 0;
+    R.smooth_vertices = ns;
+    double gmax = 0;
+    for (int64_t v = 0; v < nw && nlev > 2; v++)
+      for (int k = 0; k + 2 < nlev; k++) {
+        double h0 = pr_dist(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
+        double h1 = pr_dist(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
+        if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
+      }
+    R.growth_max = gmax;
+  }
+  *r = R;
+  return VM_OK;
+}

@@ -1,0 +1,89 @@
+/* prism/src/solve.c: the layer's variational solves: its problem and
+ * targets, minimizer runs with progress, time limit and step budget. */
+#include <math.h>
+
+#include "state.h"
+
+typedef struct {
+  vm_prism *p;
+  vm_prism_phase ph;
+  int base;
+  int budget;     /* > 0: stop after this many iterations once the steps sum to a share of it */
+  double share;   /* that share (k.budget_step_share) */
+  double steps;   /* sum of the accepted step lengths (at most 1 each) */
+} monitor_data;
+
+static void monitor(void *user, const vm_iter_info *it) {
+  monitor_data *d = user;
+  d->steps += it->tau < 1 ? it->tau : 1;
+  /* in the cutting phase the progress steps are rounds (pairs left), not
+   * the iterations of the local re-solves */
+  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted, 1);
+}
+
+static int budget_spent(void *user, int iter, const double *x) {
+  (void)x;
+  const monitor_data *d = user;
+  return iter > d->budget && d->steps >= d->share * d->budget;
+}
+
+int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
+                    int max_iter, int budget, vm_prism_phase ph, int *iters) {
+  if (iters) *iters = 0;
+  if (max_iter <= 0) return VM_OK;
+  double left = pr_time_left(p);
+  if (left <= 0) return VM_WARN_TIME;
+  vm_minimizer *mz = NULL;
+  int st = vm_minimizer_create(p->ctx, prob, kind, &mz);
+  if (st) return st;
+  vm_minimize_options mo = vm_minimize_options_default();
+  mo.max_iter = max_iter;
+  mo.time_limit = isfinite(left) ? left : 0;
+  mo.rel_decrease_tol = p->k.rel_decrease_tol;
+  mo.rel_decrease_count = p->k.rel_decrease_count;
+  mo.stats_every = 0;
+  monitor_data md = {p, ph, 0, budget, p->k.budget_step_share, 0};
+  mo.monitor = monitor;
+  mo.user = &md;
+  if (budget > 0) mo.before_iteration = budget_spent;
+  vm_minimize_result res;
+  if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
+  if (iters && st >= 0) *iters = res.iterations;
+  vm_minimizer_destroy(&mz);
+  if (st == VM_WARN_MAXITER) st = VM_OK;
+  return st;
+}
+
+int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+             vm_prism_phase ph, int *iters) {
+  return pr_solve_budget(p, prob, m, kind, max_iter, 0, ph, iters);
+}
+
+int pr_set_targets(vm_prism *p, const double *hv) {
+  vm_field *f = vm_mesh_find_field(p->layer, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
+  if (!f) return vm_error(p->ctx, VM_ERR_ARG, "prism: layer without targets");
+  pr_build_targets(p->nt, p->tri, &p->k.dir, p->wall, p->fnrm, p->dir, hv, f->data);
+  return vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
+}
+
+int pr_make_problem(vm_prism *p) {
+  if (p->prob) return VM_OK;
+  int st = vm_problem_create(p->ctx, p->layer, &p->prob);
+  if (st) return st;
+  vm_measure_params prm = vm_measure_params_default();
+  prm.theta = p->o.theta;
+  if ((st = vm_problem_set_measure(p->prob, VM_MEASURE_BALANCED, &prm)) ||
+      (st = vm_problem_set_rule(p->prob, VM_RULE_GEOMETRIC)))
+    return st;
+  return VM_OK;
+}
+
+int pr_check_valid(vm_prism *p, const char *when) {
+  vm_node_stats ns;
+  int st = vm_problem_node_stats(p->prob, p->layer->xyz, &ns);
+  if (st < 0) return st;
+  if (ns.inverted)
+    return vm_error(p->ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after %s",
+                    (long long)ns.inverted, when);
+  return VM_OK;
+}

@@ -1,0 +1,101 @@
+/* prism/src/state.h: the per-run state of the layer builder and the
+ * helpers its phases share (progress, time, the layer's solves, the
+ * layer's intersection query). */
+#ifndef VARMESH_PRISM_STATE_H
+#define VARMESH_PRISM_STATE_H
+
+#include <stdint.h>
+
+#include "geom.h"
+#include "intersect.h"
+#include "params.h"
+#include "varmesh/minimize.h"
+#include "varmesh/prism.h"
+#include "varmesh/problem.h"
+
+/* Element field holding the per-prism target vertex coordinates. */
+#define PRISM_TARGET_FIELD "vm_prism_target"
+
+struct vm_prism {
+  vm_ctx *ctx;
+  vm_prism_opts o;
+  pr_params k;     /* the stage's internal tunables (params.h) */
+  double t0;       /* omp_get_wtime() at creation */
+  int done;        /* phases completed (vm_prism_phase + 1) */
+  int64_t nw, nt;  /* wall vertices and triangles */
+  int64_t ned;     /* unique wall edges */
+  double *wall;    /* 3*nw, bit-identical copies of the input */
+  int32_t *tri;    /* 3*nt */
+  double *fnrm;    /* 3*nt unit face normals */
+  double *vnrm;    /* 3*nw angle-weighted unit vertex normals */
+  double *dir;     /* 3*nw blended column directions (visible from every face) */
+  double *elen;    /* nw: mean incident edge length */
+  uint8_t *smooth; /* nw: incident face normals within k.smooth_angle_deg of vnrm */
+  int64_t *vt_off; /* vertex -> triangles (CSR) */
+  int32_t *vt;
+  int64_t *vv_off; /* vertex -> neighbour vertices (CSR, sorted) */
+  int32_t *vv;
+  int32_t *edge;   /* 2*ned, a < b */
+  int32_t *etri;   /* 2*ned triangles on each side (-1: open edge) */
+
+  pr_rt *rt;             /* the run's Embree device (made at the first query) */
+  pr_layer_faces *faces; /* the layer's faces for intersection queries */
+  vm_mesh *layer;  /* single layer: 2nw vertices, nt prisms, target field */
+  vm_problem *prob;
+  double *h;       /* nw target heights */
+  double *cap;     /* nw upper bounds of the thickness left by cutting */
+  uint8_t *cut;    /* nw: rounds the column was cut in (saturates at 255) */
+
+  /* marching result */
+  int nlev;        /* levels (layers + 1); 0 before marching */
+  double *lev;     /* nlev * 3 * nw */
+  double *sched;   /* heights of the schedule (nlayers) */
+
+  vm_prism_report rep;
+};
+
+/* The wall's connectivity as plain arrays (geom.h). */
+static inline pr_surf pr_wall_surf(const vm_prism *p) {
+  pr_surf s = {p->nw, p->nt, p->tri, p->vt_off, p->vt, p->vv_off, p->vv};
+  return s;
+}
+
+/* Time since creation. */
+double pr_elapsed(const vm_prism *p);
+/* Report progress (solver: 1 for a solve's iteration, see vm_prism_progress). */
+void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count,
+                 int solver);
+/* Time limit left (seconds, +inf if none). */
+double pr_time_left(const vm_prism *p);
+
+/* Write the top vertices of the layer from thickness t along unit
+ * directions d: top_v = wall_v + t_v d_v. */
+void pr_set_top(vm_prism *p, const double *t, const double *d);
+
+/* ---- the layer's solves (solve.c) ---- */
+
+/* Minimize the functional of prob on mesh m with its current targets
+ * (implicit or explicit), at most max_iter iterations, reporting progress
+ * in phase ph. *iters receives the iterations done. */
+int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+             vm_prism_phase ph, int *iters);
+/* pr_solve with an iteration budget counted in steps: past `budget`
+ * iterations it goes on (up to max_iter) while the accepted step lengths
+ * sum to less than k.budget_step_share of it (budget <= 0: no budget). */
+int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
+                    int max_iter, int budget, vm_prism_phase ph, int *iters);
+/* The single layer's problem (balanced measure, geometric rule), made once. */
+int pr_make_problem(vm_prism *p);
+/* Targets from heights hv along the blended directions, installed on the
+ * layer's problem. */
+int pr_set_targets(vm_prism *p, const double *hv);
+/* VM_ERR_NUMERIC (naming `when`) if a node of the layer is inverted. */
+int pr_check_valid(vm_prism *p, const char *when);
+
+/* Intersections of the single layer's faces (top, sides, wall), queried
+ * incrementally: marks the wall vertex of every column that carries an
+ * intersecting top or side face in `mark` (nw, may be NULL); the number of
+ * intersecting face pairs in *npairs (cutting.c). */
+int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
+
+#endif
