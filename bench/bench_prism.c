@@ -22,8 +22,9 @@
 
 static void progress(void *user, const vm_prism_progress *pg) {
   (void)user;
-  fprintf(stderr, "  [%6.2f s] %-10s %4d %s %.6g  %lld\n", pg->elapsed, vm_prism_phase_name(pg->phase),
-          pg->step, pg->solver ? "F" : " ", pg->value, (long long)pg->count);
+  fprintf(stderr, "  [%6.2f s] %-10s %4d %s %.6g  %lld\n", pg->elapsed,
+          vm_prism_phase_name(pg->phase), pg->step, pg->solver ? "F" : " ", pg->value,
+          (long long)pg->count);
 }
 
 /* Warnings (a marching stopped early, ...) on stderr, so a "(warn)" row
@@ -93,8 +94,10 @@ static void worst_prisms(const vm_mesh *res, const vm_prism_report *r) {
     int64_t v = c[0] % nw;
     const double *x = res->xyz + 3 * v;
     double h = 0;
-    for (int d = 0; d < 3; d++) h += pow(res->xyz[3 * (int64_t)c[3] + d] - res->xyz[3 * (int64_t)c[0] + d], 2);
-    fprintf(stderr, "  sj %.3g layer %lld column %lld at (%.3f %.3f %.3f): thickness/T %.3f, h %.3g\n",
+    for (int d = 0; d < 3; d++)
+      h += pow(res->xyz[3 * (int64_t)c[3] + d] - res->xyz[3 * (int64_t)c[0] + d], 2);
+    fprintf(stderr,
+            "  sj %.3g layer %lld column %lld at (%.3f %.3f %.3f): thickness/T %.3f, h %.3g\n",
             wq[i], (long long)(we[i] / nt), (long long)v, x[0], x[1], x[2],
             th ? ((const double *)th->data)[v] / r->thickness : -1, sqrt(h));
   }
@@ -128,8 +131,8 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     FILE *df = dump && thf ? fopen(dump, "w") : NULL;
     if (df) {
       for (int64_t v = 0; v < r.wall_vertices; v++)
-        fprintf(df, "%.6f %.6f %.6f %.6f\n", res->xyz[3 * v], res->xyz[3 * v + 1], res->xyz[3 * v + 2],
-                ((const double *)thf->data)[v] / r.thickness);
+        fprintf(df, "%.6f %.6f %.6f %.6f\n", res->xyz[3 * v], res->xyz[3 * v + 1],
+                res->xyz[3 * v + 2], ((const double *)thf->data)[v] / r.thickness);
       fclose(df);
     }
     uint8_t *wall = calloc((size_t)res->nv, 1);
@@ -139,12 +142,13 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
     vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
   }
-  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f / %.3f | %lld / %lld | %.3f | %5.2f (%lld > 5) "
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f / %.3f | %lld / %lld | "
+         "%.3f | %5.2f (%lld > 5) "
          "| %lld / %lld+%lld | %.3f | %d%s |\n",
-         name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction, r.thick_min,
-         r.thick_mean, r.thick_max, (long long)r.inverted, (long long)cg_bad, r.sj_min, r.normal_dev_max,
-         (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
-         st ? " (warn)" : "");
+         name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction,
+         r.thick_min, r.thick_mean, r.thick_max, (long long)r.inverted, (long long)cg_bad, r.sj_min,
+         r.normal_dev_max, (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs,
+         (long long)cg_wall, r.growth_max, r.layers, st ? " (warn)" : "");
   fflush(stdout);
   if (verbose) {
     fprintf(stderr, "  phases:");
@@ -164,15 +168,21 @@ int main(int argc, char **argv) {
   double growth = 1.2, fracs[2] = {0.05, 0.20};
   int nfrac = 2;
   for (int i = 1; i < argc; i++) {
-    if (!strcmp(argv[i], "--data") && i + 1 < argc) data = argv[++i];
-    else if (!strcmp(argv[i], "--layers") && i + 1 < argc) layers = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--growth") && i + 1 < argc) growth = atof(argv[++i]);
-    else if (!strcmp(argv[i], "--res") && i + 1 < argc) res = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
+    if (!strcmp(argv[i], "--data") && i + 1 < argc)
+      data = argv[++i];
+    else if (!strcmp(argv[i], "--layers") && i + 1 < argc)
+      layers = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--growth") && i + 1 < argc)
+      growth = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--res") && i + 1 < argc)
+      res = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--only") && i + 1 < argc)
+      only = argv[++i];
     else if (!strcmp(argv[i], "--frac") && i + 1 < argc) {
       fracs[0] = atof(argv[++i]);
       nfrac = 1;
-    } else if (!strcmp(argv[i], "--verbose")) verbose = 1;
+    } else if (!strcmp(argv[i], "--verbose"))
+      verbose = 1;
     else {
       fprintf(stderr, "usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N] "
                       "[--only plane|aircraft] [--frac F] [--verbose]\n");
@@ -180,15 +190,19 @@ int main(int argc, char **argv) {
     }
   }
   char path[4096];
-  if (data) snprintf(path, sizeof path, "%s/plane.stl", data);
+  if (data)
+    snprintf(path, sizeof path, "%s/plane.stl", data);
   else if (getenv("VM_SOURCE_ROOT"))
     snprintf(path, sizeof path, "%s/../shared/data/plane.stl", getenv("VM_SOURCE_ROOT"));
-  else snprintf(path, sizeof path, "../shared/data/plane.stl");
+  else
+    snprintf(path, sizeof path, "../shared/data/plane.stl");
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_log(ctx, log_warn, NULL);
-  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick/T min / mean / max | inverted (own / CGAL) "
-         "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL outer+wall) | max "
+  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick/T min / mean / max | inverted "
+         "(own / CGAL) "
+         "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL "
+         "outer+wall) | max "
          "growth | layers |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   if (!only || !strcmp(only, "plane")) {
@@ -196,7 +210,8 @@ int main(int argc, char **argv) {
     if (vm_mesh_read(ctx, path, VM_FMT_AUTO, &m)) {
       fprintf(stderr, "plane: %s (skipped)\n", vm_ctx_error(ctx));
     } else {
-      for (int f = 0; f < nfrac; f++) run_case(ctx, "plane.stl", m, fracs[f], layers, growth, verbose);
+      for (int f = 0; f < nfrac; f++)
+        run_case(ctx, "plane.stl", m, fracs[f], layers, growth, verbose);
       vm_mesh_destroy(&m);
     }
   }
@@ -207,7 +222,8 @@ int main(int argc, char **argv) {
     if (vm_gen_aircraft(ctx, &ao, &m)) {
       fprintf(stderr, "aircraft: %s\n", vm_ctx_error(ctx));
     } else {
-      for (int f = 0; f < nfrac; f++) run_case(ctx, "aircraft", m, fracs[f], layers, growth, verbose);
+      for (int f = 0; f < nfrac; f++)
+        run_case(ctx, "aircraft", m, fracs[f], layers, growth, verbose);
       vm_mesh_destroy(&m);
     }
   }

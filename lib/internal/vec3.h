@@ -19,14 +19,15 @@ static inline void vm_cross3(const double *a, const double *b, double *c) {
   c[2] = a[0] * b[1] - a[1] * b[0];
 }
 static inline double vm_norm3(const double *a) { return sqrt(vm_dot3(a, a)); }
+static inline double vm_dist3(const double *a, const double *b) {
+  double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+  return vm_norm3(d);
+}
 /* Scale a to unit length and return its former length (a unchanged if 0). */
 static inline double vm_normalize3(double *a) {
   double n = vm_norm3(a);
-  if (n > 0) {
-    a[0] /= n;
-    a[1] /= n;
-    a[2] /= n;
-  }
+  if (n > 0)
+    for (int k = 0; k < 3; k++) a[k] /= n;
   return n;
 }
 

@@ -10,9 +10,8 @@
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
   int st;
   if (!p->rt && (st = pr_rt_create(p->ctx, &p->rt))) return st;
-  if (!p->faces &&
-      (st = pr_layer_faces_create(p->ctx, p->rt, &p->k.isect, p->o.check_incremental, p->nw, p->nt,
-                                  p->tri, p->ned, p->edge, &p->faces)))
+  if (!p->faces && (st = pr_layer_faces_create(p->ctx, p->rt, &p->k.isect, p->o.check_incremental,
+                                               p->nw, p->nt, p->tri, p->ned, p->edge, &p->faces)))
     return st;
   return pr_layer_faces_query(p->ctx, p->faces, p->layer->xyz, mark, npairs);
 }
@@ -48,8 +47,7 @@ static int local_solve(vm_prism *p, const uint8_t *mark, int max_iter, int *iter
   uint8_t *fl = p->layer->vflag + nw;
   for (int64_t v = 0; v < nw; v++) fl[v] = reg[v] ? VM_VERTEX_FREE : VM_VERTEX_FIXED;
   if ((st = vm_problem_set_active(p->prob, act)) == VM_OK) {
-    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, max_iter, VM_PRISM_PHASE_CUT,
-                  iters);
+    st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, max_iter, VM_PRISM_PHASE_CUT, iters);
     int s2 = vm_problem_set_active(p->prob, NULL);
     if (st >= 0 && s2) st = s2;
   }
@@ -73,8 +71,9 @@ static void shorten_stuck(vm_prism *p, const uint8_t *mark) {
   for (int64_t v = 0; v < nw; v++) {
     if (!mark[v] || p->cut[v] < p->k.stuck_rounds) continue;
     double *top = x + 3 * (v + nw), old[3] = {top[0], top[1], top[2]};
-    if (!(pr_dist(top, p->wall + 3 * v) > p->k.stuck_ratio * p->h[v])) continue;
-    for (int k = 0; k < 3; k++) top[k] = p->wall[3 * v + k] + p->o.cut_factor * (old[k] - p->wall[3 * v + k]);
+    if (!(vm_dist3(top, p->wall + 3 * v) > p->k.stuck_ratio * p->h[v])) continue;
+    for (int k = 0; k < 3; k++)
+      top[k] = p->wall[3 * v + k] + p->o.cut_factor * (old[k] - p->wall[3 * v + k]);
     int ok = 1;
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
       const int32_t *c = p->layer->conn + 6 * (int64_t)p->vt[j];

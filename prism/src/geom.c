@@ -12,9 +12,9 @@ static double node_ratio(const vm_qnode *q, const double *x) {
   for (int k = 0; k < 3; k++)
     for (int r = 0; r < 3; r++) c[k][r] = x[3 * q->head[k] + r] - x[3 * q->tail[k] + r];
   double cr[3];
-  pr_cross(c[1], c[2], cr);
-  double det = pr_dot(c[0], cr);
-  double l = pr_norm(c[0]) * pr_norm(c[1]) * pr_norm(c[2]);
+  vm_cross3(c[1], c[2], cr);
+  double det = vm_dot3(c[0], cr);
+  double l = vm_norm3(c[0]) * vm_norm3(c[1]) * vm_norm3(c[2]);
   if (!(l > 0)) return det > 0 ? 1 : -1;
   return det / l;
 }
@@ -39,8 +39,8 @@ double pr_prism_corner_quality(const double *x, int *inverted) {
     for (int k = 0; k < 3; k++)
       for (int r = 0; r < 3; r++) c[k][r] = x[3 * nd->head[k] + r] - x[3 * nd->tail[k] + r];
     double cr[3];
-    pr_cross(c[1], c[2], cr);
-    if (!(pr_dot(c[0], cr) > 0)) bad++;
+    vm_cross3(c[1], c[2], cr);
+    if (!(vm_dot3(c[0], cr) > 0)) bad++;
     double v = node_ratio(nd, x);
     if (v < q) q = v;
   }
@@ -50,7 +50,7 @@ double pr_prism_corner_quality(const double *x, int *inverted) {
 
 double pr_tilt_deg(const double *o, const double *x, const double *n) {
   double e[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
-  double l = pr_norm(e), cs = l > 0 ? pr_dot(e, n) / l : -1;
+  double l = vm_norm3(e), cs = l > 0 ? vm_dot3(e, n) / l : -1;
   return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
 }
 
@@ -58,7 +58,7 @@ double pr_tilt_deg(const double *o, const double *x, const double *n) {
 static double min_visibility(const pr_surf *p, int64_t v, const double *fn, const double *n) {
   double m = INFINITY;
   for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
-    double d = pr_dot(n, fn + 3 * (int64_t)p->vt[k]);
+    double d = vm_dot3(n, fn + 3 * (int64_t)p->vt[k]);
     if (d < m) m = d;
   }
   return m;
@@ -74,7 +74,7 @@ static double best_visible(const pr_surf *p, int64_t v, const double *fn, int it
     double wm = INFINITY;
     int32_t wt = -1;
     for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
-      double d = pr_dot(c, fn + 3 * (int64_t)p->vt[k]);
+      double d = vm_dot3(c, fn + 3 * (int64_t)p->vt[k]);
       if (d < wm) {
         wm = d;
         wt = p->vt[k];
@@ -87,7 +87,7 @@ static double best_visible(const pr_surf *p, int64_t v, const double *fn, int it
     if (wt < 0) break;
     for (int k = 0; k < 3; k++) c[k] += (fn[3 * (int64_t)wt + k] - c[k]) / (it + 1);
     double u[3] = {c[0], c[1], c[2]};
-    if (pr_normalize(u) == 0) break;
+    if (vm_normalize3(u) == 0) break;
     double d = min_visibility(p, v, fn, u);
     if (d > bm) {
       bm = d;
@@ -110,8 +110,8 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
       e1[k] = b[k] - a[k];
       e2[k] = d[k] - a[k];
     }
-    pr_cross(e1, e2, fn + 3 * t);
-    pr_normalize(fn + 3 * t);
+    vm_cross3(e1, e2, fn + 3 * t);
+    vm_normalize3(fn + 3 * t);
   }
   memset(dir, 0, (size_t)(3 * nw) * sizeof *dir);
   for (int64_t t = 0; t < nt; t++) {
@@ -124,7 +124,7 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
         u[k] = x1[k] - x0[k];
         w[k] = x2[k] - x0[k];
       }
-      double cu = pr_dot(u, w) / (pr_norm(u) * pr_norm(w));
+      double cu = vm_dot3(u, w) / (vm_norm3(u) * vm_norm3(w));
       double ang = acos(cu < -1 ? -1 : cu > 1 ? 1 : cu);
       for (int k = 0; k < 3; k++) dir[3 * (int64_t)c[i] + k] += ang * fn[3 * t + k];
     }
@@ -132,9 +132,10 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
   int64_t blind = 0;
   for (int64_t v = 0; v < nw; v++) {
     double *n = dir + 3 * v;
-    if (pr_normalize(n) == 0) n[2] = 1;
+    if (vm_normalize3(n) == 0) n[2] = 1;
     if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
-    if (min_visibility(p, v, fn, n) < kp->visible_min && best_visible(p, v, fn, kp->visible_iter, n) <= 0)
+    if (min_visibility(p, v, fn, n) < kp->visible_min &&
+        best_visible(p, v, fn, kp->visible_iter, n) <= 0)
       blind++;
   }
   /* blend near sharp edges: Jacobi averaging with the neighbours, kept only
@@ -151,9 +152,10 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
       if (!sharp) continue;
       double s[3] = {dir[3 * v], dir[3 * v + 1], dir[3 * v + 2]};
       for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++)
-        for (int c = 0; c < 3; c++) s[c] += kp->blend_weight * dir[3 * (int64_t)p->vv[k] + c] /
-                                           (double)(p->vv_off[v + 1] - p->vv_off[v]);
-      if (pr_normalize(s) == 0) continue;
+        for (int c = 0; c < 3; c++)
+          s[c] += kp->blend_weight * dir[3 * (int64_t)p->vv[k] + c] /
+                  (double)(p->vv_off[v + 1] - p->vv_off[v]);
+      if (vm_normalize3(s) == 0) continue;
       double m1 = min_visibility(p, v, fn, s);
       if (m1 >= kp->blend_keep || m1 >= m0) memcpy(tmp + 3 * v, s, sizeof s);
     }
@@ -172,9 +174,9 @@ static int widens(const double *x) {
     f1[k] = x[12 + k] - x[9 + k];
     f2[k] = x[15 + k] - x[9 + k];
   }
-  pr_cross(e1, e2, nb);
-  pr_cross(f1, f2, nt);
-  return pr_dot(nt, nt) >= pr_dot(nb, nb);
+  vm_cross3(e1, e2, nb);
+  vm_cross3(f1, f2, nt);
+  return vm_dot3(nt, nt) >= vm_dot3(nb, nb);
 }
 
 void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, const double *base,
@@ -193,7 +195,7 @@ void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, co
         double u[3];
         for (int r = 0; r < 3; r++)
           u[r] = (1 - blend[s]) * dir[3 * (int64_t)c[i] + r] + blend[s] * fn[3 * t + r];
-        if (blend[s] == 1 || pr_normalize(u) == 0) memcpy(u, fn + 3 * t, sizeof u);
+        if (blend[s] == 1 || vm_normalize3(u) == 0) memcpy(u, fn + 3 * t, sizeof u);
         for (int r = 0; r < 3; r++) x[9 + 3 * i + r] = x[3 * i + r] + h[c[i]] * u[r];
       }
       double q = pr_prism_quality(x);

@@ -1,5 +1,5 @@
 /* prism/src/geom.h: geometry of prisms and surfaces on plain arrays:
- * vector helpers, prism quality over quadrature simplices, column
+ * prism quality over quadrature simplices, column
  * directions and per-prism targets of a triangulated surface. */
 #ifndef VARMESH_PRISM_GEOM_H
 #define VARMESH_PRISM_GEOM_H
@@ -9,29 +9,9 @@
 
 #include "params.h"
 #include "varmesh/ctx.h"
+#include "vec3.h"
 
 #define PR_PI 3.14159265358979323846
-
-/* ---- small vector helpers ---- */
-static inline double pr_dot(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static inline void pr_cross(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-static inline double pr_norm(const double *a) { return sqrt(pr_dot(a, a)); }
-static inline double pr_normalize(double *a) {
-  double n = pr_norm(a);
-  if (n > 0)
-    for (int k = 0; k < 3; k++) a[k] /= n;
-  return n;
-}
-static inline double pr_dist(const double *a, const double *b) {
-  double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-  return pr_norm(d);
-}
 
 /* Minimum over the 12 compound matrices of the prism's geometric rule of
  * det / (|c1| |c2| |c3|), normalized to 1 on the right prism with an

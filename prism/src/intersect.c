@@ -105,10 +105,10 @@ static int orient(const double *a, const double *b, const double *c, const doubl
     v[k] = b[k] - d[k];
     w[k] = c[k] - d[k];
   }
-  pr_cross(v, w, x);
-  double o = pr_dot(u, x);
+  vm_cross3(v, w, x);
+  double o = vm_dot3(u, x);
   /* |o| <= tol |u| |v| |w|, squared: no square roots on this hot path */
-  double s2 = pr_dot(u, u) * pr_dot(v, v) * pr_dot(w, w);
+  double s2 = vm_dot3(u, u) * vm_dot3(v, v) * vm_dot3(w, w);
   if (o * o <= tol_sq * s2) return 0;
   return o > 0 ? 1 : -1;
 }
@@ -129,8 +129,8 @@ static int seg_tri(const double *p, const double *q, const double *a, const doub
 typedef struct {
   struct RTCIntersectContext rtc; /* first: Embree passes a pointer to it */
   const soup *d;
-  int32_t a, b;    /* the edge's vertices */
-  int32_t group;   /* group of the edge (-1: none) */
+  int32_t a, b;  /* the edge's vertices */
+  int32_t group; /* group of the edge (-1: none) */
   int64_t n, cap;
   int32_t *hit;
   int nomem;
@@ -156,8 +156,7 @@ static void edge_intersect(const struct RTCIntersectFunctionNArguments *args) {
   const soup *d = r->d;
   int32_t t = d->map ? d->map[args->primID] : (int32_t)args->primID;
   const int32_t *T = d->tri + 3 * (int64_t)t;
-  if (T[0] == r->a || T[1] == r->a || T[2] == r->a || T[0] == r->b || T[1] == r->b ||
-      T[2] == r->b)
+  if (T[0] == r->a || T[1] == r->a || T[2] == r->a || T[0] == r->b || T[1] == r->b || T[2] == r->b)
     return; /* touching at a shared vertex only, unless coplanar */
   if (r->group >= 0 && d->group && d->group[t] == r->group) return;
   const double *x = d->xyz;
@@ -174,7 +173,7 @@ typedef struct {
 } half_edge;
 
 struct pr_soup {
-  pr_rt *rt;           /* borrowed */
+  pr_rt *rt; /* borrowed */
   pr_isect_params k;
   int64_t ntri, ned;
   int32_t *tri;   /* 3 per triangle */
@@ -288,7 +287,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
         int32_t a = he[eb[e]].a, b = he[eb[e]].b;
         const double *pa = xyz + 3 * (int64_t)a, *pb = xyz + 3 * (int64_t)b;
         double dir[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
-        double len = pr_normalize(dir);
+        double len = vm_normalize3(dir);
         if (!(len > 0)) continue;
         /* an edge whose triangles are all of one group tests only others */
         r.group = -1;
@@ -433,8 +432,10 @@ static int hits_to_pairs(vm_ctx *ctx, const pr_soup *so, const int64_t *found, i
       u++;
     }
   *npairs = u;
-  if (pairs && u) *pairs = pp;
-  else vm_free(ctx, pp);
+  if (pairs && u)
+    *pairs = pp;
+  else
+    vm_free(ctx, pp);
   return VM_OK;
 }
 
@@ -608,8 +609,7 @@ int pr_soup_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int64_t ntr
     }
   qsort(s->he, (size_t)(3 * ntri), sizeof *s->he, cmp_he);
   for (int64_t k = 0; k < 3 * ntri; k++)
-    if (k == 0 || s->he[k].a != s->he[k - 1].a || s->he[k].b != s->he[k - 1].b)
-      s->eb[s->ned++] = k;
+    if (k == 0 || s->he[k].a != s->he[k - 1].a || s->he[k].b != s->he[k - 1].b) s->eb[s->ned++] = k;
   s->eb[s->ned] = 3 * ntri;
   for (int64_t k = 0; k < 3 * ntri; k++)
     if (tri[k] >= s->nv) s->nv = tri[k] + 1;
@@ -617,9 +617,8 @@ int pr_soup_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int64_t ntr
   return VM_OK;
 }
 
-int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
-                                const int32_t *tri, const int32_t *group, int64_t *npairs,
-                                int64_t **pairs) {
+int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri, const int32_t *tri,
+                                const int32_t *group, int64_t *npairs, int64_t **pairs) {
   if (npairs) *npairs = 0;
   if (pairs) *pairs = NULL;
   if (!xyz || !tri || ntri < 0 || !npairs)
@@ -644,7 +643,7 @@ struct pr_layer_faces {
   int32_t *tri;  /* 3 nt wall triangles */
   int32_t *edge; /* 2 ned wall edges */
   pr_soup *soup;
-  double *xyz;   /* 3 (2 nw + ned): wall, top, then the side quads' centres */
+  double *xyz; /* 3 (2 nw + ned): wall, top, then the side quads' centres */
 };
 
 void pr_layer_faces_destroy(vm_ctx *ctx, pr_layer_faces **plf) {
@@ -672,7 +671,8 @@ int pr_layer_faces_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int 
   *out = NULL;
   int64_t nf = nt + QUAD_TRIS * ned + nt;
   if (2 * nw + ned > INT32_MAX)
-    return vm_error(ctx, VM_ERR_ARG, "intersections: %lld layer vertices", (long long)(2 * nw + ned));
+    return vm_error(ctx, VM_ERR_ARG, "intersections: %lld layer vertices",
+                    (long long)(2 * nw + ned));
   pr_layer_faces *lf = vm_calloc(ctx, 1, sizeof *lf);
   if (!lf) return VM_ERR_NOMEM;
   lf->nw = nw;

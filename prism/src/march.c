@@ -35,15 +35,13 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
     double x[18];
     for (int i = 0; i < 3; i++) {
       memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-      memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
-             3 * sizeof *x);
+      memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
     }
     double v = pr_prism_quality(x);
     q = v < q ? v : q;
   }
   return q;
 }
-
 
 /* Column v stood up at the wall (along its normal; a column at a sharp
  * edge or corner along its blended direction, p->dir): each of levels
@@ -57,14 +55,13 @@ static double layers_quality(const vm_prism *p, int64_t t, int k0, int k1) {
  * (levels 1..nmax). hs < 1 lowers level 1 to hs times its height, level k
  * to hs + (1 - hs)(k - 1)/nm times its own (1: heights kept). Returns 0 if
  * the column cannot stand up (a level at or below the tangent plane). */
-static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
-                        const double *old) {
+static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs, const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   const double *o = p->wall + 3 * v, *nv = (p->smooth[v] ? p->vnrm : p->dir) + 3 * v;
   for (int k = 1; k <= nm; k++) {
     double e[3];
     for (int c = 0; c < 3; c++) e[c] = old[(size_t)(k - 1) * lsz + 3 * v + c] - o[c];
-    if (!(pr_dot(e, nv) > 0)) return 0;
+    if (!(vm_dot3(e, nv) > 0)) return 0;
   }
   /* s1: the share of level 1's lateral offset kept, so that its side edge
    * leans by at most atan(tilt) */
@@ -73,9 +70,9 @@ static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
     const double *x1 = old + 3 * v;
     double e[3], l[3];
     for (int c = 0; c < 3; c++) e[c] = x1[c] - o[c];
-    double a = pr_dot(e, nv);
+    double a = vm_dot3(e, nv);
     for (int c = 0; c < 3; c++) l[c] = e[c] - a * nv[c];
-    double ln = sqrt(pr_dot(l, l));
+    double ln = sqrt(vm_dot3(l, l));
     s1 = ln > tilt * a ? tilt * a / ln : 1;
   }
   for (int k = 1; k <= nm; k++) {
@@ -84,7 +81,7 @@ static int stand_column(vm_prism *p, int64_t v, int nm, double tilt, double hs,
     double keep = s1 + (1 - s1) * (double)(k - 1) / nm;
     double lower = hs + (1 - hs) * (double)(k - 1) / nm;
     for (int c = 0; c < 3; c++) e[c] = x0[c] - o[c];
-    double a = pr_dot(e, nv);
+    double a = vm_dot3(e, nv);
     for (int c = 0; c < 3; c++) x[c] = o[c] + lower * a * nv[c] + keep * (e[c] - a * nv[c]);
   }
   return 1;
@@ -98,12 +95,12 @@ static double first_level_share(const vm_prism *p, int64_t v, const double *old)
   size_t lsz = (size_t)(3 * p->nw);
   double e[3], sum = 0;
   for (int c = 0; c < 3; c++) e[c] = old[3 * v + c] - p->wall[3 * v + c];
-  double a = pr_dot(e, p->vnrm + 3 * v);
+  double a = vm_dot3(e, p->vnrm + 3 * v);
   for (int64_t k = p->vv_off[v]; k < p->vv_off[v + 1]; k++) {
     int64_t u = p->vv[k];
     double f[3];
     for (int c = 0; c < 3; c++) f[c] = p->lev[lsz + 3 * u + c] - p->wall[3 * u + c];
-    sum += pr_dot(f, p->vnrm + 3 * u);
+    sum += vm_dot3(f, p->vnrm + 3 * u);
   }
   double mean = sum / (double)(p->vv_off[v + 1] - p->vv_off[v]);
   return a > 0 && mean > 0 && mean < p->k.ortho_high_ratio * a ? mean / a : 1;
@@ -112,8 +109,7 @@ static double first_level_share(const vm_prism *p, int64_t v, const double *old)
 static void restore_column(vm_prism *p, int64_t v, int nmax, const double *old) {
   size_t lsz = (size_t)(3 * p->nw);
   for (int k = 0; k < nmax; k++)
-    memcpy(p->lev + (size_t)(k + 1) * lsz + 3 * v, old + (size_t)k * lsz + 3 * v,
-           3 * sizeof *old);
+    memcpy(p->lev + (size_t)(k + 1) * lsz + 3 * v, old + (size_t)k * lsz + 3 * v, 3 * sizeof *old);
 }
 
 /* The quality a prism of quality q0 before may fall to: min(k.ortho_qmin,
@@ -294,8 +290,8 @@ static double first_tilt(const vm_prism *p, int64_t v) {
  * column's present height above its tangent plane and weigh
  * k.solve_weight; the other layers' targets are their present shapes
  * where those are fair prisms (quality > k.dir.fair_quality), else
- * orthogonal ones on their base surface, as in marching. The result replaces the levels (*applied = 1) only if every
- * quadrature node and every corner tet of the patch is positive. */
+ * orthogonal ones on their base surface, as in marching. The result replaces the levels (*applied =
+ * 1) only if every quadrature node and every corner tet of the patch is positive. */
 static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
   vm_ctx *ctx = p->ctx;
   const pr_params *kp = &p->k;
@@ -357,8 +353,9 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
     for (int64_t v = 0; v < nw; v++) {
       double e[3];
       for (int c = 0; c < 3; c++) e[c] = up[3 * v + c] - base[3 * v + c];
-      hv[v] = k == 0 ? pr_dot(e, dn + 3 * v) : pr_norm(e);
-      if (!(hv[v] >= kp->min_target_height * p->elen[v])) hv[v] = kp->min_target_height * p->elen[v];
+      hv[v] = k == 0 ? vm_dot3(e, dn + 3 * v) : vm_norm3(e);
+      if (!(hv[v] >= kp->min_target_height * p->elen[v]))
+        hv[v] = kp->min_target_height * p->elen[v];
     }
     pr_build_targets(nt, p->tri, &kp->dir, base, k == 0 ? p->fnrm : fn, dn, hv, tg);
     for (int64_t j = 0; j < ntl; j++) {
@@ -580,8 +577,9 @@ int vm_prism_march(vm_prism *p) {
         for (int c = 0; c < 3; c++)
           mv[c] = base[3 * v + c] + f * (outer[3 * v + c] - base[3 * v + c]);
         /* a column cut to (almost) nothing still gets a proper target */
-        hk[v] = f * pr_dist(outer + 3 * v, base + 3 * v);
-        if (!(hk[v] >= kp->min_target_height * p->elen[v])) hk[v] = kp->min_target_height * p->elen[v];
+        hk[v] = f * vm_dist3(outer + 3 * v, base + 3 * v);
+        if (!(hk[v] >= kp->min_target_height * p->elen[v]))
+          hk[v] = kp->min_target_height * p->elen[v];
       }
       /* inner targets: orthogonal to the base surface (vertex normals,
        * bent towards the face normal only where needed); outer targets:
@@ -594,7 +592,8 @@ int vm_prism_march(vm_prism *p) {
         const int32_t *c = m2->conn + 6 * (nt + t);
         double x[18];
         for (int q = 0; q < 6; q++) memcpy(x + 3 * q, m2->xyz + 3 * (int64_t)c[q], 3 * sizeof *x);
-        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > kp->dir.fair_quality ? x : tg + 18 * t, sizeof x);
+        memcpy(tg + 18 * (nt + t), pr_prism_quality(x) > kp->dir.fair_quality ? x : tg + 18 * t,
+               sizeof x);
       }
       /* a split that cannot be made valid ends the marching early (the
        * paper's option): levels 0..k are valid, and so is the remainder
@@ -624,8 +623,8 @@ int vm_prism_march(vm_prism *p) {
     }
     if (why) {
       if (st == VM_ERR_NOMEM || st == VM_ERR_INTERRUPTED) goto done;
-      vm_log(ctx, VM_LOG_WARN, "prism: marching stopped at split %d of %d (%s); %d layers",
-             k + 1, n - 1, why, k + 1);
+      vm_log(ctx, VM_LOG_WARN, "prism: marching stopped at split %d of %d (%s); %d layers", k + 1,
+             n - 1, why, k + 1);
       made = k + 1;
       warn = VM_WARN_MAXITER;
       st = VM_OK;
@@ -640,8 +639,8 @@ int vm_prism_march(vm_prism *p) {
   if (p->nlev > 2 && (st = orthogonal_solve(p)) < 0) goto done;
   /* the paper's option: drop a skewed outermost remainder */
   if (p->o.drop_quality > 0 && p->nlev > 2 &&
-      level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz,
-                    p->lev + (size_t)(p->nlev - 1) * lsz) < p->o.drop_quality)
+      level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz, p->lev + (size_t)(p->nlev - 1) * lsz) <
+          p->o.drop_quality)
     p->nlev--;
   p->rep.layers = p->nlev - 1;
   p->done = 5;
@@ -657,4 +656,3 @@ done:
   p->rep.time[VM_PRISM_PHASE_MARCH] += omp_get_wtime() - t0;
   return st;
 }
-

@@ -17,79 +17,79 @@
 
 /* Column directions and surface geometry (geom.c). */
 typedef struct pr_dir_params {
-  double visible_min;     /* 0.2: a vertex normal seen by an incident face at
-                             n . f below this is replaced by the best visible
-                             direction (below 0.2 the prism on that face is
-                             close to flat along its side edge) */
-  int visible_iter;       /* 200: Badoiu-Clarkson iterations for the best
-                             visible direction (the minimum n . f settles
-                             within a few dozen on the demo models) */
+  double visible_min;      /* 0.2: a vertex normal seen by an incident face at
+                              n . f below this is replaced by the best visible
+                              direction (below 0.2 the prism on that face is
+                              close to flat along its side edge) */
+  int visible_iter;        /* 200: Badoiu-Clarkson iterations for the best
+                              visible direction (the minimum n . f settles
+                              within a few dozen on the demo models) */
   double sharp_visibility; /* 0.94: a vertex, or a neighbour of it, whose
                               direction is seen at n . f below this (about
                               20 degrees) is at a sharp edge and is blended */
-  double blend_weight;    /* 0.5: weight of the neighbours' mean direction
-                             in one blending pass (a Jacobi step halfway) */
-  double blend_keep;      /* 0.3: a blended direction is kept if every
-                             incident face sees it at n . f >= 0.3 (or
-                             better than before) */
-  double target_blend[5]; /* {0, 0.25, 0.5, 0.75, 1}: shares of the face
-                             normal tried in turn for a prism's target
-                             directions, so the target bends as little as
-                             needed */
-  double target_quality;  /* 0.5: the quality a target must reach to stop
-                             bending (a margin: the solve starts far from
-                             the barrier) */
-  double fair_quality;    /* 0.05: a prism at least this good may be its own
-                             target (a fan's exact offset; marching's outer
-                             sublayer; the patch solve's upper layers):
-                             below it, a target of that shape is nearly
-                             flat */
+  double blend_weight;     /* 0.5: weight of the neighbours' mean direction
+                              in one blending pass (a Jacobi step halfway) */
+  double blend_keep;       /* 0.3: a blended direction is kept if every
+                              incident face sees it at n . f >= 0.3 (or
+                              better than before) */
+  double target_blend[5];  /* {0, 0.25, 0.5, 0.75, 1}: shares of the face
+                              normal tried in turn for a prism's target
+                              directions, so the target bends as little as
+                              needed */
+  double target_quality;   /* 0.5: the quality a target must reach to stop
+                              bending (a margin: the solve starts far from
+                              the barrier) */
+  double fair_quality;     /* 0.05: a prism at least this good may be its own
+                              target (a fan's exact offset; marching's outer
+                              sublayer; the patch solve's upper layers):
+                              below it, a target of that shape is nearly
+                              flat */
 } pr_dir_params;
 
 /* Intersection queries (intersect.c). */
 typedef struct pr_isect_params {
-  double orient_tol_sq;  /* 1e-24: four points are coplanar when
-                            |orient|^2 <= 1e-24 |u|^2 |v|^2 |w|^2, i.e. within
-                            1e-12 relative (rounding of the double products) */
-  double box_pad;        /* 1e-6: triangle boxes padded by this share of the
-                            soup's bounding box extents, covering the rounding
-                            of the rays to float */
-  double ray_extend;     /* 1e-5: relative lengthening of an edge's ray (plus
-                            two paddings), so its far end's triangles are
-                            candidates despite the float rounding */
-  int ray_chunk;         /* 256: edges per OpenMP chunk of the casting loop
-                            (dynamic: edge costs vary a lot) */
-  int full_query_ratio;  /* 4: an incremental query falls back to a full one
-                            when more than 1/4 of the faces moved (then the
-                            full query is cheaper) */
+  double orient_tol_sq; /* 1e-24: four points are coplanar when
+                           |orient|^2 <= 1e-24 |u|^2 |v|^2 |w|^2, i.e. within
+                           1e-12 relative (rounding of the double products) */
+  double box_pad;       /* 1e-6: triangle boxes padded by this share of the
+                           soup's bounding box extents, covering the rounding
+                           of the rays to float */
+  double ray_extend;    /* 1e-5: relative lengthening of an edge's ray (plus
+                           two paddings), so its far end's triangles are
+                           candidates despite the float rounding */
+  int ray_chunk;        /* 256: edges per OpenMP chunk of the casting loop
+                           (dynamic: edge costs vary a lot) */
+  int full_query_ratio; /* 4: an incremental query falls back to a full one
+                           when more than 1/4 of the faces moved (then the
+                           full query is cheaper) */
 } pr_isect_params;
 
 typedef struct pr_params {
   /* wall import (prism.c) */
-  double degenerate_area; /* 1e-14: a wall triangle with |e1 x e2| <=
-                             1e-14 (|e1|^2 + |e2|^2) is refused as degenerate
-                             (no normal to grow along) */
+  double degenerate_area;  /* 1e-14: a wall triangle with |e1 x e2| <=
+                              1e-14 (|e1|^2 + |e2|^2) is refused as degenerate
+                              (no normal to grow along) */
   double smooth_angle_deg; /* 10: a vertex whose incident face normals are all
                               within 10 degrees of its normal is smooth: the
                               first layer stands on the normal there, and the
                               report measures the deviation there */
-  int dir_blend_passes;   /* 3: blending passes of the column directions at
-                             the wall (marching's base surfaces take none) */
+  int dir_blend_passes;    /* 3: blending passes of the column directions at
+                              the wall (marching's base surfaces take none) */
   pr_dir_params dir;
 
   /* the schedule of layer heights (prism.c) */
-  double sched_fit_tol;   /* 1e-9: with both first height and growth given,
-                             a layer fits below T if the sum stays below
-                             (1 - 1e-9) T (no sliver last layer from rounding) */
-  int sched_bisect_iter;  /* 200: bisection steps for the growth ratio (far
-                             more than double precision needs; cheap) */
+  double sched_fit_tol;  /* 1e-9: with both first height and growth given,
+                            a layer fits below T if the sum stays below
+                            (1 - 1e-9) T (no sliver last layer from rounding) */
+  int sched_bisect_iter; /* 200: bisection steps for the growth ratio (far
+                            more than double precision needs; cheap) */
 
   /* phase 1, thin layer (thin.c) */
-  double thin_height;     /* 0.5: start height, a share of the mean incident
-                             edge length (at most T) */
-  double thin_limit_height; /* 1e-6: the height (a share of the start height)
-                               at which a prism's limit quality is measured */
-  int thin_rounds;        /* 60: halvings at most (2^-60: the limit reached) */
+  double thin_height;        /* 0.5: start height, a share of the mean incident
+                                edge length (at most T) */
+  double thin_limit_height;  /* 1e-6: the height (a share of the start height)
+                                at which a prism's limit quality is measured */
+  int thin_rounds;           /* 60: halvings at most (2^-60: the limit reached) */
   double thin_quality_share; /* 0.5: a thin prism must keep this share of its
                                 limit quality ... */
   double thin_quality_cap;   /* 0.3: ... or this quality, whichever is less */
@@ -104,89 +104,89 @@ typedef struct pr_params {
   int rel_decrease_count;   /* 2: ... this many times in a row */
 
   /* phase 2, springback (springback.c) */
-  double springback_grow; /* 8: target heights grow at most 8 times the
-                             column length per continuation stage */
-  int springback_stages;  /* 60: stages at most (8^60: always reaches T) */
-  int springback_stage_iter; /* 5: implicit iterations per intermediate stage
-                                (each starts near its answer) */
+  double springback_grow;     /* 8: target heights grow at most 8 times the
+                                 column length per continuation stage */
+  int springback_stages;      /* 60: stages at most (8^60: always reaches T) */
+  int springback_stage_iter;  /* 5: implicit iterations per intermediate stage
+                                 (each starts near its answer) */
   int springback_budget_mult; /* 3: the last stage runs up to 3 times
                                  springback_iter while the step budget is not
                                  spent (the aircraft's wing tips) */
 
   /* phase 3, cutting (cutting.c) */
-  int resolve_rings;      /* 4: rings around the cut columns that move in the
-                             local re-solve */
-  double cut_floor;       /* 1e-3: targets are not cut below this share of the
-                             column's mean edge length (flatter is
-                             numerically degenerate) */
-  int stuck_rounds;       /* 10: a column cut in this many rounds ... */
-  double stuck_ratio;     /* 2: ... still longer than twice its target is
-                             shortened directly (a fold the solve does not
-                             undo) */
+  int resolve_rings;  /* 4: rings around the cut columns that move in the
+                         local re-solve */
+  double cut_floor;   /* 1e-3: targets are not cut below this share of the
+                         column's mean edge length (flatter is
+                         numerically degenerate) */
+  int stuck_rounds;   /* 10: a column cut in this many rounds ... */
+  double stuck_ratio; /* 2: ... still longer than twice its target is
+                         shortened directly (a fold the solve does not
+                         undo) */
 
   /* phase 4, restoring (restore.c) */
-  double restore_qshare;  /* 0.1: a move may not leave a prism below a tenth
-                             of its quality at the start (a share, not a
-                             floor: fan prisms start near 0.01) */
-  int restore_quality_rounds; /* 200: back-off rounds at most for quality */
-  double restore_backoff; /* 0.5: a column sent back halves its step */
-  int restore_zone_rings; /* 3: rings around cut columns that restore with
-                             half steps from the start */
-  double restore_zone_alpha; /* 0.5: the step there */
+  double restore_qshare;        /* 0.1: a move may not leave a prism below a tenth
+                                   of its quality at the start (a share, not a
+                                   floor: fan prisms start near 0.01) */
+  int restore_quality_rounds;   /* 200: back-off rounds at most for quality */
+  double restore_backoff;       /* 0.5: a column sent back halves its step */
+  int restore_zone_rings;       /* 3: rings around cut columns that restore with
+                                   half steps from the start */
+  double restore_zone_alpha;    /* 0.5: the step there */
   double restore_smooth_weight; /* 0.5: a cut column's Laplace-Beltrami step
                                    goes halfway to the projected mean */
-  double restore_min_step; /* 1e-3: steps below this share of T are not taken,
-                              so few columns move and the intersection query
-                              stays incremental */
-  double restore_freeze_alpha; /* 1/64: after six halvings against an
-                                  intersection the cap is frozen there */
-  int restore_back_rounds; /* 20: intersection back-off rounds per pass */
-  double restore_stop_change; /* 1e-6: the passes stop when no column moved
-                                 more than this share of T */
+  double restore_min_step;      /* 1e-3: steps below this share of T are not taken,
+                                   so few columns move and the intersection query
+                                   stays incremental */
+  double restore_freeze_alpha;  /* 1/64: after six halvings against an
+                                   intersection the cap is frozen there */
+  int restore_back_rounds;      /* 20: intersection back-off rounds per pass */
+  double restore_stop_change;   /* 1e-6: the passes stop when no column moved
+                                   more than this share of T */
 
   /* phase 5, marching (march.c) */
-  double split_mul[5];    /* {1, 0.8, 1.25, 0.64, 1.5}: factors of the
-                             schedule's split fraction tried where the
-                             straight split is not valid */
-  double split_max_frac;  /* 0.9: a changed split never takes more than 90 %
-                             of the remainder (the outer sublayer would be a
-                             sliver) */
-  double min_target_height; /* 1e-4: marching's targets are at least this
-                               share of the mean edge length high (a column
-                               cut to nothing still gets a proper target) */
-  double tilt_limit_deg;  /* 5: the first layer's orthogonality target in
-                             degrees (the report counts the smooth columns
-                             beyond it) */
-  double ortho_qmin;      /* 0.3: standing up never has to keep a prism
-                             better than this ... */
-  double ortho_round_share; /* 0.5: ... nor, all columns at once, better than
-                               half its quality before */
-  double ortho_alone_share; /* 0.25: a column standing up alone (or with its
-                               ring) keeps its prisms above a quarter of
-                               their quality before */
-  int ortho_layers;       /* 24: layers measured when columns stand up */
-  int ortho_bend;         /* 6: layers over which a column bends back to its
-                             course when all stand up at once */
-  int ortho_rounds;       /* 100: rounds sending columns back at most */
+  double split_mul[5];        /* {1, 0.8, 1.25, 0.64, 1.5}: factors of the
+                                 schedule's split fraction tried where the
+                                 straight split is not valid */
+  double split_max_frac;      /* 0.9: a changed split never takes more than 90 %
+                                 of the remainder (the outer sublayer would be a
+                                 sliver) */
+  double min_target_height;   /* 1e-4: marching's targets are at least this
+                                 share of the mean edge length high (a column
+                                 cut to nothing still gets a proper target) */
+  double tilt_limit_deg;      /* 5: the first layer's orthogonality target in
+                                 degrees (the report counts the smooth columns
+                                 beyond it) */
+  double ortho_qmin;          /* 0.3: standing up never has to keep a prism
+                                 better than this ... */
+  double ortho_round_share;   /* 0.5: ... nor, all columns at once, better than
+                                 half its quality before */
+  double ortho_alone_share;   /* 0.25: a column standing up alone (or with its
+                                 ring) keeps its prisms above a quarter of
+                                 their quality before */
+  int ortho_layers;           /* 24: layers measured when columns stand up */
+  int ortho_bend;             /* 6: layers over which a column bends back to its
+                                 course when all stand up at once */
+  int ortho_rounds;           /* 100: rounds sending columns back at most */
   int ortho_bends[PR_NBENDS]; /* {6, 12, 9, 18, 0, 3, 2, 1}: bends tried
                                  alone, in layers (0: all measured layers);
                                  the long ones for columns tilted far over */
-  int ortho_passes;       /* 4: passes over the columns that went back (a
-                             neighbour standing up can make room) */
-  double ortho_lean_deg;  /* 4.5: the last resort leans by this much, within
-                             the 5 degree target */
-  double ortho_high_ratio; /* 0.5: a first level more than twice as high as
-                              its neighbours' mean is lowered to it */
-  double tilt_solve_deg;  /* 4.5: smooth columns tilted beyond this go to the
-                             patch solve */
-  int solve_rings;        /* 2: rings of neighbours moving with them */
-  double solve_weight;    /* 1e4: weight (12) of the first layer in the patch
-                             (10^2 left 6 of the aircraft's columns tilted) */
-  int solve_iter;         /* 50: Newton iterations per chunk of a patch solve */
-  int solve_tries;        /* 4: solves at most, holding the neighbours one
-                             tilted */
-  int solve_chunks;       /* 6: chunks at most (each restarts Newton, which
-                             gets further than one long solve) */
+  int ortho_passes;           /* 4: passes over the columns that went back (a
+                                 neighbour standing up can make room) */
+  double ortho_lean_deg;      /* 4.5: the last resort leans by this much, within
+                                 the 5 degree target */
+  double ortho_high_ratio;    /* 0.5: a first level more than twice as high as
+                                 its neighbours' mean is lowered to it */
+  double tilt_solve_deg;      /* 4.5: smooth columns tilted beyond this go to the
+                                 patch solve */
+  int solve_rings;            /* 2: rings of neighbours moving with them */
+  double solve_weight;        /* 1e4: weight (12) of the first layer in the patch
+                                 (10^2 left 6 of the aircraft's columns tilted) */
+  int solve_iter;             /* 50: Newton iterations per chunk of a patch solve */
+  int solve_tries;            /* 4: solves at most, holding the neighbours one
+                                 tilted */
+  int solve_chunks;           /* 6: chunks at most (each restarts Newton, which
+                                 gets further than one long solve) */
 
   pr_isect_params isect;
 } pr_params;

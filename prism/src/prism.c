@@ -220,8 +220,8 @@ static int build_adjacency(vm_prism *p) {
     if (open)
       return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not closed (%lld open edges)",
                       (long long)open);
-    return vm_error(ctx, VM_ERR_ARG,
-                    "prism: the wall is not consistently oriented (%lld edges)", (long long)flipped);
+    return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not consistently oriented (%lld edges)",
+                    (long long)flipped);
   }
   for (int64_t e = 0; e < ned; e++) {
     p->vv_off[p->edge[2 * e] + 1]++;
@@ -233,7 +233,7 @@ static int build_adjacency(vm_prism *p) {
     int32_t a = p->edge[2 * e], b = p->edge[2 * e + 1];
     p->vv[fill[a]++] = b;
     p->vv[fill[b]++] = a;
-    double l = pr_dist(p->wall + 3 * (int64_t)a, p->wall + 3 * (int64_t)b);
+    double l = vm_dist3(p->wall + 3 * (int64_t)a, p->wall + 3 * (int64_t)b);
     p->elen[a] += l;
     p->elen[b] += l;
   }
@@ -246,8 +246,7 @@ static int build_adjacency(vm_prism *p) {
   return VM_OK;
 }
 
-int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
-                    vm_prism **out) {
+int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_prism **out) {
   if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_prism_create: out is NULL");
   *out = NULL;
   if (!wall) return vm_error(ctx, VM_ERR_ARG, "vm_prism_create: wall is NULL");
@@ -329,8 +328,8 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
       e1[i] = p->wall[3 * (int64_t)c[1] + i] - p->wall[3 * (int64_t)c[0] + i];
       e2[i] = p->wall[3 * (int64_t)c[2] + i] - p->wall[3 * (int64_t)c[0] + i];
     }
-    pr_cross(e1, e2, n);
-    double a = pr_norm(n), l = pr_dot(e1, e1) + pr_dot(e2, e2);
+    vm_cross3(e1, e2, n);
+    double a = vm_norm3(n), l = vm_dot3(e1, e1) + vm_dot3(e2, e2);
     if (!(a > p->k.degenerate_area * l)) {
       vm_prism_destroy(&p);
       return vm_error(ctx, VM_ERR_ARG, "prism: wall triangle %lld is degenerate", (long long)t);
@@ -339,11 +338,12 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   /* outward: the enclosed volume is positive */
   double vol = 0;
   for (int64_t t = 0; t < nt; t++) {
-    const double *a = p->wall + 3 * (int64_t)p->tri[3 * t], *b = p->wall + 3 * (int64_t)p->tri[3 * t + 1],
+    const double *a = p->wall + 3 * (int64_t)p->tri[3 * t],
+                 *b = p->wall + 3 * (int64_t)p->tri[3 * t + 1],
                  *c = p->wall + 3 * (int64_t)p->tri[3 * t + 2];
     double x[3];
-    pr_cross(b, c, x);
-    vol += pr_dot(a, x);
+    vm_cross3(b, c, x);
+    vol += vm_dot3(a, x);
   }
   if (!(vol > 0)) {
     vm_prism_destroy(&p);
@@ -363,7 +363,7 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   for (int64_t v = 0; v < nw; v++) {
     int sm = 1;
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
-      if (pr_dot(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < smooth_cos) sm = 0;
+      if (vm_dot3(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < smooth_cos) sm = 0;
     p->smooth[v] = (uint8_t)sm;
     p->h[v] = o.thickness;
     p->cap[v] = o.thickness;
@@ -387,9 +387,9 @@ void vm_prism_destroy(vm_prism **pp) {
   pr_layer_faces_destroy(ctx, &p->faces);
   pr_rt_destroy(&p->rt);
   vm_mesh_destroy(&p->layer);
-  void *arrays[] = {p->wall, p->tri, p->fnrm, p->vnrm, p->dir, p->elen, p->smooth,
-                    p->vt_off, p->vt, p->vv_off, p->vv, p->edge, p->etri, p->h,
-                    p->cap, p->cut, p->lev, p->sched};
+  void *arrays[] = {p->wall,   p->tri,    p->fnrm, p->vnrm,   p->dir, p->elen,
+                    p->smooth, p->vt_off, p->vt,   p->vv_off, p->vv,  p->edge,
+                    p->etri,   p->h,      p->cap,  p->cut,    p->lev, p->sched};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;

@@ -67,11 +67,12 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
   th = f->data;
   for (int64_t k = 0; k < ne; k++) {
     lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
-    ph[k] = k < nl * nt ? VM_PRISM_TAG_VOLUME : k < nl * nt + nt ? VM_PRISM_TAG_WALL
-                                                                  : VM_PRISM_TAG_OUTER;
+    ph[k] = k < nl * nt        ? VM_PRISM_TAG_VOLUME
+            : k < nl * nt + nt ? VM_PRISM_TAG_WALL
+                               : VM_PRISM_TAG_OUTER;
   }
   for (int64_t v = 0; v < nw; v++) {
-    double d = pr_dist(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
+    double d = vm_dist3(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
     for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
   }
   if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
@@ -99,7 +100,7 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     int64_t full = 0;
     double tmin = INFINITY, tmax = 0, tsum = 0;
     for (int64_t v = 0; v < nw; v++) {
-      double d = pr_dist(p->wall + 3 * v, top + 3 * v) / T;
+      double d = vm_dist3(p->wall + 3 * v, top + 3 * v) / T;
       if (d >= 1 - p->o.full_tol) full++;
       tmin = d < tmin ? d : tmin;
       tmax = d > tmax ? d : tmax;
@@ -144,8 +145,8 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     double gmax = 0;
     for (int64_t v = 0; v < nw && nlev > 2; v++)
       for (int k = 0; k + 2 < nlev; k++) {
-        double h0 = pr_dist(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
-        double h1 = pr_dist(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
+        double h0 = vm_dist3(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
+        double h1 = vm_dist3(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
         if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
       }
     R.growth_max = gmax;

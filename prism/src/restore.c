@@ -26,16 +26,16 @@ static void mean_value_proj(const vm_prism *p, const double *d, double *tp) {
         u[r] = a[r] - x[r];
         w[r] = b[r] - x[r];
       }
-      double lu = pr_norm(u), lw = pr_norm(w);
+      double lu = vm_norm3(u), lw = vm_norm3(w);
       if (!(lu > 0) || !(lw > 0)) continue;
-      double cs = pr_dot(u, w) / (lu * lw);
+      double cs = vm_dot3(u, w) / (lu * lw);
       cs = cs < -1 ? -1 : cs > 1 ? 1 : cs;
       double tn = tan(0.5 * acos(cs));
       for (int r = 0; r < 3; r++) q[r] += tn / lu * a[r] + tn / lw * b[r];
       ws += tn / lu + tn / lw;
     }
     if (!(ws > 0)) {
-      tp[v] = pr_dist(x, p->wall + 3 * v);
+      tp[v] = vm_dist3(x, p->wall + 3 * v);
       continue;
     }
     double s = 0;
@@ -131,7 +131,7 @@ int vm_prism_restore(vm_prism *p) {
   const double *x = p->layer->xyz;
   for (int64_t v = 0; v < nw; v++) {
     for (int k = 0; k < 3; k++) d[3 * v + k] = x[3 * (v + nw) + k] - x[3 * v + k];
-    t[v] = pr_normalize(d + 3 * v);
+    t[v] = vm_normalize3(d + 3 * v);
     tcut[v] = t[v] < T ? t[v] : T;
     p->cap[v] = T;
     alpha[v] = 1;
@@ -215,7 +215,8 @@ int vm_prism_restore(vm_prism *p) {
   {
     vm_node_stats ns;
     int s2 = vm_problem_node_stats(p->prob, p->layer->xyz, &ns);
-    if (s2 < 0) st = s2;
+    if (s2 < 0)
+      st = s2;
     else if (ns.inverted)
       st = vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after restoring",
                     (long long)ns.inverted);

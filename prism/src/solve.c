@@ -8,9 +8,9 @@ typedef struct {
   vm_prism *p;
   vm_prism_phase ph;
   int base;
-  int budget;     /* > 0: stop after this many iterations once the steps sum to a share of it */
-  double share;   /* that share (k.budget_step_share) */
-  double steps;   /* sum of the accepted step lengths (at most 1 each) */
+  int budget;   /* > 0: stop after this many iterations once the steps sum to a share of it */
+  double share; /* that share (k.budget_step_share) */
+  double steps; /* sum of the accepted step lengths (at most 1 each) */
 } monitor_data;
 
 static void monitor(void *user, const vm_iter_info *it) {
@@ -18,7 +18,8 @@ static void monitor(void *user, const vm_iter_info *it) {
   d->steps += it->tau < 1 ? it->tau : 1;
   /* in the cutting phase the progress steps are rounds (pairs left), not
    * the iterations of the local re-solves */
-  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted, 1);
+  if (d->ph != VM_PRISM_PHASE_CUT)
+    pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted, 1);
 }
 
 static int budget_spent(void *user, int iter, const double *x) {
@@ -27,8 +28,8 @@ static int budget_spent(void *user, int iter, const double *x) {
   return iter > d->budget && d->steps >= d->share * d->budget;
 }
 
-int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
-                    int max_iter, int budget, vm_prism_phase ph, int *iters) {
+int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+                    int budget, vm_prism_phase ph, int *iters) {
   if (iters) *iters = 0;
   if (max_iter <= 0) return VM_OK;
   double left = pr_time_left(p);

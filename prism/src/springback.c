@@ -9,7 +9,7 @@
 /* Column lengths of the layer. */
 static void column_lengths(const vm_prism *p, double *len) {
   const double *x = p->layer->xyz;
-  for (int64_t v = 0; v < p->nw; v++) len[v] = pr_dist(x + 3 * v, x + 3 * (v + p->nw));
+  for (int64_t v = 0; v < p->nw; v++) len[v] = vm_dist3(x + 3 * v, x + 3 * (v + p->nw));
 }
 
 /* Phase 2. The target heights grow by continuation (at most
@@ -66,4 +66,3 @@ done:
   if (st >= 0) p->done = 2;
   return st;
 }
-

@@ -35,21 +35,21 @@ struct vm_prism {
   int32_t *vt;
   int64_t *vv_off; /* vertex -> neighbour vertices (CSR, sorted) */
   int32_t *vv;
-  int32_t *edge;   /* 2*ned, a < b */
-  int32_t *etri;   /* 2*ned triangles on each side (-1: open edge) */
+  int32_t *edge; /* 2*ned, a < b */
+  int32_t *etri; /* 2*ned triangles on each side (-1: open edge) */
 
   pr_rt *rt;             /* the run's Embree device (made at the first query) */
   pr_layer_faces *faces; /* the layer's faces for intersection queries */
-  vm_mesh *layer;  /* single layer: 2nw vertices, nt prisms, target field */
+  vm_mesh *layer;        /* single layer: 2nw vertices, nt prisms, target field */
   vm_problem *prob;
-  double *h;       /* nw target heights */
-  double *cap;     /* nw upper bounds of the thickness left by cutting */
-  uint8_t *cut;    /* nw: rounds the column was cut in (saturates at 255) */
+  double *h;    /* nw target heights */
+  double *cap;  /* nw upper bounds of the thickness left by cutting */
+  uint8_t *cut; /* nw: rounds the column was cut in (saturates at 255) */
 
   /* marching result */
-  int nlev;        /* levels (layers + 1); 0 before marching */
-  double *lev;     /* nlev * 3 * nw */
-  double *sched;   /* heights of the schedule (nlayers) */
+  int nlev;      /* levels (layers + 1); 0 before marching */
+  double *lev;   /* nlev * 3 * nw */
+  double *sched; /* heights of the schedule (nlayers) */
 
   vm_prism_report rep;
 };
@@ -63,8 +63,7 @@ static inline pr_surf pr_wall_surf(const vm_prism *p) {
 /* Time since creation. */
 double pr_elapsed(const vm_prism *p);
 /* Report progress (solver: 1 for a solve's iteration, see vm_prism_progress). */
-void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count,
-                 int solver);
+void pr_progress(vm_prism *p, vm_prism_phase ph, int step, double value, int64_t count, int solver);
 /* Time limit left (seconds, +inf if none). */
 double pr_time_left(const vm_prism *p);
 
@@ -82,8 +81,8 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
 /* pr_solve with an iteration budget counted in steps: past `budget`
  * iterations it goes on (up to max_iter) while the accepted step lengths
  * sum to less than k.budget_step_share of it (budget <= 0: no budget). */
-int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
-                    int max_iter, int budget, vm_prism_phase ph, int *iters);
+int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+                    int budget, vm_prism_phase ph, int *iters);
 /* The single layer's problem (balanced measure, geometric rule), made once. */
 int pr_make_problem(vm_prism *p);
 /* Targets from heights hv along the blended directions, installed on the

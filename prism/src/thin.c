@@ -109,4 +109,3 @@ int vm_prism_thin(vm_prism *p) {
   pr_progress(p, VM_PRISM_PHASE_THIN, 1, hmax, 0, 0);
   return VM_OK;
 }
-

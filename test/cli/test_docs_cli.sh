@@ -3,7 +3,7 @@
 # option of a program appears on its page docs/cli/PROG.md (--help and
 # --version are documented once, in docs/cli.md), and docs/cli.md links
 # every page. The options come from the program's option table (the hidden
-# --list-options); a program without one has them read off its --help.
+# --list-options), and each is in --help.
 set -u
 root=$1
 shift
@@ -14,19 +14,14 @@ for prog in "$@"; do
   page="$root/docs/cli/$name.md"
   check '[ -f "$page" ]' "$name has a page"
   [ -f "$page" ] || continue
-  if opts=$("$prog" --list-options 2>/dev/null); then
-    check '[ -n "$opts" ]' "$name --list-options lists options"
-    help=$("$prog" --help)
-    missing=
-    for o in $opts; do
-      grep -q -- "$o\b" <<<"$help" || missing="$missing $o"
-    done
-    check '[ -z "$missing" ]' "$name: every option of its table in --help (missing:${missing:- none})"
-  else
-    # the option column of each help line that starts with a dash: up to
-    # the first gap of two spaces
-    opts=$("$prog" --help | grep -E '^ +-' | sed -E 's/^ +//; s/  .*//' | grep -oE -- '--[a-z0-9-]+' | sort -u)
-  fi
+  opts=$("$prog" --list-options 2>/dev/null)
+  check '[ -n "$opts" ]' "$name --list-options lists options"
+  help=$("$prog" --help)
+  missing=
+  for o in $opts; do
+    grep -q -- "$o\b" <<<"$help" || missing="$missing $o"
+  done
+  check '[ -z "$missing" ]' "$name: every option of its table in --help (missing:${missing:- none})"
   missing=
   for o in $opts; do
     case $o in --help|--version) continue ;; esac

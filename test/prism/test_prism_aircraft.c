@@ -23,8 +23,7 @@
 
 /* One run at thickness frac * length: the checks both thicknesses share,
  * and the report in *out. */
-static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
-                vm_prism_report *out) {
+static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac, vm_prism_report *out) {
   vm_prism_opts o = vm_prism_opts_default();
   o.thickness = frac * length; /* the model's length: nose at 0, tail at L */
   o.nlayers = 20;
@@ -44,8 +43,8 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
    * tilted; at 20 %: 10 columns lying nearly flat next to trailing edges
    * and tips, which no column stood up alone or with its ring could right,
    * until the tilted ones were solved for with their neighbours */
-  CHECK(r.normal_dev_over5 == 0, "T = %g L: %lld smooth columns beyond 5 degrees (max %.1f)",
-        frac, (long long)r.normal_dev_over5, r.normal_dev_max);
+  CHECK(r.normal_dev_over5 == 0, "T = %g L: %lld smooth columns beyond 5 degrees (max %.1f)", frac,
+        (long long)r.normal_dev_over5, r.normal_dev_max);
   CHECK(r.inverted == 0, "T = %g L: %lld inverted corner tets", frac, (long long)r.inverted);
   CHECK(r.intersections == 0, "T = %g L: %lld intersections left", frac,
         (long long)r.intersections);
@@ -54,8 +53,8 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac,
     CHECK(res->ne == 20 * r.wall_triangles + 2 * r.wall_triangles, "%lld elements",
           (long long)res->ne);
     CHECK(chk_corner_inverted(res) == 0, "T = %g L: the result has inverted corner tets", frac);
-    CHECK(!memcmp(res->xyz, w->xyz, sizeof(double) * 3 * (size_t)w->nv),
-          "T = %g L: the wall moved", frac);
+    CHECK(!memcmp(res->xyz, w->xyz, sizeof(double) * 3 * (size_t)w->nv), "T = %g L: the wall moved",
+          frac);
     vm_mesh_destroy(&res);
   }
   *out = r;

@@ -13,7 +13,6 @@
 #include "varmesh/shapes.h"
 #include "vmtest.h"
 
-
 /* Outer faces against each other and against the wall (the triangles of
  * the result: wall tag 1, outer tag 2), all pairs. */
 static int64_t boundary_intersections(const vm_mesh *res) {
@@ -144,15 +143,15 @@ int main(void) {
     double gap = INFINITY, tmax = 0;
     for (int64_t a = 0; o.res && a < na; a++) {
       const double *xa = top_of(&o, a);
-      for (int64_t b = na; b < o.nw; b++) gap = fmin(gap, sqrt(pow(xa[0] - top_of(&o, b)[0], 2) +
-                                                             pow(xa[1] - top_of(&o, b)[1], 2) +
-                                                             pow(xa[2] - top_of(&o, b)[2], 2)));
+      for (int64_t b = na; b < o.nw; b++)
+        gap = fmin(gap, sqrt(pow(xa[0] - top_of(&o, b)[0], 2) + pow(xa[1] - top_of(&o, b)[1], 2) +
+                             pow(xa[2] - top_of(&o, b)[2], 2)));
       const double *y = o.res->xyz + 3 * a;
-      if (y[0] > -0.35) tmax = fmax(tmax, sqrt(pow(xa[0] - y[0], 2) + pow(xa[1] - y[1], 2) +
-                                               pow(xa[2] - y[2], 2)));
+      if (y[0] > -0.35)
+        tmax = fmax(tmax, sqrt(pow(xa[0] - y[0], 2) + pow(xa[1] - y[1], 2) + pow(xa[2] - y[2], 2)));
     }
-    fprintf(stderr, "two spheres: gap between the layers %.4f, thickness at contact <= %.3f\n",
-            gap, tmax);
+    fprintf(stderr, "two spheres: gap between the layers %.4f, thickness at contact <= %.3f\n", gap,
+            tmax);
     CHECK(gap < 0.15, "two spheres: no contact, gap %g", gap);
     CHECK(tmax < 0.4, "two spheres: column at the contact %g long", tmax);
     CHECK(o.r.full_fraction > 0.6, "two spheres: full fraction %g", o.r.full_fraction);
@@ -187,13 +186,14 @@ int main(void) {
     vm_prism_report r;
     for (int ph = 0; p && ph < VM_PRISM_NPHASES; ph++) {
       static int (*const fn[])(vm_prism *) = {vm_prism_thin, vm_prism_springback, vm_prism_cut,
-                                               vm_prism_restore, vm_prism_march};
+                                              vm_prism_restore, vm_prism_march};
       st = fn[ph](p);
       CHECK(st >= 0, "two spheres, 1 cut round: phase %d: %s", ph, vm_ctx_error(ctx));
       vm_prism_get_report(p, &r);
       if (ph == VM_PRISM_PHASE_CUT) after_cut = r.intersections;
       if (ph == VM_PRISM_PHASE_RESTORE) {
-        fprintf(stderr, "two spheres, 1 cut round: %lld pairs after cutting, %lld after restoring\n",
+        fprintf(stderr,
+                "two spheres, 1 cut round: %lld pairs after cutting, %lld after restoring\n",
                 (long long)after_cut, (long long)r.intersections);
         CHECK(after_cut > 0, "two spheres, 1 cut round: no pair left to test with");
         CHECK(r.intersections <= after_cut, "two spheres, 1 cut round: restoring added pairs");

@@ -11,7 +11,6 @@
 #include "varmesh/shapes.h"
 #include "vmtest.h"
 
-
 static int64_t layer_faces_intersections(const vm_mesh *L, int64_t nw) {
   /* tops and the wall of a single layer (vertices nw.. are the top) */
   int64_t nt = L->ne;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "linsolve_private.h"
+#include "vec3.h"
 
 enum { SURF_PLANE = 0, SURF_SPHERE = 1, SURF_BOX = 2 };
 
@@ -243,10 +244,6 @@ void vm_bc_destroy(vm_bc **p) {
   *p = NULL;
 }
 
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 /* Orthonormal basis of the complement of the constraint normals (and of
  * e_z in 2D): Gram-Schmidt on the normals, then the coordinate axes
  * taken greedily by largest remaining length. Returns the rank. */
@@ -262,13 +259,13 @@ static int cone_basis(int dim, const double *nrm, int nn, double Q[9]) {
   }
   for (int i = 0; i < nc; i++) {
     double v[3] = {cons[i][0], cons[i][1], cons[i][2]};
-    double len0 = sqrt(dot3(v, v));
+    double len0 = sqrt(vm_dot3(v, v));
     if (!(len0 > 0)) continue;
     for (int j = 0; j < nu; j++) {
-      double t = dot3(v, U[j]);
+      double t = vm_dot3(v, U[j]);
       for (int k = 0; k < 3; k++) v[k] -= t * U[j][k];
     }
-    double len = sqrt(dot3(v, v));
+    double len = sqrt(vm_dot3(v, v));
     if (len <= 1e-8 * len0) continue;
     for (int k = 0; k < 3; k++) U[nu][k] = v[k] / len;
     nu++;
@@ -280,14 +277,14 @@ static int cone_basis(int dim, const double *nrm, int nn, double Q[9]) {
       double v[3] = {0, 0, 0};
       v[e] = 1;
       for (int j = 0; j < nu; j++) {
-        double t = dot3(v, U[j]);
+        double t = vm_dot3(v, U[j]);
         for (int k = 0; k < 3; k++) v[k] -= t * U[j][k];
       }
       for (int j = 0; j < r; j++) {
-        double t = dot3(v, Q + 3 * j);
+        double t = vm_dot3(v, Q + 3 * j);
         for (int k = 0; k < 3; k++) v[k] -= t * Q[3 * j + k];
       }
-      double len = sqrt(dot3(v, v));
+      double len = sqrt(vm_dot3(v, v));
       if (len > blen + 1e-12) {
         blen = len;
         memcpy(best, v, sizeof best);
@@ -339,7 +336,7 @@ static void apply_slip(const vm_bc *bc, int64_t s, double r[3]) {
   const double *Q = bc->Q + 9 * s;
   double out[3] = {0, 0, 0};
   for (int j = 0; j < bc->rank[s]; j++) {
-    double t = dot3(Q + 3 * j, r);
+    double t = vm_dot3(Q + 3 * j, r);
     for (int k = 0; k < 3; k++) out[k] += t * Q[3 * j + k];
   }
   memcpy(r, out, sizeof out);

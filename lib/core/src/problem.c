@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "problem_private.h"
+#include "vec3.h"
 
 static double det3(const double *A) {
   return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
@@ -26,16 +27,6 @@ static void inv3(const double *A, double det, double *B) {
   B[6] = (A[3] * A[7] - A[4] * A[6]) * r;
   B[7] = (A[1] * A[6] - A[0] * A[7]) * r;
   B[8] = (A[0] * A[4] - A[1] * A[3]) * r;
-}
-
-static void cross3(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
 /* Newell normal of a polygon (not normalized): twice its vector area. */
@@ -134,7 +125,7 @@ static int target_normal(const vm_problem *p, const double *tc, int k, double *n
   n[0] = n[1] = n[2] = 0;
   if (p->kind != VM_PK_SURF || p->tgt == VM_TGT_IDEAL) return 0;
   newell(tc, k, n);
-  return !(dot3(n, n) > 0) || !isfinite(dot3(n, n));
+  return !(vm_dot3(n, n) > 0) || !isfinite(vm_dot3(n, n));
 }
 
 /* T of rule node q from element coordinates tc; writes S = T^{-1}
@@ -157,14 +148,14 @@ static double node_target(const vm_qnode *q, int d, const double *tc, const doub
   if (n[0] == 0 && n[1] == 0 && n[2] == 0) {
     a = col[0][0], b = col[1][0], c = col[0][1], e = col[1][1];
   } else {
-    double x[3], l0 = sqrt(dot3(col[0], col[0]));
-    cross3(col[0], col[1], x);
-    double area = sqrt(dot3(x, x));
+    double x[3], l0 = sqrt(vm_dot3(col[0], col[0]));
+    vm_cross3(col[0], col[1], x);
+    double area = sqrt(vm_dot3(x, x));
     if (!(l0 > 0)) return 0;
     a = l0;
-    b = dot3(col[0], col[1]) / l0;
+    b = vm_dot3(col[0], col[1]) / l0;
     c = 0;
-    e = (dot3(n, x) < 0 ? -area : area) / l0;
+    e = (vm_dot3(n, x) < 0 ? -area : area) / l0;
   }
   double dt = a * e - b * c;
   if (dt != 0) {
@@ -304,12 +295,12 @@ static double elem_volume(const vm_problem *p, int64_t i, const double *xyz) {
     double det;
     if (R->dim == 3) {
       double c[3];
-      cross3(col[1], col[2], c);
-      det = dot3(col[0], c);
+      vm_cross3(col[1], col[2], c);
+      det = vm_dot3(col[0], c);
     } else if (p->kind == VM_PK_SURF) {
       double c[3];
-      cross3(col[0], col[1], c);
-      det = dot3(p->nrm + 3 * i, c);
+      vm_cross3(col[0], col[1], c);
+      det = vm_dot3(p->nrm + 3 * i, c);
     } else {
       det = col[0][0] * col[1][1] - col[0][1] * col[1][0];
     }
@@ -611,7 +602,7 @@ int vm_problem_update_normals(vm_problem *p, const double *vertex_normals) {
       gather(p, i, p->m->xyz, x);
       newell(x, k, n);
     }
-    double l = sqrt(dot3(n, n));
+    double l = sqrt(vm_dot3(n, n));
     if (!(l > 0) || !isfinite(l)) {
       vm_free(p->ctx, nrm);
       return vm_error(p->ctx, VM_ERR_ARG, "element %d: no normal (degenerate %s)", p->ael[i],

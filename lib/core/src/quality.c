@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "vec3.h"
 
 static double det3(const double *A) {
   return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
@@ -25,14 +26,6 @@ static int inv3(const double *A, double *B) {
   B[8] = (A[0] * A[4] - A[1] * A[3]) / d;
   return 0;
 }
-
-static void cross(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 
 /* Columns of a node's edge matrix in 3D from element coordinates x[i*3+r]. */
 static void node_cols(const vm_qnode *q, int d, const double *x, double col[3][3]) {
@@ -64,11 +57,11 @@ static node_val eval_node(const vm_qnode *q, int d, const double *x, const doubl
     r.det_c = det3(C);
     r.s = 0;
     for (int i = 0; i < 9; i++) r.s += C[i] * C[i];
-    double l = norm3(col[0]) * norm3(col[1]) * norm3(col[2]);
+    double l = vm_norm3(col[0]) * vm_norm3(col[1]) * vm_norm3(col[2]);
     r.sj_raw = l > 0 ? dE / l : 0;
   } else {
     double c[3];
-    cross(col[0], col[1], c);
+    vm_cross3(col[0], col[1], c);
     double dE = c[0] * nrm[0] + c[1] * nrm[1] + c[2] * nrm[2];
     /* C = E T^{-1} in the tangent frame: s from the 3x2 product, det scaled */
     double s = 0;
@@ -80,7 +73,7 @@ static node_val eval_node(const vm_qnode *q, int d, const double *x, const doubl
     double dT = Tinv[0] * Tinv[3] - Tinv[1] * Tinv[2];
     r.det_c = dE * dT;
     r.s = s;
-    double l = norm3(col[0]) * norm3(col[1]);
+    double l = vm_norm3(col[0]) * vm_norm3(col[1]);
     r.sj_raw = l > 0 ? dE / l : 0;
   }
   return r;
@@ -187,7 +180,7 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
         nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
         nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
       }
-      double l = norm3(nrm);
+      double l = vm_norm3(nrm);
       if (l > 0)
         for (int i = 0; i < 3; i++) nrm[i] /= l;
     }

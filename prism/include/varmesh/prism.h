@@ -20,13 +20,13 @@ extern "C" {
 #endif
 
 /* Names used on the output mesh. */
-#define VM_PRISM_FIELD_LAYER "layer"           /* i32 per element: 0 at the wall; -1 on faces */
-#define VM_PRISM_FIELD_THICKNESS "thickness"   /* f64 per vertex: achieved column thickness */
-#define VM_PRISM_FIELD_PHYS "gmsh:physical"    /* i32 per element: family tag below */
+#define VM_PRISM_FIELD_LAYER "layer"         /* i32 per element: 0 at the wall; -1 on faces */
+#define VM_PRISM_FIELD_THICKNESS "thickness" /* f64 per vertex: achieved column thickness */
+#define VM_PRISM_FIELD_PHYS "gmsh:physical"  /* i32 per element: family tag below */
 enum {
-  VM_PRISM_TAG_WALL = 1,   /* wall triangles (the input surface) */
-  VM_PRISM_TAG_OUTER = 2,  /* outer boundary triangles */
-  VM_PRISM_TAG_VOLUME = 3  /* the prisms */
+  VM_PRISM_TAG_WALL = 1,  /* wall triangles (the input surface) */
+  VM_PRISM_TAG_OUTER = 2, /* outer boundary triangles */
+  VM_PRISM_TAG_VOLUME = 3 /* the prisms */
 };
 
 /* Phases, in order (progress and timings). */
@@ -44,43 +44,43 @@ const char *vm_prism_phase_name(vm_prism_phase ph);
 
 typedef struct vm_prism_progress {
   vm_prism_phase phase;
-  int step;          /* solver iteration, cutting round, smoothing pass or layer */
-  double value;      /* phase-specific: F (solves), intersecting pairs (cut),
-                        mean thickness / T (restore), layer height (march) */
-  int64_t count;     /* phase-specific: inverted nodes (solves), prisms to cut */
-  double elapsed;    /* seconds since the layer was created */
-  int solver;        /* 1: an iteration of a solve (step: iteration, value: F,
-                        count: inverted nodes or -1 where not computed) inside
-                        any phase, including marching's splits and its last
-                        solve of tilted columns */
+  int step;       /* solver iteration, cutting round, smoothing pass or layer */
+  double value;   /* phase-specific: F (solves), intersecting pairs (cut),
+                     mean thickness / T (restore), layer height (march) */
+  int64_t count;  /* phase-specific: inverted nodes (solves), prisms to cut */
+  double elapsed; /* seconds since the layer was created */
+  int solver;     /* 1: an iteration of a solve (step: iteration, value: F,
+                     count: inverted nodes or -1 where not computed) inside
+                     any phase, including marching's splits and its last
+                     solve of tilted columns */
 } vm_prism_progress;
 
 typedef void (*vm_prism_progress_fn)(void *user, const vm_prism_progress *p);
 
 typedef struct vm_prism_opts {
-  double thickness;     /* T, absolute, > 0 (required) */
-  int nlayers;          /* N >= 1 (default 20) */
-  double first_height;  /* h1 > 0, or <= 0: from growth (default 0) */
-  double growth;        /* ratio r >= 1 of successive heights, or <= 0: from
-                           first_height (default 1.2); if both are given, the
-                           growth law is kept and the layer count may drop */
-  double theta;         /* of the balanced measure (default 0.8) */
-  double cut_factor;    /* target height reduction per cut, in (0.5, 1) (default 0.85) */
-  int springback_iter;  /* implicit iterations of the springback at full height
-                           (default 100; it stops earlier once F stagnates, and
-                           goes on, up to 3 times as many, while the accepted
-                           steps sum to less than a quarter of it) */
-  int resolve_iter;     /* implicit iterations after each cutting round, around
-                           the cut columns only (default 6) */
-  int max_cut_rounds;   /* default 400; rounds with few pairs are cheap */
-  int smooth_iter;      /* restoration / smoothing passes (default 30) */
-  int march_iter;       /* explicit iterations per split (default 8) */
-  double ortho_weight;  /* weight (12) of the inner sublayer in marching (default 10) */
-  double drop_quality;  /* drop the outermost remainder if its minimum scaled
-                           Jacobian is below this (default 0: never) */
-  double full_tol;      /* a column is at full thickness if >= (1 - full_tol) T
-                           (default 0.01) */
-  double time_limit;    /* seconds for the whole run, <= 0: none */
+  double thickness;      /* T, absolute, > 0 (required) */
+  int nlayers;           /* N >= 1 (default 20) */
+  double first_height;   /* h1 > 0, or <= 0: from growth (default 0) */
+  double growth;         /* ratio r >= 1 of successive heights, or <= 0: from
+                            first_height (default 1.2); if both are given, the
+                            growth law is kept and the layer count may drop */
+  double theta;          /* of the balanced measure (default 0.8) */
+  double cut_factor;     /* target height reduction per cut, in (0.5, 1) (default 0.85) */
+  int springback_iter;   /* implicit iterations of the springback at full height
+                            (default 100; it stops earlier once F stagnates, and
+                            goes on, up to 3 times as many, while the accepted
+                            steps sum to less than a quarter of it) */
+  int resolve_iter;      /* implicit iterations after each cutting round, around
+                            the cut columns only (default 6) */
+  int max_cut_rounds;    /* default 400; rounds with few pairs are cheap */
+  int smooth_iter;       /* restoration / smoothing passes (default 30) */
+  int march_iter;        /* explicit iterations per split (default 8) */
+  double ortho_weight;   /* weight (12) of the inner sublayer in marching (default 10) */
+  double drop_quality;   /* drop the outermost remainder if its minimum scaled
+                            Jacobian is below this (default 0: never) */
+  double full_tol;       /* a column is at full thickness if >= (1 - full_tol) T
+                            (default 0.01) */
+  double time_limit;     /* seconds for the whole run, <= 0: none */
   int check_incremental; /* 1: compare every incremental intersection query
                             with a full one, an error (VM_ERR_NUMERIC) if
                             they differ; for tests (default 0: the
@@ -97,21 +97,21 @@ vm_prism_opts vm_prism_opts_default(void);
 /* The summary of a run (every figure is measured, not assumed). */
 typedef struct vm_prism_report {
   int64_t wall_vertices, wall_triangles, prisms;
-  int layers_requested, layers;  /* layers is less if the remainder was dropped */
-  double thickness;              /* T */
-  double first_height, growth;   /* of the schedule used */
-  double thin_min, thin_max;     /* heights of the thin layer */
-  int springback_iter;           /* implicit iterations, all solves */
+  int layers_requested, layers; /* layers is less if the remainder was dropped */
+  double thickness;             /* T */
+  double first_height, growth;  /* of the schedule used */
+  double thin_min, thin_max;    /* heights of the thin layer */
+  int springback_iter;          /* implicit iterations, all solves */
   int cut_rounds;
-  int64_t cut_pairs_first;       /* intersecting pairs found in the first round */
-  int64_t intersections;         /* pairs left at the end (0 unless limits hit) */
-  double full_fraction;          /* columns at full thickness */
-  double thick_min, thick_mean;  /* achieved / requested thickness over columns */
-  double thick_max;              /* > 1 where springback left a column longer than T */
-  int64_t inverted;              /* corner tets with det <= 0 in the final mesh */
-  double sj_min;                 /* minimum scaled Jacobian of the prisms */
-  double normal_dev_max;         /* degrees: first-layer side edges vs the wall's
-                                    vertex normal, at smooth vertices */
+  int64_t cut_pairs_first;      /* intersecting pairs found in the first round */
+  int64_t intersections;        /* pairs left at the end (0 unless limits hit) */
+  double full_fraction;         /* columns at full thickness */
+  double thick_min, thick_mean; /* achieved / requested thickness over columns */
+  double thick_max;             /* > 1 where springback left a column longer than T */
+  int64_t inverted;             /* corner tets with det <= 0 in the final mesh */
+  double sj_min;                /* minimum scaled Jacobian of the prisms */
+  double normal_dev_max;        /* degrees: first-layer side edges vs the wall's
+                                   vertex normal, at smooth vertices */
   double normal_dev_mean;
   int64_t smooth_vertices;       /* vertices where normal_dev is measured */
   int64_t normal_dev_over5;      /* of those, deviating by more than 5 degrees */
@@ -149,8 +149,7 @@ typedef struct vm_prism vm_prism;
  * Errors: VM_ERR_ARG (no triangles, bad options, a degenerate triangle, an
  * open, non-manifold, inconsistently or inwards oriented wall, a vertex
  * where no direction sees every incident face), VM_ERR_NOMEM. */
-int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
-                    vm_prism **out);
+int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_prism **out);
 void vm_prism_destroy(vm_prism **p);
 
 /* The phases, to be called in this order (vm_prism_run calls them all).
@@ -190,9 +189,8 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r);
  * (e.g. the wall against itself). Output: *npairs pairs (a < b), sorted,
  * in *pairs (2 per pair, vm_malloc; may be NULL to count only).
  * The result does not depend on thread timing. */
-int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri,
-                                const int32_t *tri, const int32_t *group, int64_t *npairs,
-                                int64_t **pairs);
+int vm_prism_find_intersections(vm_ctx *ctx, const double *xyz, int64_t ntri, const int32_t *tri,
+                                const int32_t *group, int64_t *npairs, int64_t **pairs);
 
 /* Boundary-face intersections of a volume mesh: its boundary triangles
  * (quads split) against each other, except pairs that both lie on `wall`
