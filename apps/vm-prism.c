@@ -170,6 +170,8 @@ static const vm_opt opts[] = {
      "the achieved thickness",
      .error = "expects a directory"},
     {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "JSON summary on stdout", .ival = 1},
+    {"--check-incremental", NULL, VM_OPT_FLAG, A(o.check_incremental), NULL,
+     "check every incremental intersection query against a full one (slow; for tests)", .ival = 1},
     VM_CLI_OPT_QUIET("no progress on stderr"),
     {0}};
 
@@ -376,9 +378,6 @@ int main(int argc, char **argv) {
   progress_state ps = {&cli, -1, hist, 0, NAN, a.in, m, L, o};
   o->progress = progress;
   o->user = &ps;
-  /* the prism tests check every incremental intersection query */
-  const char *chk = getenv("VM_PRISM_CHECK_INCREMENTAL");
-  o->check_incremental = chk && *chk && strcmp(chk, "0");
   vm_cli_catch_interrupts(&cli);
   vm_prism_report r;
   int st = vm_prism_run(cli.ctx, m, o, &res, &r);

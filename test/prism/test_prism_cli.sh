@@ -5,7 +5,7 @@
 # gmsh -check when Gmsh is installed; the --json summary says valid; bad input and usage errors give
 # a one-line error, the documented exit code and no output file.
 set -u
-prism=$1 gen=$2 qual=$3
+prism=("$1" --check-incremental) gen=$2 qual=$3
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -13,7 +13,7 @@ check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
 
 "$gen" aircraft --resolution 1 "$dir/a.stl" >/dev/null
 check '[ -s "$dir/a.stl" ]' "vm-gen aircraft writes the wall"
-"$prism" -t 0.05 -n 4 --json "$dir/a.stl" "$dir/a.msh" >"$dir/a.json" 2>"$dir/a.err"
+"${prism[@]}" -t 0.05 -n 4 --json "$dir/a.stl" "$dir/a.msh" >"$dir/a.json" 2>"$dir/a.err"
 rc=$?
 check '[ $rc -eq 0 ]' "vm-prism on the aircraft exits 0 (got $rc)"
 check 'grep -q "\"valid\": true" "$dir/a.json"' "--json says valid"
@@ -31,7 +31,7 @@ check 'grep -q "\"wall\"" "$dir/a.msh" && grep -q "\"outer\"" "$dir/a.msh"' ".ms
 # the default 20 layers: every smooth column's first side edge within 5
 # degrees of the wall normal, also those beside the wing and tail junctions
 # whose neighbours stay tilted (they bend back over up to 19 layers)
-"$prism" -q -t 0.05 --json "$dir/a.stl" "$dir/a20.vmsh" >"$dir/a20.json" 2>"$dir/a20.err"
+"${prism[@]}" -q -t 0.05 --json "$dir/a.stl" "$dir/a20.vmsh" >"$dir/a20.json" 2>"$dir/a20.err"
 check '[ $? -eq 0 ] && grep -q "\"layers\": 20," "$dir/a20.json"' "20 layers on the aircraft"
 check 'grep -q "\"normal_dev_over_5deg\": 0," "$dir/a20.json"' "20 layers: no smooth column's first layer beyond 5 degrees ($(grep -o '"normal_dev_over_5deg": [0-9]*' "$dir/a20.json"))"
 "$qual" --json "$dir/a.msh" >"$dir/q.json" 2>/dev/null
@@ -45,7 +45,7 @@ else
   echo "skip: gmsh not installed"
 fi
 for f in vtu vmsh su2; do
-  "$prism" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.$f"
+  "${prism[@]}" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.$f"
   check '[ $? -eq 0 ] && [ -s "$dir/b.$f" ]' "writes .$f"
 done
 check 'grep -q "^NELEM= 5980" "$dir/b.su2" && grep -q "^NMARK= 2" "$dir/b.su2" && grep -q "^MARKER_TAG= wall" "$dir/b.su2"' ".su2 has the cells and the wall and outer markers"
@@ -70,7 +70,7 @@ awk '/^NELEM=/ {ne = $2; next}
        print n, bad
      }' "$dir/b.su2" >"$dir/su2.orient"
 check '[ "$(cat "$dir/su2.orient")" = "5980 0" ]' ".su2 prisms in VTK's wedge order (base normal away from the top): $(cat "$dir/su2.orient") (prisms, wrong)"
-"$prism" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.cgns" 2>"$dir/cg.err"
+"${prism[@]}" -q -t 0.05 -n 2 "$dir/a.stl" "$dir/b.cgns" 2>"$dir/cg.err"
 rc=$?
 if [ $rc -eq 0 ]; then
   check '[ "$(head -c 4 "$dir/b.cgns" | od -An -c | tr -d " ")" = "211HDF" ]' ".cgns is an HDF5 file"
@@ -80,24 +80,24 @@ fi
 
 # bad input: one line on stderr, exit 1, no output file
 printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nendloop\n' >"$dir/bad.stl"
-"$prism" "$dir/bad.stl" "$dir/bad.msh" 2>"$dir/err"
+"${prism[@]}" "$dir/bad.stl" "$dir/bad.msh" 2>"$dir/err"
 rc=$?
 check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/bad.msh" ]' "truncated STL: exit 1, one line, no output"
-"$prism" "$dir/none.stl" "$dir/none.msh" 2>"$dir/err"
+"${prism[@]}" "$dir/none.stl" "$dir/none.msh" 2>"$dir/err"
 rc=$?
 check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/none.msh" ]' "missing input: exit 1, one line, no output"
 # an open wall (one triangle): refused before any work
 printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n' >"$dir/one.stl"
-"$prism" -q "$dir/one.stl" "$dir/one.msh" 2>"$dir/err"
+"${prism[@]}" -q "$dir/one.stl" "$dir/one.msh" 2>"$dir/err"
 rc=$?
 check '[ $rc -ne 0 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/one.msh" ]' "open wall: non-zero exit ($rc), one line, no output"
 # usage errors: exit 2
-"$prism" -T -1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+"${prism[@]}" -T -1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "negative thickness: exit 2"
-"$prism" -n 0 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+"${prism[@]}" -n 0 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "zero layers: exit 2"
-"$prism" "$dir/a.stl" "$dir/u.xyz" 2>/dev/null
+"${prism[@]}" "$dir/a.stl" "$dir/u.xyz" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.xyz" ]' "unknown output format: exit 2"
-"$prism" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
+"${prism[@]}" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "first height above the thickness: exit 2"
 exit $fail

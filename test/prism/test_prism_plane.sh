@@ -6,7 +6,7 @@
 # first side edge within 5 degrees of the wall normal; at 20 % at least 65 %
 # at full thickness and no smooth column beyond 5 degrees either.
 set -u
-prism=$1
+prism=("$1" --check-incremental)
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -17,7 +17,7 @@ plane="${VM_SOURCE_ROOT:-.}/../shared/data/plane.stl"
 # MIN_FULL of the columns at full thickness, no intersecting pair left
 run_at() {
   local pc=$1 min=$2 j="$dir/p$1.json" rc full
-  "$prism" -q -t "$(awk -v p="$pc" 'BEGIN { print p / 100 }')" --json "$plane" \
+  "${prism[@]}" -q -t "$(awk -v p="$pc" 'BEGIN { print p / 100 }')" --json "$plane" \
     "$dir/p$pc.vmsh" >"$j" 2>"$dir/p$pc.err"
   rc=$?
   check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$j"' "plane.stl at $pc %: exit 0, valid (got $rc)"
