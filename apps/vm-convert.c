@@ -31,7 +31,8 @@ static const vm_opt opts[] = {
 static const vm_cli_spec spec = {
     "usage: vm-convert [options] IN OUT\n"
     "Convert a mesh; formats from the extensions (.vmsh .vmsht .vtk .vtu .msh .mesh\n"
-    ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS need volume cells.\n",
+    ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS take volume meshes\n"
+    "and surface meshes (triangles and quadrilaterals in 3D).\n",
     opts,
     "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
     {A(in), A(out)},

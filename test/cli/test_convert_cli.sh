@@ -19,6 +19,27 @@ if [ -f "$plane" ]; then
   "$qual" --json "$dir/p2.vmsh" >"$dir/q.json"
   check 'grep -q "\"tri\": {\"elements\": 17456" "$dir/q.json"' "17,456 triangles kept"
   check 'grep -q "\"vertices\": 8730" "$dir/q.json"' "8,730 vertices (duplicates merged)"
+  # the surface as SU2 and CGNS, and back to .vtu: the same coordinates bit
+  # for bit and the same triangles in the same order
+  "$conv" -q "$dir/p1.vmsh" "$dir/ref_p.vmsht"
+  sect() { sed -n "/^vertices/,/^fields/{/^fields/!p}" "$1"; }
+  "$conv" "$plane" "$dir/x.su2" 2>"$dir/err_su2"
+  check '[ $? -eq 0 ]' "plane.stl -> .su2 converts"
+  check '[ $(grep -c "SU2.s solvers need volume cells" "$dir/err_su2") -eq 1 ]' "one warning that the .su2 holds a surface mesh"
+  check 'grep -q "^NMARK= 0" "$dir/x.su2" && grep -q "^NELEM= 17456" "$dir/x.su2"' ".su2 holds 17,456 triangles, no markers"
+  formats=su2
+  if "$conv" -q "$plane" "$dir/x.cgns" 2>"$dir/err_cgns"; then
+    formats="su2 cgns"
+  else
+    check 'grep -q "no CGNS support" "$dir/err_cgns"' "plane.stl -> .cgns fails only without libcgns"
+  fi
+  for f in $formats; do
+    "$conv" -q "$dir/x.$f" "$dir/y_$f.vtu" && "$conv" -q "$dir/y_$f.vtu" "$dir/y_$f.vmsht"
+    check '[ $? -eq 0 ]' "plane.stl -> .$f -> .vtu converts"
+    check 'diff <(sect "$dir/ref_p.vmsht") <(sect "$dir/y_$f.vmsht") >/dev/null' ".$f -> .vtu keeps coordinates bit for bit and the triangles in order"
+    "$qual" --json "$dir/y_$f.vtu" >"$dir/q_$f.json"
+    check 'grep -q "\"tri\": {\"elements\": 17456" "$dir/q_$f.json"' ".$f -> .vtu: 17,456 triangles"
+  done
 else
   echo "skip: $plane not found"
 fi

@@ -131,6 +131,7 @@ int main(int argc, char **argv) {
   put(ctx, out, "off", "gen-planar", pl, VM_FMT_OFF, 0, 0);
   put(ctx, out, "ply", "gen-planar-binary", pl, VM_FMT_PLY, 1, 0);
   put(ctx, out, "su2", "gen-volume", vol, VM_FMT_SU2, 0, 0);
+  put(ctx, out, "su2", "gen-surface", sf, VM_FMT_SU2, 0, 0);
   vm_mesh_destroy(&vol);
   vm_mesh_destroy(&pl);
   vm_mesh_destroy(&sf);

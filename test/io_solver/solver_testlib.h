@@ -12,6 +12,7 @@
 
 #include "varmesh/io.h"
 #include "varmesh/mesh.h"
+#include "varmesh/shapes.h"
 #include "vmtest.h"
 
 /* An n x n grid of quads on a wavy wall (coordinates with all 53 bits in
@@ -230,6 +231,31 @@ static const char *mesh_diff(const vm_mesh *a, const vm_mesh *b) {
     if (!v || strcmp(v, a->attrs[i].value)) return "attribute";
   }
   return NULL;
+}
+
+/* A surface in 3D: a jittered icosphere (triangles, coordinates with all
+ * bits in use) and a jittered torus of quadrilaterals. interleave 0: the
+ * triangles then the quads, as CGNS stores them (a section per type);
+ * 1: the two alternate (SU2 keeps any order). */
+static vm_mesh *surface_mesh(vm_ctx *ctx, int interleave) {
+  vm_mesh *s, *m;
+  vm_mesh_create(ctx, &s);
+  vm_gen_jitter j = {0.2, 7};
+  static const double c[3] = {3.0, 0.25, -1.0 / 3.0};
+  vm_gen_icosphere(s, NULL, 1.0, 2, 0, &j);
+  vm_gen_torus(s, c, 1.5, 0.5, 12, 8, VM_GEN_TORUS_QUAD, &j, NULL);
+  if (!interleave) return s;
+  vm_mesh_create(ctx, &m);
+  vm_mesh_set_vertices(m, s->nv);
+  memcpy(m->xyz, s->xyz, sizeof(double) * 3 * (size_t)s->nv);
+  int64_t ntri = 0;
+  while (ntri < s->ne && s->etype[ntri] == VM_TRI) ntri++;
+  for (int64_t i = 0, k = ntri; i < ntri || k < s->ne;) {
+    if (i < ntri) vm_mesh_add_element(m, VM_TRI, s->conn + s->eoff[i++]);
+    if (k < s->ne) vm_mesh_add_element(m, VM_QUAD, s->conn + s->eoff[k++]);
+  }
+  vm_mesh_destroy(&s);
+  return m;
 }
 
 /* Whole file into a malloc'd NUL-terminated string. */

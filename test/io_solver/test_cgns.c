@@ -97,6 +97,40 @@ static void test_round_trip(void) {
   remove(d);
 }
 
+/* A surface mesh: a base of cell dimension 2 with a TRI_3 and a QUAD_4
+ * section, read back bit for bit with its cell fields; triangles and quads
+ * interleaved come back grouped by type, each in mesh order. */
+static void test_surface(void) {
+  char a[256], b[256];
+  path_in(a, sizeof a, "surface.cgns");
+  path_in(b, sizeof b, "interleaved.cgns");
+  vm_mesh *m = surface_mesh(ctx, 0), *mi = surface_mesh(ctx, 1), *r = NULL, *ri = NULL;
+  vm_field *fi, *fd;
+  vm_mesh_add_field(m, "patch", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fi);
+  vm_mesh_add_field(m, "size", VM_FIELD_ELEMENT, VM_FIELD_F64, 1, &fd);
+  for (int64_t e = 0; e < m->ne; e++) {
+    ((int32_t *)fi->data)[e] = 1 + (m->etype[e] == VM_QUAD);
+    ((double *)fd->data)[e] = 1.0 / (double)(e + 3);
+  }
+  int st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_OK, "surface write: status %d: %s", st, vm_ctx_error(ctx));
+  st = vm_mesh_read(ctx, a, VM_FMT_AUTO, &r);
+  CHECK(st == VM_OK && r, "surface read: %s", vm_ctx_error(ctx));
+  const char *diff = r ? mesh_diff(m, r) : "not read";
+  CHECK(!diff, "surface round trip: %s", diff);
+  st = vm_mesh_write(ctx, mi, b, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_OK, "interleaved write: status %d: %s", st, vm_ctx_error(ctx));
+  st = vm_mesh_read(ctx, b, VM_FMT_AUTO, &ri);
+  CHECK(st == VM_OK && ri, "interleaved read: %s", vm_ctx_error(ctx));
+  vm_mesh *plain = surface_mesh(ctx, 0);
+  diff = ri ? mesh_diff(plain, ri) : "not read";
+  CHECK(!diff, "interleaved round trip: %s", diff);
+  vm_mesh *mm[] = {m, mi, r, ri, plain};
+  for (int i = 0; i < 5; i++) vm_mesh_destroy(&mm[i]);
+  remove(a);
+  remove(b);
+}
+
 #ifdef HAVE_CGNSLIB_H
 /* A file written with libcgns directly, in ways the writer does not. */
 static void test_foreign(void) {
@@ -168,6 +202,34 @@ static void test_foreign(void) {
 }
 #endif
 
+#ifdef HAVE_CGNSLIB_H
+/* A base of cell dimension 2 holding a tetrahedron: refused, one line. */
+static void test_surface_with_cells(void) {
+  char p[256];
+  path_in(p, sizeof p, "surface-tet.cgns");
+  int fn, B, Z, C, S;
+  cgsize_t size[3] = {4, 1, 0};
+  double x[4] = {0, 1, 0, 0}, y[4] = {0, 0, 1, 0}, z[4] = {0, 0, 0, 1};
+  cgsize_t tet[4] = {1, 2, 3, 4};
+  int ok = !cg_open(p, CG_MODE_WRITE, &fn) && !cg_base_write(fn, "b", 2, 3, &B) &&
+           !cg_zone_write(fn, B, "z", size, CGNS_ENUMV(Unstructured), &Z) &&
+           !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateX", x, &C) &&
+           !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateY", y, &C) &&
+           !cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), "CoordinateZ", z, &C) &&
+           !cg_section_write(fn, B, Z, "tets", CGNS_ENUMV(TETRA_4), 1, 1, 0, tet, &S);
+  ok = !cg_close(fn) && ok;
+  CHECK(ok, "libcgns: %s", cg_get_error());
+  vm_mesh *m = NULL;
+  int st = vm_mesh_read(ctx, p, VM_FMT_AUTO, &m);
+  CHECK(st == VM_ERR_FORMAT && !m &&
+            strstr(vm_ctx_error(ctx), "a TETRA_4 in a base of cell dimension 2") &&
+            !strchr(vm_ctx_error(ctx), '\n'),
+        "tet in a surface base: status %d, '%s'", st, vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
+  remove(p);
+}
+#endif
+
 static void expect_fail(const char *name, const void *buf, size_t len, const char *want) {
   long live0 = vm_ctx_alloc_live(ctx);
   vm_mesh *m = NULL;
@@ -224,8 +286,10 @@ int main(void) {
   if (!mkdtemp(dir) || !mkdtemp(tmpdir)) return 1;
   setenv("TMPDIR", tmpdir, 1); /* where the reader's temporary files go */
   test_round_trip();
+  test_surface();
 #ifdef HAVE_CGNSLIB_H
   test_foreign();
+  test_surface_with_cells();
 #endif
   test_bad();
   CHECK(files_in(tmpdir) == 0, "%d temporary files left in %s", files_in(tmpdir), tmpdir);

@@ -73,19 +73,59 @@ static void test_round_trip(void) {
   remove(d);
 }
 
-/* A surface mesh cannot be exported: a clear refusal naming the file, no file. */
-static void test_surface_refused(void) {
-  char a[256];
+/* A surface mesh (triangles and quads in any order) is written as NDIME= 3
+ * with its faces as NELEM and NMARK= 0, one warning that SU2's solvers
+ * need volume cells, and read back bit for bit in the same order; tags are
+ * lost (warned); a 2D mesh and a mesh without elements are refused. */
+static void test_surface(void) {
+  char a[256], b[256];
   path_in(a, sizeof a, "surface.su2");
-  vm_mesh *m;
+  path_in(b, sizeof b, "tagged.su2");
+  vm_mesh *m = surface_mesh(ctx, 1), *r = NULL;
+  tlog lg = {0};
+  vm_ctx_set_log(ctx, tlog_fn, &lg);
+  int st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
+  vm_ctx_set_log(ctx, NULL, NULL);
+  CHECK(st == VM_OK, "surface write: status %d: %s", st, vm_ctx_error(ctx));
+  CHECK(lg.warnings == 1 && strstr(lg.last, "SU2's solvers need volume cells"),
+        "surface write: %d warnings, last '%s'", lg.warnings, lg.last);
+  char *text = slurp(a, NULL);
+  CHECK(text && strstr(text, "\nNDIME= 3\n") && strstr(text, "\nNMARK= 0\n"),
+        "surface file header");
+  free(text);
+  st = vm_mesh_read(ctx, a, VM_FMT_AUTO, &r);
+  CHECK(st == VM_OK && r, "surface read: %s", vm_ctx_error(ctx));
+  const char *diff = r ? mesh_diff(m, r) : "not read";
+  CHECK(!diff, "surface round trip: %s", diff);
+  vm_mesh_destroy(&r);
+  /* with tags: written all the same, the tags reported lost */
+  vm_field *f;
+  vm_mesh_add_field(m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+  for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = 1 + (m->etype[e] == VM_QUAD);
+  vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "sphere");
+  st = vm_mesh_write(ctx, m, b, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_WARN_LOSSY, "tagged surface: status %d: %s", st, vm_ctx_error(ctx));
+  st = vm_mesh_read(ctx, b, VM_FMT_AUTO, &r);
+  CHECK(st == VM_OK && r && r->nfield == 0 && r->ne == m->ne, "tagged surface read: %s",
+        vm_ctx_error(ctx));
+  vm_mesh_destroy(&r);
+  vm_mesh_destroy(&m);
+  remove(a);
+  remove(b);
+  /* refused, nothing written: 2D, and no elements */
   vm_mesh_create(ctx, &m);
   static const int32_t t[3] = {0, 1, 2};
   for (int i = 0; i < 3; i++) vm_mesh_add_vertex(m, i == 1, i == 2, 0, NULL);
-  vm_mesh_add_element(m, VM_TRI, t);
-  int st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
-  CHECK(st == VM_ERR_ARG && strstr(vm_ctx_error(ctx), "surface.su2: SU2 needs volume cells") &&
+  st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_ERR_ARG && strstr(vm_ctx_error(ctx), "surface.su2: SU2 needs cells") &&
             access(a, F_OK) != 0,
-        "surface: status %d, '%s'", st, vm_ctx_error(ctx));
+        "no elements: status %d, '%s'", st, vm_ctx_error(ctx));
+  vm_mesh_add_element(m, VM_TRI, t);
+  m->dim = 2;
+  st = vm_mesh_write(ctx, m, a, VM_FMT_AUTO, NULL);
+  CHECK(st == VM_ERR_UNSUPPORTED && strstr(vm_ctx_error(ctx), "needs a 3D mesh") &&
+            access(a, F_OK) != 0,
+        "2D: status %d, '%s'", st, vm_ctx_error(ctx));
   vm_mesh_destroy(&m);
 }
 
@@ -238,8 +278,16 @@ static void test_bad(void) {
               "line 3: point 0: coordinate is not finite");
   expect_fail("unknown-type.su2", "NDIME= 3\nNELEM= 1\n11 0 1 2 3 0\n", F,
               "line 3: element type 11 is not a 3D cell");
-  expect_fail("surface-cell.su2", "NDIME= 3\nNELEM= 1\n5 0 1 2 0\n", F,
-              "line 3: element type 5 is not a 3D cell");
+  expect_fail("surface-after-cells.su2", "NDIME= 3\nNELEM= 2\n10 0 1 2 3 0\n5 0 1 2 1\n", F,
+              "line 4: element type 5: a surface element among volume cells");
+  expect_fail("cell-after-surface.su2", "NDIME= 3\nNELEM= 2\n5 0 1 2 0\n10 0 1 2 3 1\n", F,
+              "line 4: element type 10: a volume cell among surface elements");
+  expect_fail("line-cell.su2", "NDIME= 3\nNELEM= 1\n3 0 1 0\n", F,
+              "line 3: element type 3 is not a 3D cell or surface element");
+  expect_fail("surface-marker.su2",
+              "NDIME= 3\nNMARK= 1\nMARKER_TAG= w\nMARKER_ELEMS= 2\n3 0 1\n5 0 1 2\n"
+              "NELEM= 1\n5 0 1 2\nNPOIN= 3\n0 0 0\n1 0 0\n0 1 0\n",
+              F, "line 6: a marker of triangles or quadrilaterals in a surface mesh");
   expect_fail("marker-tet.su2", HEAD "NMARK= 1\nMARKER_TAG= w\nMARKER_ELEMS= 1\n10 0 1 2 3\n", F,
               "line 12: marker 'w': element type 10 is not a boundary element");
   expect_fail("garbage-number.su2", "NDIME= 3\nNPOIN= 1\n0 0x 0\n", F,
@@ -270,7 +318,7 @@ int main(void) {
   if (!mkdtemp(dir)) return 1;
   test_round_trip();
   test_no_faces();
-  test_surface_refused();
+  test_surface();
   test_general();
   test_bad();
   rmdir(dir);

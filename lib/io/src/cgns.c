@@ -1,7 +1,8 @@
 /* lib/io/src/cgns.c: CGNS unstructured meshes through libcgns. Export:
  * one base, one zone, a section per cell type and per boundary family,
- * Family_t + BC_t per family, cell fields as a cell-centred FlowSolution_t;
- * import: the same and what varmesh/io.h lists. */
+ * Family_t + BC_t per family, cell fields as a cell-centred FlowSolution_t
+ * (a surface mesh: a base of cell dimension 2, sections TRI_3 / QUAD_4, no
+ * families); import: the same and what varmesh/io.h lists. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -48,8 +49,9 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
     st = VM_ERR_NOMEM;
     goto done;
   }
-  if (cg_base_write(fn, "varmesh", 3, 3, &B) ||
-      cg_zone_write(fn, B, "layers", size, CGNS_ENUMV(Unstructured), &Z)) {
+  int surface = ex_groups_surface(m);
+  if (cg_base_write(fn, "varmesh", surface ? 2 : 3, 3, &B) ||
+      cg_zone_write(fn, B, surface ? "surface" : "layers", size, CGNS_ENUMV(Unstructured), &Z)) {
     st = cg_fail(ctx, path, "zone");
     goto done;
   }
@@ -65,9 +67,11 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   /* cells grouped by type: elements 1..ncell in that order */
   cgsize_t next = 1;
   int64_t nord = 0;
-  static const int vol_types[4] = {VM_TET, VM_PYRAMID, VM_PRISM, VM_HEX};
-  static const char *const vol_names[4] = {"Tetrahedra", "Pyramids", "Prisms", "Hexahedra"};
-  for (int ti = 0; ti < 4; ti++) {
+  /* the cells are volume elements, or the triangles and quads of a surface */
+  static const int vol_types[6] = {VM_TRI, VM_QUAD, VM_TET, VM_PYRAMID, VM_PRISM, VM_HEX};
+  static const char *const vol_names[6] = {"Triangles", "Quadrilaterals", "Tetrahedra",
+                                           "Pyramids",  "Prisms",         "Hexahedra"};
+  for (int ti = 0; ti < 6; ti++) {
     int64_t n = 0, k = 0;
     for (int64_t i = 0; i < g->ncell; i++) {
       int32_t e = g->cell[i];
@@ -204,6 +208,7 @@ typedef struct {
   const char *name;
   size_t len;
   int fn;
+  int cdim; /* the base's cell dimension: 3, or 2 for a surface mesh */
   vm_mesh *m;
   int nsec;
   struct csec {
@@ -387,6 +392,12 @@ static int cg_sections(cg_rd *r) {
         }
       }
       int t = vm_type_of(et);
+      if (t >= 0 && vm_elem_dim(t) > r->cdim) {
+        st = vm_error(r->ctx, VM_ERR_FORMAT,
+                      "%s: section '%s': element %lld: a %s in a base of cell dimension %d",
+                      r->name, s->name, (long long)(s->start + e), type_name(et), r->cdim);
+        break;
+      }
       int32_t v[VM_MAX_ELEM_VERTS];
       for (int j = 0; j < npe; j++) {
         cgsize_t x = conn[k++];
@@ -519,7 +530,7 @@ static int cg_fields(cg_rd *r, int64_t ncell) {
   int nsol, st = VM_OK;
   if (cg_nsols(r->fn, 1, 1, &nsol)) return cg_rfail(r, "solutions");
   int64_t ncell_read = 0, nskipped = 0;
-  for (int64_t e = 0; e < r->m->ne; e++) ncell_read += vm_elem_dim(r->m->etype[e]) == 3;
+  for (int64_t e = 0; e < r->m->ne; e++) ncell_read += vm_elem_dim(r->m->etype[e]) == r->cdim;
   for (int S = 1; S <= nsol && !st; S++) {
     char sname[33];
     CGNS_ENUMT(GridLocation_t) loc;
@@ -558,7 +569,7 @@ static int cg_fields(cg_rd *r, int64_t ncell) {
                                isint ? VM_FIELD_I32 : VM_FIELD_F64, 1, &f);
       /* cell value k belongs to the k-th cell in element-id order */
       for (int64_t e = 0, k = 0; !st && k < n; e++) {
-        if (at_cells && vm_elem_dim(r->m->etype[e]) != 3) continue;
+        if (at_cells && vm_elem_dim(r->m->etype[e]) != r->cdim) continue;
         if (isint)
           ((int32_t *)f->data)[e] = ((const int *)buf)[k];
         else
@@ -584,11 +595,12 @@ static int cg_parse(cg_rd *r) {
     return vm_error(r->ctx, nb ? VM_ERR_UNSUPPORTED : VM_ERR_FORMAT,
                     "%s: %d bases (one base with one zone can be read)", r->name, nb);
   if (cg_base_read(r->fn, 1, nm, &cdim, &pdim)) return cg_rfail(r, "base");
-  if (cdim != 3 || pdim != 3)
+  if ((cdim != 3 && cdim != 2) || pdim != 3)
     return vm_error(r->ctx, VM_ERR_UNSUPPORTED,
                     "%s: base of cell dimension %d in %d "
-                    "dimensions (3 and 3 can be read)",
+                    "dimensions (3 or 2 in 3 can be read)",
                     r->name, cdim, pdim);
+  r->cdim = cdim;
   if (cg_nzones(r->fn, 1, &nz)) return cg_rfail(r, "zones");
   if (nz != 1)
     return vm_error(r->ctx, nz ? VM_ERR_UNSUPPORTED : VM_ERR_FORMAT,
@@ -597,7 +609,20 @@ static int cg_parse(cg_rd *r) {
     return cg_rfail(r, "zone");
   if (zt != CGNS_ENUMV(Unstructured))
     return vm_error(r->ctx, VM_ERR_UNSUPPORTED, "%s: zone '%s' is not unstructured", r->name, nm);
-  if ((st = cg_coords(r, size[0])) || (st = cg_sections(r)) || (st = cg_bcs(r))) return st;
+  if ((st = cg_coords(r, size[0])) || (st = cg_sections(r))) return st;
+  if (cdim == 2) {
+    /* a surface mesh: its boundary conditions are on edges, which are not kept */
+    int nbc;
+    if (cg_nbocos(r->fn, 1, 1, &nbc)) return cg_rfail(r, "boundary conditions");
+    if (nbc)
+      vm_log(r->ctx, VM_LOG_WARN, "%s: %d boundary conditions of a surface mesh ignored", r->name,
+             nbc);
+    if (r->nskip)
+      vm_log(r->ctx, VM_LOG_WARN, "%s: %lld NODE and BAR_2 elements dropped", r->name,
+             (long long)r->nskip);
+    return cg_fields(r, size[1]);
+  }
+  if ((st = cg_bcs(r))) return st;
   vm_field *f;
   if ((st = vm_mesh_add_field(r->m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
     return st;

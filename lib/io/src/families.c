@@ -10,9 +10,11 @@
 int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt,
                     int cell_fields) {
   int lossy = 0;
+  /* a surface mesh has no boundary faces: its tags and their names are lost */
+  int surface = ex_groups_surface(m);
   for (int i = 0; i < m->nfield; i++) {
     const vm_field *f = &m->fields[i];
-    if (f->location == VM_FIELD_ELEMENT && !strcmp(f->name, "gmsh:physical") &&
+    if (!surface && f->location == VM_FIELD_ELEMENT && !strcmp(f->name, "gmsh:physical") &&
         f->type == VM_FIELD_I32 && f->ncomp == 1)
       continue;
     if (cell_fields && f->location == VM_FIELD_ELEMENT && f->ncomp == 1 &&
@@ -23,7 +25,7 @@ int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char 
     lossy = 1;
   }
   for (int i = 0; i < m->nattr; i++) {
-    if (!strncmp(m->attrs[i].key, "gmsh:physical_name:2:", 21)) continue;
+    if (!surface && !strncmp(m->attrs[i].key, "gmsh:physical_name:2:", 21)) continue;
     vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store the attribute '%s'; dropped", path, fmt,
            m->attrs[i].key);
     lossy = 1;
@@ -38,16 +40,21 @@ int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char 
   return lossy;
 }
 
+int ex_groups_surface(const vm_mesh *m) {
+  int64_t counts[VM_NTYPES];
+  return m->dim == 3 && vm_mesh_count_types(m, counts) == 2;
+}
+
 int ex_groups_check(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt) {
   int64_t counts[VM_NTYPES];
   int top = vm_mesh_count_types(m, counts);
   if (m->dim != 3)
     return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: %s export needs a 3D mesh", path, fmt);
-  if (top != 3)
+  if (top != 3 && top != 2)
     return vm_error(ctx, VM_ERR_ARG,
-                    "%s: %s needs volume cells (tetrahedra, pyramids, prisms, hexahedra); the "
-                    "mesh has %s (vm-prism builds a prism layer on a surface)",
-                    path, fmt, top == 2 ? "only surface elements" : "no elements");
+                    "%s: %s needs cells (tetrahedra, pyramids, prisms, hexahedra, or triangles "
+                    "and quadrilaterals of a surface); the mesh has no elements",
+                    path, fmt);
   return VM_OK;
 }
 
@@ -77,7 +84,19 @@ int ex_groups_build(vm_ctx *ctx, const vm_mesh *m, ex_groups *g) {
   memset(g, 0, sizeof *g);
   int64_t counts[VM_NTYPES];
   int top = vm_mesh_count_types(m, counts);
-  if (top != 3) return vm_error(ctx, VM_ERR_ARG, "export: the mesh has no volume elements");
+  if (top != 3 && top != 2) return vm_error(ctx, VM_ERR_ARG, "export: the mesh has no cells");
+  if (top == 2) {
+    /* a surface: its triangles and quads are the cells, in mesh order; no faces */
+    g->ncell = counts[VM_TRI] + counts[VM_QUAD];
+    g->cell = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *g->cell);
+    g->fbeg = vm_alloc_array(ctx, 1, sizeof *g->fbeg);
+    if (!g->cell || !g->fbeg) return VM_ERR_NOMEM;
+    int64_t k = 0;
+    for (int64_t e = 0; e < m->ne; e++)
+      if (vm_elem_dim(m->etype[e]) == 2) g->cell[k++] = (int32_t)e;
+    g->fbeg[0] = 0;
+    return VM_OK;
+  }
   int64_t nf = counts[VM_TRI] + counts[VM_QUAD];
   g->ncell = counts[VM_TET] + counts[VM_PYRAMID] + counts[VM_PRISM] + counts[VM_HEX];
   g->cell = vm_alloc_array(ctx, (size_t)g->ncell, sizeof *g->cell);

@@ -19,16 +19,21 @@ typedef struct {
   int32_t *felem; /* the face's element in the mesh, -1 if extracted */
 } ex_groups;
 
-/* VM_OK if the mesh can be exported (3D, with volume cells), else a
- * one-line error naming path and the format fmt ("SU2", "CGNS"). */
+/* VM_OK if the mesh can be exported (3D, with volume cells or a surface of
+ * triangles and quads), else a one-line error naming path and the format
+ * fmt ("SU2", "CGNS"). */
 int ex_groups_check(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt);
+/* Nonzero if the mesh is a surface in 3D (top dimension 2): it is exported
+ * as its triangles and quads as cells, without faces or families. */
+int ex_groups_surface(const vm_mesh *m);
 /* Log (VM_LOG_WARN) each thing the export cannot carry: fields other than
- * "gmsh:physical" (and, if cell_fields, one-component element fields not
- * named "gmsh:..."), attributes other than the family names, vertex flags.
- * Returns nonzero if anything is lost. */
+ * "gmsh:physical" (that one too for a surface mesh) (and, if cell_fields, one-component element
+ * fields not named "gmsh:..."), attributes other than the family names (all of them for a surface
+ * mesh), vertex flags. Returns nonzero if anything is lost. */
 int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt,
                     int cell_fields);
-/* Group the mesh's faces (see varmesh/io.h). */
+/* Group the mesh's faces (see varmesh/io.h); for a surface mesh, the cells
+ * are its triangles and quads in mesh order and there are no families. */
 int ex_groups_build(vm_ctx *ctx, const vm_mesh *m, ex_groups *g);
 void ex_groups_free(vm_ctx *ctx, ex_groups *g);
 

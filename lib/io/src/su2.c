@@ -1,5 +1,5 @@
 /* lib/io/src/su2.c: SU2's native mesh format (ASCII): cells plus one
- * marker per boundary-face family, read and written. */
+ * marker per boundary-face family, or a surface mesh, read and written. */
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -58,6 +58,11 @@ int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
     return vm_error(ctx, VM_ERR_IO, "%s: write failed", path);
   }
   if ((st = vm_outfile_commit(&of))) return st;
+  if (ex_groups_surface(m))
+    vm_log(ctx, VM_LOG_WARN,
+           "%s: SU2's solvers need volume cells; the file holds a surface mesh (triangles and "
+           "quadrilaterals as NELEM, NMARK= 0)",
+           path);
   return ex_groups_lossy(ctx, m, path, "SU2", 0) ? VM_WARN_LOSSY : VM_OK;
 }
 
@@ -71,12 +76,14 @@ typedef struct {
   const char *name;
   vm_lex lx;
   vm_mesh *m;
-  int dim; /* 0 until NDIME */
+  int dim;  /* 0 until NDIME */
+  int cdim; /* dimension of the NELEM cells, 0 until the first (2 in NDIME= 3: a surface) */
   int have_elem, have_poin, have_mark;
   int64_t vmax, vmax_line; /* largest vertex index seen before NPOIN, and its line */
   int nmark;
-  int64_t *mbeg; /* elements of marker k: [mbeg[k], mbeg[k+1]) */
-  int64_t nline; /* line markers dropped */
+  int64_t *mbeg;      /* elements of marker k: [mbeg[k], mbeg[k+1]) */
+  int64_t nline;      /* line markers dropped */
+  int64_t mface_line; /* line of the first triangle or quad of a marker, 0 if none */
   /* the tokens of the current record line */
   int ntok;
   const char *tok[SU2_MAX_TOK];
@@ -202,7 +209,7 @@ static int su2_arity(su2_rd *r, int k, const char *what, int64_t id) {
 }
 
 static int su2_elements(su2_rd *r, int64_t n) {
-  int st = su2_count(r, "NELEM", n, r->dim == 2 ? 4 : 5);
+  int st = su2_count(r, "NELEM", n, 4);
   if (st) return st;
   if (r->m->ne + n > INT32_MAX) return su2_fail(r, r->line, "too many elements");
   for (int64_t i = 0; i < n; i++) {
@@ -211,11 +218,21 @@ static int su2_elements(su2_rd *r, int64_t n) {
         (st = tok_int(r, 0, &id, "element type")))
       return st ? st : su2_fail(r, r->line, "empty element line");
     int t = su2_type(id);
-    if (t < 0 || vm_elem_dim(t) != r->dim)
-      return su2_fail(r, r->line, "element type %lld is not a %s cell (%s)", (long long)id,
-                      r->dim == 2 ? "2D" : "3D",
+    if (t < 0 || vm_elem_dim(t) > r->dim || vm_elem_dim(t) < 2)
+      return su2_fail(r, r->line, "element type %lld is not a %s (%s)", (long long)id,
+                      r->dim == 2 ? "2D cell" : "3D cell or surface element",
                       r->dim == 2 ? "5 triangle, 9 quadrilateral"
-                                  : "10 tetrahedron, 12 hexahedron, 13 prism, 14 pyramid");
+                                  : "10 tetrahedron, 12 hexahedron, 13 prism, 14 pyramid; 5 "
+                                    "triangle, 9 quadrilateral for a surface mesh");
+    /* NDIME= 3 holds volume cells or, for a surface mesh, triangles and
+     * quads: a mix of the two is refused */
+    if (r->cdim && vm_elem_dim(t) != r->cdim)
+      return su2_fail(r, r->line,
+                      "element type %lld: a %s among %s (NELEM holds either volume cells or the "
+                      "triangles and quadrilaterals of a surface mesh)",
+                      (long long)id, r->cdim == 3 ? "surface element" : "volume cell",
+                      r->cdim == 3 ? "volume cells" : "surface elements");
+    r->cdim = vm_elem_dim(t);
     int k = vm_elem_nverts(t);
     int32_t v[VM_MAX_ELEM_VERTS];
     if ((st = su2_arity(r, k, "element", id)) || (st = su2_verts(r, t, k, v, "element")) ||
@@ -363,6 +380,7 @@ static int su2_markers(su2_rd *r, int64_t n) {
         r->nline++;
         continue;
       }
+      if (!r->mface_line) r->mface_line = r->line;
       if ((st = vm_mesh_add_element(r->m, t, v))) return st;
     }
     r->nmark++;
@@ -426,6 +444,10 @@ static int su2_parse(su2_rd *r) {
   if (!r->dim) return vm_lex_fail(lx, "no NDIME= (empty or not an SU2 file)");
   if (!r->have_elem) return vm_lex_fail(lx, "no NELEM= section");
   if (!r->have_poin) return vm_lex_fail(lx, "no NPOIN= section");
+  if (r->dim == 3 && r->cdim == 2 && r->mface_line)
+    return su2_fail(r, r->mface_line,
+                    "a marker of triangles or quadrilaterals in a surface mesh (its NELEM "
+                    "holds triangles and quadrilaterals; its markers can only hold lines)");
   return VM_OK;
 }
 
@@ -442,7 +464,7 @@ int vm_read_su2(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
   if (!st) st = su2_parse(&r);
   if (!st) {
     r.m->dim = r.dim;
-    if (r.have_mark) {
+    if (r.nmark > 0) {
       vm_field *f;
       st = vm_mesh_add_field(r.m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
       for (int k = 0; !st && k < r.nmark; k++)

@@ -133,7 +133,8 @@ void vm_outfile_abort(vm_outfile **f);
  * coordinates to float and its OBJ reader skips unparsable vertex lines
  * silently, so the io library parses and writes these formats itself. */
 
-/* Solver formats (SU2, CGNS): volume meshes with named boundaries.
+/* Solver formats (SU2, CGNS): volume meshes with named boundaries, and
+ * surface meshes.
  *
  * How faces are grouped. The volume elements of the mesh's top dimension
  * become the cells. Boundary faces (TRI / QUAD elements of the mesh) are
@@ -145,15 +146,28 @@ void vm_outfile_abort(vm_outfile **f);
  * Element fields of the cells (int or f64, one component; for example
  * "layer") are written where the format can hold them.
  *
+ * Surface meshes. A 3D mesh whose top dimension is 2 (triangles and quads,
+ * as read from an STL) is written as a surface mesh: its triangles and
+ * quads are the cells and there are no boundary families, so the field
+ * "gmsh:physical" and the "gmsh:physical_name:..." attributes are lost
+ * (VM_WARN_LOSSY, one VM_LOG_WARN each). SU2: NDIME= 3, the faces as NELEM
+ * in mesh order (types 5 and 9), NMARK= 0, and one VM_LOG_WARN that SU2's
+ * solvers need volume cells (the status stays VM_OK if nothing else is
+ * lost). CGNS: a base of cell dimension 2 in physical dimension 3, zone
+ * "surface", a TRI_3 section "Triangles" then a QUAD_4 section
+ * "Quadrilaterals" (each in mesh order), no Family_t or BC_t, cell fields
+ * as for volume meshes. Both read back to the same coordinates bit for bit
+ * and the same elements (CGNS: triangles first).
+ *
  * SU2 native mesh (.su2, ASCII): NDIME=3, NELEM with VTK type ids and
  * 0-based indices, NPOIN with coordinates printed with 17 significant
  * digits, NMARK with one MARKER_TAG per family. Fields other than
  * "gmsh:physical", attributes other than the family names and vertex flags
  * cannot be stored (VM_WARN_LOSSY after writing, one VM_LOG_WARN each).
  * Atomic.
- * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no volume elements: a surface
- * mesh such as an STL is refused, nothing written), VM_ERR_UNSUPPORTED
- * (2D meshes), VM_ERR_IO, VM_ERR_NOMEM.
+ * Returns VM_OK, VM_WARN_LOSSY, VM_ERR_ARG (no elements of dimension 2 or
+ * 3: nothing written), VM_ERR_UNSUPPORTED (2D meshes), VM_ERR_IO,
+ * VM_ERR_NOMEM.
  *
  * SU2 reading: a single-zone ASCII file of "KEY= value" lines (also
  * "KEY=value"; keys case-insensitive), each count followed by its records,
@@ -166,7 +180,12 @@ void vm_outfile_abort(vm_outfile **f);
  *    prisms are renumbered by vm_elem_vtk_node), an optional trailing
  *    element index (ignored). Cells are 5 triangle and 9 quadrilateral in
  *    2D, 10 tetrahedron, 12 hexahedron, 13 prism and 14 pyramid in 3D; any
- *    other type is refused. Elements keep the file's order.
+ *    other type is refused. In 3D, NELEM may instead hold only triangles
+ *    and quadrilaterals (a surface mesh, as the writer writes one); a
+ *    NELEM mixing volume cells and surface elements is refused at the
+ *    first element that differs, and so is a marker of triangles or quads
+ *    in a surface mesh (its markers can only hold lines, which are
+ *    dropped). Elements keep the file's order.
  *  - NPOIN records: NDIME coordinates (parsed to the nearest double: the
  *    writer's %.17g reads back bit for bit), then up to two integers
  *    (ignored). Non-finite coordinates are refused.
@@ -175,7 +194,8 @@ void vm_outfile_abort(vm_outfile **f);
  *    quadrilateral in 3D, 3 line in 2D and 3D. Triangles and quads are
  *    appended after the cells, marker by marker in file order, with the
  *    element field "gmsh:physical" = marker number (1, 2, ...; cells 0) and
- *    the attribute "gmsh:physical_name:2:<number>" = the name. Lines are
+ *    the attribute "gmsh:physical_name:2:<number>" = the name (NMARK= 0:
+ *    no field). Lines are
  *    dropped (there is no edge element) with one VM_LOG_WARN; a marker
  *    with no faces keeps only its name. Writing what was read gives the
  *    same file but for the header comment.
@@ -188,7 +208,8 @@ void vm_outfile_abort(vm_outfile **f);
  *  many numbers on a record line, indices out of range, non-finite or
  *  unparsable numbers. Time and memory are linear in the file size.
  *
- * CGNS (.cgns, through libcgns): one base (cell dimension 3), one
+ * CGNS (.cgns, through libcgns): one base (cell dimension 3; 2 for a
+ * surface mesh, see above), one
  * unstructured zone, coordinates in double, one element section per cell
  * type (TETRA_4, PYRA_5, PENTA_6, HEXA_8; 1-based, VTK order equals CGNS
  * order for these types), one section per face family (TRI_3 / QUAD_4),
@@ -199,7 +220,7 @@ void vm_outfile_abort(vm_outfile **f);
  * Returns VM_OK, VM_WARN_LOSSY (vertex fields, element fields of several
  * components, vertex flags and attributes other than the family names are
  * not written; one VM_LOG_WARN each), VM_ERR_UNSUPPORTED (built without
- * libcgns; 2D meshes), VM_ERR_ARG (no volume cells),
+ * libcgns; 2D meshes), VM_ERR_ARG (no elements of dimension 2 or 3),
  * VM_ERR_IO, VM_ERR_BACKEND (libcgns failed; its message on ctx),
  * VM_ERR_NOMEM.
  *
@@ -208,7 +229,8 @@ void vm_outfile_abort(vm_outfile **f);
  * unlinked as soon as libcgns has opened it: nothing is left behind on any
  * path, and vm_mesh_read and vm_mesh_read_memory behave alike (a file is
  * read into memory first, so it is copied once more). Accepted: one base
- * of cell and physical dimension 3 with one unstructured zone (other
+ * of cell and physical dimension 3, or of cell dimension 2 in physical
+ * dimension 3 (a surface mesh), with one unstructured zone (other
  * layouts: VM_ERR_UNSUPPORTED); coordinates CoordinateX/Y/Z in single or
  * double (widened exactly); element sections TRI_3, QUAD_4, TETRA_4,
  * PYRA_5, PENTA_6, HEXA_8 and MIXED of these (NODE and BAR_2 are dropped
@@ -230,7 +252,12 @@ void vm_outfile_abort(vm_outfile **f);
  * files libcgns cannot open or read, arrays claiming more entries than the
  * file has bytes (checked before allocating), overlapping sections, node
  * indices out of range, non-finite coordinates; VM_ERR_IO if the temporary
- * file cannot be written. libcgns itself is not hardened against hostile
+ * file cannot be written.
+ * A base of cell dimension 2 is a surface mesh: its TRI_3 / QUAD_4
+ * elements are the cells (a volume element in it is VM_ERR_FORMAT), NODE
+ * and BAR_2 are dropped as above, its BC_t (on edges) are ignored with one
+ * warning, no "gmsh:physical" field is made, and CellCenter solutions
+ * belong to its triangles and quads. libcgns itself is not hardened against hostile
  * files (it reads the whole node tree at open), is not thread-safe, and
  * its warnings are silenced by a global handler (cg_configure) so that the
  * library prints nothing; do not feed it untrusted input. */
