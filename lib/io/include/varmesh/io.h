@@ -257,8 +257,9 @@ void vm_outfile_abort(vm_outfile **f);
  * elements are the cells (a volume element in it is VM_ERR_FORMAT), NODE
  * and BAR_2 are dropped as above, its BC_t (on edges) are ignored with one
  * warning, no "gmsh:physical" field is made, and CellCenter solutions
- * belong to its triangles and quads. libcgns itself is not hardened against hostile
- * files (it reads the whole node tree at open), is not thread-safe, and
+ * belong to its triangles and quads.
+ * libcgns itself is not hardened against hostile files (it reads the
+ * whole node tree at open), is not thread-safe, and
  * its warnings are silenced by a global handler (cg_configure) so that the
  * library prints nothing; do not feed it untrusted input. */
 
