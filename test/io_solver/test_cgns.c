@@ -106,8 +106,12 @@ static void test_surface(void) {
   path_in(b, sizeof b, "interleaved.cgns");
   vm_mesh *m = surface_mesh(ctx, 0), *mi = surface_mesh(ctx, 1), *r = NULL, *ri = NULL;
   vm_field *fi, *fd;
+  /* each field is found again after the last one is added: adding a field
+   * may move the array that holds the others */
   vm_mesh_add_field(m, "patch", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &fi);
   vm_mesh_add_field(m, "size", VM_FIELD_ELEMENT, VM_FIELD_F64, 1, &fd);
+  fi = vm_mesh_find_field(m, "patch", VM_FIELD_ELEMENT);
+  fd = vm_mesh_find_field(m, "size", VM_FIELD_ELEMENT);
   for (int64_t e = 0; e < m->ne; e++) {
     ((int32_t *)fi->data)[e] = 1 + (m->etype[e] == VM_QUAD);
     ((double *)fd->data)[e] = 1.0 / (double)(e + 3);
