@@ -362,16 +362,15 @@ vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, d
   if (min_bound) {
     double L = longest_edge(xyz, nv);
     double scale = planar ? L * L : L * L * L;
-    *min_bound = v == VM_JAC_VALID && scale > 0 ? lo / scale : (v == VM_JAC_VALID ? lo : 0);
+    *min_bound = v != VM_JAC_VALID ? 0 : scale > 0 ? lo / scale : lo;
   }
   return v;
 }
 
 int vm_mesh_jacobian_certify(const vm_mesh *m, vm_jac_report *rep, uint8_t *verdict) {
   if (!m || !rep) return VM_ERR_ARG;
-  int top = 0;
-  for (int64_t e = 0; e < m->ne; e++)
-    if (vm_elem_dim(m->etype[e]) > top) top = vm_elem_dim(m->etype[e]);
+  int64_t counts[VM_NTYPES];
+  int top = vm_mesh_count_types(m, counts);
   int cell_dim = top == 3 ? 3 : (m->dim == 2 ? 2 : 0);
   int64_t cells = 0, invalid = 0, undecided = 0, first = m->ne;
   int nt = vm_nthreads(m->ctx);

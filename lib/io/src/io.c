@@ -63,16 +63,6 @@ const char *vm_format_name(int f) {
   return e ? e->names[0] : "?";
 }
 
-int vm_format_can_read(int f) {
-  const struct vm_format_entry *e = entry(f);
-  return e && e->read;
-}
-
-int vm_format_can_write(int f) {
-  const struct vm_format_entry *e = entry(f);
-  return e && e->write;
-}
-
 vm_write_opts vm_write_opts_default(void) {
   vm_write_opts o = {0, 41};
   return o;

@@ -38,9 +38,6 @@ int vm_format_from_path(const char *path);
 /* Format from a name ("vtk", "vtu", "msh", "mesh", "vmsh", "vmsht", "stl", ...). */
 int vm_format_from_name(const char *name);
 const char *vm_format_name(int format);
-/* 1 if this build can read (write) the format, 0 if not. */
-int vm_format_can_read(int format);
-int vm_format_can_write(int format);
 /* 1 if this build was made with libcgns (VM_FMT_CGNS), 0 if not. */
 int vm_have_cgns(void);
 
