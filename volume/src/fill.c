@@ -1,0 +1,1528 @@
+/* volume/src/fill.c: the fill stage (varmesh/fill.h): envelope, size field,
+ * far field, Gmsh's Delaunay mesher in memory, the merged mesh, and the
+ * variational optimization of the tetrahedra next to the layer. */
+#include "varmesh/fill.h"
+
+#include <gmshc.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "varmesh/topology.h"
+#include "varmesh/volume.h"
+#include "vec3.h"
+
+#define PI 3.14159265358979323846
+#define VM_FILL_OFF 0.5
+
+vm_fill_opts vm_fill_opts_default(void) {
+  vm_fill_opts o;
+  memset(&o, 0, sizeof o);
+  o.farfield = 20;
+  o.shape = VM_FAR_BOX;
+  o.growth = 1.2;
+  o.opt_iter = 30;
+  o.opt_rings = 3;
+  o.algorithm = 1;
+  return o;
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---------- triangular faces shared by cells ---------- */
+
+typedef struct {
+  int32_t v[3];
+  int32_t cell;
+} tface;
+
+static int cmp_tface(const void *a, const void *b) {
+  const tface *x = a, *y = b;
+  for (int i = 0; i < 3; i++)
+    if (x->v[i] != y->v[i]) return x->v[i] < y->v[i] ? -1 : 1;
+  return (x->cell > y->cell) - (x->cell < y->cell);
+}
+
+static void sort3(int32_t v[3]) {
+  int32_t t;
+  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
+  if (v[1] > v[2]) t = v[1], v[1] = v[2], v[2] = t;
+  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
+}
+
+/* Every triangular face of the 3D cells, sorted by its vertex set. */
+static int tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
+  int64_t cap = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int t = m->etype[e];
+    cap += t == VM_TET ? 4 : t == VM_PYRAMID ? 4 : t == VM_PRISM ? 2 : 0;
+  }
+  tface *f = vm_alloc_array(ctx, (size_t)(cap ? cap : 1), sizeof *f);
+  if (!f) return VM_ERR_NOMEM;
+  int64_t k = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (vm_elem_dim(m->etype[e]) != 3) continue;
+    int fl[6][4], nfv[6];
+    int nf = vm_elem_faces(m->etype[e], fl, nfv);
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int j = 0; j < nf; j++) {
+      if (nfv[j] != 3) continue;
+      for (int i = 0; i < 3; i++) f[k].v[i] = c[fl[j][i]];
+      sort3(f[k].v);
+      f[k++].cell = (int32_t)e;
+    }
+  }
+  qsort(f, (size_t)k, sizeof *f, cmp_tface);
+  *out = f;
+  *n = k;
+  return VM_OK;
+}
+
+static int same_face(const tface *a, const tface *b) {
+  return a->v[0] == b->v[0] && a->v[1] == b->v[1] && a->v[2] == b->v[2];
+}
+
+/* ---------- cell volumes and tet angles ---------- */
+
+static double tet_vol(const double *a, const double *b, const double *c, const double *d) {
+  double u[3], v[3], w[3], x[3];
+  vm_sub3(b, a, u);
+  vm_sub3(c, a, v);
+  vm_sub3(d, a, w);
+  vm_cross3(u, v, x);
+  return vm_dot3(x, w) / 6;
+}
+
+/* Volume of a cell as the sum of tets from its centroid to its faces (faces
+ * of 4 split by their centroid): exact for tets and planar-faced cells. */
+static double cell_volume(const vm_mesh *m, int64_t e) {
+  const int32_t *c = m->conn + m->eoff[e];
+  int n = vm_elem_nverts(m->etype[e]);
+  if (m->etype[e] == VM_TET)
+    return tet_vol(m->xyz + 3 * c[0], m->xyz + 3 * c[1], m->xyz + 3 * c[2], m->xyz + 3 * c[3]);
+  double g[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) g[k] += m->xyz[3 * c[i] + k] / n;
+  int fl[6][4], nfv[6];
+  int nf = vm_elem_faces(m->etype[e], fl, nfv);
+  double vol = 0;
+  for (int j = 0; j < nf; j++) {
+    const double *p[4];
+    for (int i = 0; i < nfv[j]; i++) p[i] = m->xyz + 3 * c[fl[j][i]];
+    if (nfv[j] == 3) {
+      vol += tet_vol(p[0], p[1], p[2], g);
+    } else {
+      double q[3];
+      for (int k = 0; k < 3; k++) q[k] = (p[0][k] + p[1][k] + p[2][k] + p[3][k]) / 4;
+      for (int i = 0; i < 4; i++) vol += tet_vol(p[i], p[(i + 1) % 4], q, g);
+    }
+  }
+  return vol;
+}
+
+/* The six dihedral angles of a tet (radians) into lo/hi, its scaled
+ * Jacobian (min over corners of det/(|e1||e2||e3|), times sqrt 2) returned. */
+static double tet_angles(const double *p[4], double *lo, double *hi) {
+  static const int edge[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
+                                 {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  *lo = PI;
+  *hi = 0;
+  for (int k = 0; k < 6; k++) {
+    const double *a = p[edge[k][0]], *b = p[edge[k][1]], *c = p[edge[k][2]], *d = p[edge[k][3]];
+    double e[3], u[3], w[3], n1[3], n2[3];
+    vm_sub3(b, a, e);
+    vm_sub3(c, a, u);
+    vm_sub3(d, a, w);
+    vm_cross3(e, u, n1);
+    vm_cross3(e, w, n2);
+    double l1 = vm_norm3(n1), l2 = vm_norm3(n2);
+    double cs = l1 > 0 && l2 > 0 ? vm_dot3(n1, n2) / (l1 * l2) : 1;
+    double ang = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
+    if (ang < *lo) *lo = ang;
+    if (ang > *hi) *hi = ang;
+  }
+  double sj = INFINITY;
+  static const int corner[4][3] = {{1, 2, 3}, {2, 0, 3}, {0, 1, 3}, {1, 0, 2}};
+  for (int i = 0; i < 4; i++) {
+    double e1[3], e2[3], e3[3], x[3];
+    vm_sub3(p[corner[i][0]], p[i], e1);
+    vm_sub3(p[corner[i][1]], p[i], e2);
+    vm_sub3(p[corner[i][2]], p[i], e3);
+    vm_cross3(e1, e2, x);
+    double den = vm_norm3(e1) * vm_norm3(e2) * vm_norm3(e3);
+    double s = den > 0 ? vm_dot3(x, e3) / den * 1.41421356237309504880 : 0;
+    if (s < sj) sj = s;
+  }
+  return sj;
+}
+
+int vm_fill_tet_quality_of(vm_ctx *ctx, const vm_mesh *m, vm_fill_tet_quality *q) {
+  memset(q, 0, sizeof *q);
+  q->min_dihedral = 180;
+  q->sj_min = 1;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_TET) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    const double *p[4] = {m->xyz + 3 * c[0], m->xyz + 3 * c[1], m->xyz + 3 * c[2],
+                          m->xyz + 3 * c[3]};
+    double lo, hi;
+    double sj = tet_angles(p, &lo, &hi);
+    if (lo * 180 / PI < q->min_dihedral) q->min_dihedral = lo * 180 / PI;
+    if (hi * 180 / PI > q->max_dihedral) q->max_dihedral = hi * 180 / PI;
+    if (sj < q->sj_min) q->sj_min = sj;
+    if (tet_vol(p[0], p[1], p[2], p[3]) <= 0) q->inverted++;
+  }
+  tface *f;
+  int64_t nf;
+  int st = tri_faces(ctx, m, &f, &nf);
+  if (st) return st;
+  for (int64_t i = 0; i + 1 < nf; i++) {
+    if (!same_face(&f[i], &f[i + 1])) continue;
+    int32_t a = f[i].cell, b = f[i + 1].cell;
+    int ta = m->etype[a] == VM_TET, tb = m->etype[b] == VM_TET;
+    if (!ta && !tb) continue;
+    double va = fabs(cell_volume(m, a)), vb = fabs(cell_volume(m, b));
+    double r = va > vb ? (vb > 0 ? va / vb : INFINITY) : (va > 0 ? vb / va : INFINITY);
+    if (ta && tb) {
+      if (r > q->vol_ratio_tets) q->vol_ratio_tets = r;
+    } else if (r > q->vol_ratio_env) {
+      q->vol_ratio_env = r;
+    }
+    i++;
+  }
+  vm_free(ctx, f);
+  return VM_OK;
+}
+
+/* ---------- the size field: a kd-tree over the envelope's vertices ---------- */
+
+typedef struct {
+  double lo[3], hi[3];
+  double hmin;  /* smallest h_v below */
+  int32_t a, b; /* points [a, b) of the permuted order */
+} kd_node;
+
+typedef struct {
+  int64_t n;
+  double *p;   /* 3 per point, permuted */
+  double *h;   /* h_v, permuted */
+  kd_node *nd; /* implicit binary tree, node i has children 2i+1, 2i+2 */
+  int64_t nnodes;
+  int32_t *id;  /* original index of each permuted point */
+  double slope; /* growth - 1 */
+  double hmax;  /* cap (far size) */
+  const vm_fill_opts *o;
+} size_field;
+
+enum { KD_LEAF = 8 };
+
+/* Reorder idx[a, b) so that idx[mid] has the median coordinate along ax,
+ * the smaller ones before it (quickselect; ties by index: deterministic). */
+static int kd_less(const double *pts, int ax, int32_t i, int32_t j) {
+  double x = pts[3 * i + ax], y = pts[3 * j + ax];
+  return x < y || (x == y && i < j);
+}
+
+static void kd_select(int32_t *idx, const double *pts, int ax, int32_t a, int32_t b, int32_t mid) {
+  while (b - a > 1) {
+    int32_t pv = idx[a + (b - a) / 2], lo = a, hi = b - 1;
+    while (lo <= hi) {
+      while (kd_less(pts, ax, idx[lo], pv)) lo++;
+      while (kd_less(pts, ax, pv, idx[hi])) hi--;
+      if (lo <= hi) {
+        int32_t t = idx[lo];
+        idx[lo++] = idx[hi];
+        idx[hi--] = t;
+      }
+    }
+    if (mid <= hi)
+      b = hi + 1;
+    else if (mid >= lo)
+      a = lo;
+    else
+      return;
+  }
+}
+
+static void kd_build(size_field *S, int32_t *idx, const double *pts, const double *h, int64_t i,
+                     int32_t a, int32_t b) {
+  kd_node *n = &S->nd[i];
+  n->a = a;
+  n->b = b;
+  n->hmin = INFINITY;
+  for (int k = 0; k < 3; k++) n->lo[k] = INFINITY, n->hi[k] = -INFINITY;
+  for (int32_t j = a; j < b; j++) {
+    const double *x = pts + 3 * idx[j];
+    for (int k = 0; k < 3; k++) {
+      if (x[k] < n->lo[k]) n->lo[k] = x[k];
+      if (x[k] > n->hi[k]) n->hi[k] = x[k];
+    }
+    if (h[idx[j]] < n->hmin) n->hmin = h[idx[j]];
+  }
+  if (b - a <= KD_LEAF || 2 * i + 2 >= S->nnodes) return;
+  int ax = 0;
+  for (int k = 1; k < 3; k++)
+    if (n->hi[k] - n->lo[k] > n->hi[ax] - n->lo[ax]) ax = k;
+  int32_t mid = a + (b - a) / 2;
+  kd_select(idx, pts, ax, a, b, mid);
+  kd_build(S, idx, pts, h, 2 * i + 1, a, mid);
+  kd_build(S, idx, pts, h, 2 * i + 2, mid, b);
+}
+
+static double box_dist(const kd_node *n, const double *x) {
+  double s = 0;
+  for (int k = 0; k < 3; k++) {
+    double d = x[k] < n->lo[k] ? n->lo[k] - x[k] : x[k] > n->hi[k] ? x[k] - n->hi[k] : 0;
+    s += d * d;
+  }
+  return sqrt(s);
+}
+
+static void kd_query(const size_field *S, int64_t i, const double *x, double *best) {
+  const kd_node *n = &S->nd[i];
+  if (n->hmin + S->slope * box_dist(n, x) >= *best) return;
+  int64_t l = 2 * i + 1, r = 2 * i + 2;
+  if (n->b - n->a <= KD_LEAF || r >= S->nnodes) {
+    for (int32_t j = n->a; j < n->b; j++) {
+      double v = S->h[j] + S->slope * vm_dist3(S->p + 3 * j, x);
+      if (v < *best) *best = v;
+    }
+    return;
+  }
+  double dl = S->nd[l].hmin + S->slope * box_dist(&S->nd[l], x);
+  double dr = S->nd[r].hmin + S->slope * box_dist(&S->nd[r], x);
+  if (dl <= dr) {
+    kd_query(S, l, x, best);
+    kd_query(S, r, x, best);
+  } else {
+    kd_query(S, r, x, best);
+    kd_query(S, l, x, best);
+  }
+}
+
+static double size_at(const size_field *S, const double *x) {
+  double best = S->hmax;
+  kd_query(S, 0, x, &best);
+  const vm_fill_opts *o = S->o;
+  if (o->refine_size > 0 && best > o->refine_size && x[0] >= o->refine_lo[0] &&
+      x[0] <= o->refine_hi[0] && x[1] >= o->refine_lo[1] && x[1] <= o->refine_hi[1] &&
+      x[2] >= o->refine_lo[2] && x[2] <= o->refine_hi[2])
+    best = o->refine_size;
+  return best;
+}
+
+/* Nonzero if a point of S within r of x (other than `self`) is marked. */
+static int kd_any_marked(const size_field *S, int64_t i, const double *x, double r,
+                         const uint8_t *mark, int32_t self) {
+  const kd_node *n = &S->nd[i];
+  if (n->b <= n->a || box_dist(n, x) > r) return 0;
+  if (n->b - n->a <= KD_LEAF || 2 * i + 2 >= S->nnodes) {
+    for (int32_t j = n->a; j < n->b; j++)
+      if (S->id[j] != self && mark[S->id[j]] && vm_dist3(S->p + 3 * j, x) <= r) return 1;
+    return 0;
+  }
+  return kd_any_marked(S, 2 * i + 1, x, r, mark, self) ||
+         kd_any_marked(S, 2 * i + 2, x, r, mark, self);
+}
+
+static double gmsh_size_cb(int dim, int tag, double x, double y, double z, void *data) {
+  (void)dim;
+  (void)tag;
+  double p[3] = {x, y, z};
+  return size_at(data, p);
+}
+
+static void size_free(vm_ctx *ctx, size_field *S) {
+  vm_free(ctx, S->p);
+  vm_free(ctx, S->h);
+  vm_free(ctx, S->nd);
+  vm_free(ctx, S->id);
+}
+
+/* pts: 3*n coordinates, h: n sizes. */
+static int size_build(vm_ctx *ctx, size_field *S, const double *pts, const double *h, int64_t n) {
+  S->n = n;
+  S->nnodes = 1;
+  while (S->nnodes * KD_LEAF < 2 * n) S->nnodes *= 2;
+  S->nnodes = 2 * S->nnodes - 1;
+  S->p = vm_alloc_array(ctx, (size_t)(3 * n), sizeof *S->p);
+  S->h = vm_alloc_array(ctx, (size_t)n, sizeof *S->h);
+  S->nd = vm_calloc(ctx, (size_t)S->nnodes, sizeof *S->nd);
+  int32_t *idx = vm_alloc_array(ctx, (size_t)n, sizeof *idx);
+  if (!S->p || !S->h || !S->nd || !idx) {
+    vm_free(ctx, idx);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t i = 0; i < n; i++) idx[i] = (int32_t)i;
+  kd_build(S, idx, pts, h, 0, 0, (int32_t)n);
+  for (int64_t i = 0; i < n; i++) {
+    memcpy(S->p + 3 * i, pts + 3 * idx[i], 3 * sizeof(double));
+    S->h[i] = h[idx[i]];
+  }
+  S->id = idx;
+  return VM_OK;
+}
+
+/* ---------- the envelope ---------- */
+
+typedef struct {
+  int64_t nf;
+  int32_t *fv;    /* 3 per face, oriented away from the layer (into the fill) */
+  int32_t *felem; /* the face's element in the input (an "outer" triangle), or -1 */
+  int surface;    /* the input is a surface: its triangles */
+} envelope;
+
+static void envelope_free(vm_ctx *ctx, envelope *E) {
+  vm_free(ctx, E->fv);
+  vm_free(ctx, E->felem);
+}
+
+/* The tag named `name` by "gmsh:physical_name:2:<tag>", or -1. */
+static int32_t tag_named(const vm_mesh *m, const char *name) {
+  for (int i = 0; i < m->nattr; i++) {
+    const char *k = m->attrs[i].key;
+    if (!strncmp(k, "gmsh:physical_name:2:", 21) && !strcmp(m->attrs[i].value, name))
+      return (int32_t)atol(k + 21);
+  }
+  return -1;
+}
+
+static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
+  memset(E, 0, sizeof *E);
+  int64_t counts[VM_NTYPES];
+  int top = vm_mesh_count_types(m, counts);
+  if (top == 2) {
+    if (counts[VM_QUAD])
+      return vm_error(ctx, VM_ERR_ARG,
+                      "the surface has %lld quadrilaterals: the fill needs a triangulated "
+                      "envelope",
+                      (long long)counts[VM_QUAD]);
+    E->surface = 1;
+    E->nf = counts[VM_TRI];
+    E->fv = vm_alloc_array(ctx, (size_t)(3 * E->nf + 1), sizeof *E->fv);
+    E->felem = vm_alloc_array(ctx, (size_t)(E->nf + 1), sizeof *E->felem);
+    if (!E->fv || !E->felem) return VM_ERR_NOMEM;
+    int64_t k = 0;
+    for (int64_t e = 0; e < m->ne; e++) {
+      if (m->etype[e] != VM_TRI) continue;
+      memcpy(E->fv + 3 * k, m->conn + m->eoff[e], 3 * sizeof(int32_t));
+      E->felem[k++] = (int32_t)e;
+    }
+    return VM_OK;
+  }
+  if (top != 3)
+    return vm_error(ctx, VM_ERR_ARG, "the mesh has no cells and no surface to fill around");
+  /* the boundary of the cells, oriented outward */
+  int64_t nb;
+  int32_t *bfv = NULL;
+  uint8_t *bnv = NULL;
+  int st = vm_mesh_boundary(m, &nb, &bfv, &bnv, NULL, NULL);
+  if (st) return st;
+  /* the faces named "outer", matched to the boundary by vertex set */
+  const vm_field *ph = vm_mesh_find_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
+  int32_t outer = ph && ph->type == VM_FIELD_I32 && ph->ncomp == 1 ? tag_named(m, "outer") : -1;
+  uint8_t *pick = vm_calloc(ctx, (size_t)(nb + 1), 1);
+  tface *bf = vm_alloc_array(ctx, (size_t)(nb + 1), sizeof *bf);
+  if (!pick || !bf) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t nq = 0;
+  for (int64_t f = 0; f < nb; f++) {
+    if (bnv[f] != 3) {
+      bf[f].v[0] = bf[f].v[1] = bf[f].v[2] = -1;
+    } else {
+      memcpy(bf[f].v, bfv + 4 * f, sizeof bf[f].v);
+      sort3(bf[f].v);
+    }
+    bf[f].cell = (int32_t)f;
+  }
+  qsort(bf, (size_t)nb, sizeof *bf, cmp_tface);
+  int64_t npick = 0;
+  if (outer >= 0) {
+    const int32_t *tag = ph->data;
+    for (int64_t e = 0; e < m->ne; e++) {
+      if (vm_elem_dim(m->etype[e]) != 2 || tag[e] != outer) continue;
+      if (m->etype[e] == VM_QUAD) {
+        nq++;
+        continue;
+      }
+      tface key;
+      memcpy(key.v, m->conn + m->eoff[e], sizeof key.v);
+      sort3(key.v);
+      key.cell = -1;
+      /* binary search for the vertex set */
+      int64_t lo = 0, hi = nb;
+      while (lo < hi) {
+        int64_t mid = (lo + hi) / 2;
+        if (cmp_tface(&bf[mid], &key) < 0)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      if (lo < nb && same_face(&bf[lo], &key)) {
+        if (!pick[bf[lo].cell]) npick++;
+        pick[bf[lo].cell] = 1;
+      } else {
+        st = vm_error(ctx, VM_ERR_FORMAT,
+                      "element %lld: a triangle named 'outer' that is not a boundary face of "
+                      "the cells",
+                      (long long)e);
+        goto done;
+      }
+    }
+    if (nq) {
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "the envelope ('outer') has %lld quadrilaterals: the fill needs triangles "
+                    "(a prism layer's top)",
+                    (long long)nq);
+      goto done;
+    }
+  }
+  if (!npick) {
+    /* no "outer" faces: the boundary component reaching farthest out */
+    int32_t *comp = vm_alloc_array(ctx, (size_t)(m->nv + 1), sizeof *comp);
+    if (!comp) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    /* union-find over the vertices of boundary faces */
+    for (int64_t v = 0; v < m->nv; v++) comp[v] = (int32_t)v;
+    for (int64_t f = 0; f < nb; f++)
+      for (int i = 1; i < bnv[f]; i++) {
+        int32_t a = bfv[4 * f], b = bfv[4 * f + i];
+        while (comp[a] != a) a = comp[a] = comp[comp[a]];
+        while (comp[b] != b) b = comp[b] = comp[comp[b]];
+        if (a != b) comp[a > b ? a : b] = a < b ? a : b;
+      }
+    /* the component holding the vertex of largest x (ties: smallest index) */
+    int32_t far = -1;
+    for (int64_t f = 0; f < nb; f++)
+      for (int i = 0; i < bnv[f]; i++) {
+        int32_t v = bfv[4 * f + i];
+        if (far < 0 || m->xyz[3 * v] > m->xyz[3 * far]) far = v;
+      }
+    int32_t root = far;
+    while (comp[root] != root) root = comp[root];
+    for (int64_t f = 0; f < nb; f++) {
+      int32_t a = bfv[4 * f];
+      while (comp[a] != a) a = comp[a];
+      if (a != root) continue;
+      if (bnv[f] != 3) nq++;
+      pick[f] = 1;
+      npick++;
+    }
+    vm_free(ctx, comp);
+    if (nq) {
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "the outer boundary has %lld quadrilaterals: the fill needs triangles "
+                    "(name the envelope 'outer')",
+                    (long long)nq);
+      goto done;
+    }
+    if (npick == nb) {
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "the cells have one boundary only: no inner wall and outer envelope "
+                    "(a layer around a wall, or a closed surface, is needed)");
+      goto done;
+    }
+  }
+  E->nf = npick;
+  E->fv = vm_alloc_array(ctx, (size_t)(3 * npick), sizeof *E->fv);
+  E->felem = vm_alloc_array(ctx, (size_t)npick, sizeof *E->felem);
+  if (!E->fv || !E->felem) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t k = 0;
+  for (int64_t f = 0; f < nb; f++) {
+    if (!pick[f]) continue;
+    memcpy(E->fv + 3 * k, bfv + 4 * f, 3 * sizeof(int32_t));
+    E->felem[k++] = -1;
+  }
+  /* the envelope's own triangle elements (they become interior) */
+  if (outer >= 0) {
+    const int32_t *tag = ph->data;
+    tface *ef = vm_alloc_array(ctx, (size_t)npick, sizeof *ef);
+    if (!ef) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    for (int64_t i = 0; i < npick; i++) {
+      memcpy(ef[i].v, E->fv + 3 * i, sizeof ef[i].v);
+      sort3(ef[i].v);
+      ef[i].cell = (int32_t)i;
+    }
+    qsort(ef, (size_t)npick, sizeof *ef, cmp_tface);
+    for (int64_t e = 0; e < m->ne; e++) {
+      if (m->etype[e] != VM_TRI || tag[e] != outer) continue;
+      tface key;
+      memcpy(key.v, m->conn + m->eoff[e], sizeof key.v);
+      sort3(key.v);
+      key.cell = -1;
+      int64_t lo = 0, hi = npick;
+      while (lo < hi) {
+        int64_t mid = (lo + hi) / 2;
+        if (cmp_tface(&ef[mid], &key) < 0)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      if (lo < npick && same_face(&ef[lo], &key)) E->felem[ef[lo].cell] = (int32_t)e;
+    }
+    vm_free(ctx, ef);
+  }
+done:
+  vm_free(ctx, pick);
+  vm_free(ctx, bf);
+  vm_free(ctx, bfv);
+  vm_free(ctx, bnv);
+  return st;
+}
+
+/* ---------- the far field ---------- */
+
+typedef struct {
+  int64_t nv, nf;
+  double *xyz;
+  int32_t *fv; /* 3 per triangle, local vertex indices, outward */
+} far_surface;
+
+static void far_free(vm_ctx *ctx, far_surface *F) {
+  vm_free(ctx, F->xyz);
+  vm_free(ctx, F->fv);
+}
+
+/* A cube of half-width H about c, n x n quads per side, each split in two
+ * triangles along alternating diagonals; or the sphere of radius H, the
+ * same cube's vertices projected onto it (a cube-sphere). */
+static int far_build(vm_ctx *ctx, far_surface *F, const double c[3], double H, int n, int sphere) {
+  /* a (n+1)^3 lattice's surface vertices, numbered through a lattice index */
+  int64_t N = n + 1;
+  int32_t *id = vm_alloc_array(ctx, (size_t)(N * N * N), sizeof *id);
+  if (!id) return VM_ERR_NOMEM;
+  int64_t nv = 0;
+  for (int64_t i = 0; i < N * N * N; i++) {
+    int64_t x = i % N, y = (i / N) % N, z = i / (N * N);
+    id[i] = (x == 0 || y == 0 || z == 0 || x == n || y == n || z == n) ? (int32_t)nv++ : -1;
+  }
+  F->nv = nv;
+  F->nf = 12 * (int64_t)n * n;
+  F->xyz = vm_alloc_array(ctx, (size_t)(3 * nv), sizeof *F->xyz);
+  F->fv = vm_alloc_array(ctx, (size_t)(3 * F->nf), sizeof *F->fv);
+  if (!F->xyz || !F->fv) {
+    vm_free(ctx, id);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t i = 0; i < N * N * N; i++) {
+    if (id[i] < 0) continue;
+    double q[3] = {(double)(i % N), (double)((i / N) % N), (double)(i / (N * N))};
+    for (int k = 0; k < 3; k++) q[k] = 2 * q[k] / n - 1;
+    if (sphere) {
+      /* equal-angle cube-sphere: tan of the face angle, then onto the sphere */
+      double t[3];
+      for (int k = 0; k < 3; k++) t[k] = tan(q[k] * PI / 4);
+      double r = vm_norm3(t);
+      for (int k = 0; k < 3; k++) q[k] = t[k] / r;
+    }
+    for (int k = 0; k < 3; k++) F->xyz[3 * id[i] + k] = c[k] + H * q[k];
+  }
+  int64_t f = 0;
+  for (int ax = 0; ax < 3; ax++)
+    for (int side = 0; side < 2; side++) {
+      int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
+      for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+          int32_t v[4];
+          for (int k = 0; k < 4; k++) {
+            int64_t g[3];
+            g[ax] = side ? n : 0;
+            g[a1] = i + (k == 1 || k == 2);
+            g[a2] = j + (k >= 2);
+            v[k] = id[g[0] + N * g[1] + N * N * g[2]];
+          }
+          /* (a1, a2) is right-handed about +ax: outward on the + side */
+          if (!side) {
+            int32_t t = v[1];
+            v[1] = v[3];
+            v[3] = t;
+          }
+          int diag = (i + j) % 2;
+          int32_t t1[3] = {v[0], v[1], v[2]}, t2[3] = {v[0], v[2], v[3]};
+          if (diag) {
+            t1[2] = v[3];
+            t2[0] = v[1];
+          }
+          memcpy(F->fv + 3 * f++, t1, sizeof t1);
+          memcpy(F->fv + 3 * f++, t2, sizeof t2);
+        }
+    }
+  vm_free(ctx, id);
+  return VM_OK;
+}
+
+/* ---------- points off the envelope ---------- */
+
+/* Points about one tet height off the envelope along its vertex normals,
+ * where the envelope is smooth and nothing else is near: Gmsh's boundary
+ * recovery then finds a vertex above each face instead of making flat tets
+ * of four envelope vertices (in concave regions, it did). env: the
+ * envelope's vertices (tree with h = 0), vid: input vertex -> point index,
+ * hs: sizes by point index. Returns the points in *q (3 each). */
+static int offset_points(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const int32_t *vid,
+                         const double *hs, int64_t nenv, double *nrm, double **q, int64_t *nq) {
+  int st = VM_OK;
+  *q = NULL;
+  *nq = 0;
+  double *dmin = vm_alloc_array(ctx, (size_t)nenv + 1, sizeof *dmin);
+  double *cand = vm_alloc_array(ctx, (size_t)(3 * nenv + 3), sizeof *cand);
+  double *zero = vm_calloc(ctx, (size_t)nenv + 1, sizeof *zero);
+  double *pts = vm_alloc_array(ctx, (size_t)(3 * nenv + 3), sizeof *pts);
+  uint8_t *ok = vm_calloc(ctx, (size_t)nenv + 1, 1), *acc = vm_calloc(ctx, (size_t)nenv + 1, 1);
+  size_field T, C;
+  memset(&T, 0, sizeof T);
+  memset(&C, 0, sizeof C);
+  if (!dmin || !cand || !zero || !pts || !ok || !acc) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  /* a closed surface given as input: its normals point out if it encloses
+   * a positive volume, and the fill is outside */
+  double vol = 0;
+  for (int64_t f = 0; f < E->nf; f++) {
+    const double *a = m->xyz + 3 * E->fv[3 * f], *b = m->xyz + 3 * E->fv[3 * f + 1],
+                 *c = m->xyz + 3 * E->fv[3 * f + 2];
+    double x[3];
+    vm_cross3(b, c, x);
+    vol += vm_dot3(a, x) / 6;
+  }
+  double sgn = E->surface && vol < 0 ? -1 : 1;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (vid[v] >= 0) memcpy(pts + 3 * vid[v], m->xyz + 3 * v, 3 * sizeof(double));
+  for (int pass = 0; pass < 2; pass++)
+    for (int64_t f = 0; f < E->nf; f++) {
+      const int32_t *t = E->fv + 3 * f;
+      double u[3], w[3], x[3];
+      vm_sub3(m->xyz + 3 * t[1], m->xyz + 3 * t[0], u);
+      vm_sub3(m->xyz + 3 * t[2], m->xyz + 3 * t[0], w);
+      vm_cross3(u, w, x);
+      for (int k = 0; k < 3; k++) x[k] *= sgn;
+      for (int i = 0; i < 3; i++) {
+        int32_t p = vid[t[i]];
+        if (pass == 0) {
+          for (int k = 0; k < 3; k++) nrm[3 * p + k] += x[k];
+          dmin[p] = 1;
+        } else {
+          double l = vm_norm3(x), d = l > 0 ? vm_dot3(x, nrm + 3 * p) / l : -1;
+          if (d < dmin[p]) dmin[p] = d;
+        }
+      }
+      if (pass == 0 && f == E->nf - 1)
+        for (int64_t p = 0; p < nenv; p++) vm_normalize3(nrm + 3 * p);
+    }
+  /* candidates where the envelope is smooth */
+  for (int64_t p = 0; p < nenv; p++) {
+    ok[p] = dmin[p] > 0.7;
+    for (int k = 0; k < 3; k++)
+      cand[3 * p + k] = pts[3 * p + k] + VM_FILL_OFF * hs[p] * nrm[3 * p + k];
+  }
+  /* ... whose nearest envelope vertex is their own */
+  T.slope = 1;
+  T.hmax = INFINITY;
+  if ((st = size_build(ctx, &T, pts, zero, nenv))) goto done;
+  for (int64_t p = 0; p < nenv; p++) {
+    if (!ok[p]) continue;
+    double best = INFINITY;
+    kd_query(&T, 0, cand + 3 * p, &best);
+    ok[p] = best >= 0.95 * VM_FILL_OFF * hs[p];
+  }
+  /* ... and no accepted one near (in vertex order: deterministic) */
+  C.slope = 1;
+  C.hmax = INFINITY;
+  if ((st = size_build(ctx, &C, cand, zero, nenv))) goto done;
+  int64_t n = 0;
+  for (int64_t p = 0; p < nenv; p++) {
+    if (!ok[p] || kd_any_marked(&C, 0, cand + 3 * p, 0.5 * hs[p], acc, (int32_t)p)) continue;
+    acc[p] = 1;
+    n++;
+  }
+  *q = vm_alloc_array(ctx, (size_t)(3 * n + 3), sizeof **q);
+  if (!*q) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t p = 0; p < nenv; p++)
+    if (acc[p]) memcpy(*q + 3 * (*nq)++, cand + 3 * p, 3 * sizeof(double));
+done:
+  size_free(ctx, &T);
+  size_free(ctx, &C);
+  vm_free(ctx, dmin);
+  vm_free(ctx, cand);
+  vm_free(ctx, zero);
+  vm_free(ctx, pts);
+  vm_free(ctx, ok);
+  vm_free(ctx, acc);
+  return st;
+}
+
+/* Points that break Gmsh's slivers of four envelope vertices (flat tets in
+ * slightly concave kinks of the envelope, which Delaunay keeps: no other
+ * point is in their small circumsphere): one just off the envelope above
+ * each, inside that sphere. Appended to *q (3 each, *nq of them). */
+static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t nin, const int32_t *vid,
+                         const double *nrm, double min_deg, double **q, int64_t *nq,
+                         int64_t *nsliver) {
+  *nsliver = 0;
+  int64_t n = *nq;
+  for (int64_t e = 0; e < o->ne; e++) {
+    if (o->etype[e] != VM_TET) continue;
+    const int32_t *c = o->conn + o->eoff[e];
+    if (c[0] >= nin || c[1] >= nin || c[2] >= nin || c[3] >= nin) continue;
+    const double *p[4] = {o->xyz + 3 * c[0], o->xyz + 3 * c[1], o->xyz + 3 * c[2],
+                          o->xyz + 3 * c[3]};
+    double lo, hi;
+    tet_angles(p, &lo, &hi);
+    if (lo * 180 / PI >= min_deg) continue;
+    double g[3] = {0, 0, 0}, nv[3] = {0, 0, 0}, lmax = 0;
+    for (int i = 0; i < 4; i++) {
+      for (int k = 0; k < 3; k++) {
+        g[k] += p[i][k] / 4;
+        nv[k] += vid[c[i]] >= 0 ? nrm[3 * vid[c[i]] + k] : 0;
+      }
+      for (int j = i + 1; j < 4; j++) {
+        double l = vm_dist3(p[i], p[j]);
+        lmax = l > lmax ? l : lmax;
+      }
+    }
+    if (!(vm_normalize3(nv) > 0)) continue;
+    double *t = vm_realloc(ctx, *q, (size_t)(3 * (n + 1)) * sizeof *t);
+    if (!t) return VM_ERR_NOMEM;
+    *q = t;
+    for (int k = 0; k < 3; k++) t[3 * n + k] = g[k] + 0.25 * lmax * nv[k];
+    n++;
+    (*nsliver)++;
+  }
+  *nq = n;
+  return VM_OK;
+}
+
+/* ---------- Gmsh ---------- */
+
+/* Gmsh's log lines to ours; its last error into the context. */
+static int gmsh_status(vm_ctx *ctx, int ierr, const char *what) {
+  char **log = NULL;
+  size_t n = 0;
+  int e2;
+  gmshLoggerGet(&log, &n, &e2);
+  for (size_t i = 0; i < n; i++) {
+    if (!e2) vm_log(ctx, VM_LOG_DEBUG, "gmsh: %s", log[i]);
+    gmshFree(log[i]);
+  }
+  gmshFree(log);
+  if (!ierr) return VM_OK;
+  char *last = NULL;
+  gmshLoggerGetLastError(&last, &e2);
+  int st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh failed %s: %s", what,
+                    last && *last ? last : "(no message)");
+  gmshFree(last);
+  return st;
+}
+
+typedef struct {
+  size_t nn;
+  size_t *ntag;
+  double *coord;
+  size_t nt;
+  size_t *tnode; /* 4 per tet */
+} gmsh_result;
+
+static void gmsh_result_free(gmsh_result *R) {
+  gmshFree(R->ntag);
+  gmshFree(R->coord);
+  gmshFree(R->tnode);
+  memset(R, 0, sizeof *R);
+}
+
+/* Mesh the region between the envelope (node tags = input index + 1) and
+ * the far field (node tags base + 1 ...) with the size field S. */
+static int gmsh_fill(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_surface *F,
+                     int64_t base, const double *q, int64_t nq, size_field *S,
+                     const vm_fill_opts *o, gmsh_result *R) {
+  memset(R, 0, sizeof *R);
+  int ierr = 0, st = VM_OK;
+  gmshInitialize(0, NULL, 0, &ierr);
+  if (ierr) return vm_error(ctx, VM_ERR_BACKEND, "Gmsh could not be initialized");
+  gmshOptionSetNumber("General.Terminal", 0, &ierr);
+  gmshLoggerStart(&ierr);
+  gmshOptionSetNumber("General.Verbosity", 5, &ierr);
+  int threads = o->threads > 0 ? o->threads : vm_ctx_threads(ctx);
+  gmshOptionSetNumber("General.NumThreads", threads > 0 ? threads : 1, &ierr);
+  gmshModelAdd("varmesh-fill", &ierr);
+  /* the envelope: its vertices with their own (1-based) indices as tags */
+  size_t *tags = NULL, *tri = NULL;
+  double *xyz = NULL;
+  uint8_t *used = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+  size_t nmax = (size_t)(E->nf * 3 > F->nv ? E->nf * 3 : F->nv);
+  size_t fmax = (size_t)(E->nf > F->nf ? E->nf : F->nf);
+  tags = vm_alloc_array(ctx, nmax + 1, sizeof *tags);
+  xyz = vm_alloc_array(ctx, 3 * nmax + 3, sizeof *xyz);
+  tri = vm_alloc_array(ctx, 3 * fmax + 3, sizeof *tri);
+  if (!used || !tags || !xyz || !tri) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  size_t k = 0;
+  for (int64_t i = 0; i < 3 * E->nf; i++) {
+    int32_t v = E->fv[i];
+    if (used[v]) continue;
+    used[v] = 1;
+    tags[k] = (size_t)v + 1;
+    memcpy(xyz + 3 * k++, m->xyz + 3 * v, 3 * sizeof(double));
+  }
+  int s1 = gmshModelAddDiscreteEntity(2, -1, NULL, 0, &ierr);
+  if (!ierr) gmshModelMeshAddNodes(2, s1, tags, k, xyz, 3 * k, NULL, 0, &ierr);
+  for (int64_t i = 0; i < 3 * E->nf; i++) tri[i] = (size_t)E->fv[i] + 1;
+  if (!ierr) gmshModelMeshAddElementsByType(s1, 2, NULL, 0, tri, (size_t)(3 * E->nf), &ierr);
+  if ((st = gmsh_status(ctx, ierr, "adding the envelope"))) goto done;
+  for (int64_t i = 0; i < F->nv; i++) tags[i] = (size_t)(base + i + 1);
+  int s2 = gmshModelAddDiscreteEntity(2, -1, NULL, 0, &ierr);
+  if (!ierr)
+    gmshModelMeshAddNodes(2, s2, tags, (size_t)F->nv, F->xyz, (size_t)(3 * F->nv), NULL, 0, &ierr);
+  for (int64_t i = 0; i < 3 * F->nf; i++) tri[i] = (size_t)(base + F->fv[i] + 1);
+  if (!ierr) gmshModelMeshAddElementsByType(s2, 2, NULL, 0, tri, (size_t)(3 * F->nf), &ierr);
+  int loops[2] = {s1, s2}, shell = 0, vol = 0;
+  int *ptag = vm_alloc_array(ctx, (size_t)nq + 1, sizeof *ptag);
+  if (!ptag) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t i = 0; i < nq && !ierr; i++)
+    ptag[i] = gmshModelGeoAddPoint(q[3 * i], q[3 * i + 1], q[3 * i + 2], 0, -1, &ierr);
+  if (!ierr) shell = gmshModelGeoAddSurfaceLoop(loops, 2, -1, &ierr);
+  if (!ierr) vol = gmshModelGeoAddVolume(&shell, 1, -1, &ierr);
+  if (!ierr) gmshModelGeoSynchronize(&ierr);
+  if (!ierr && nq) gmshModelMeshEmbed(0, ptag, (size_t)nq, 3, vol, &ierr);
+  vm_free(ctx, ptag);
+  if ((st = gmsh_status(ctx, ierr, "setting up the volume"))) goto done;
+  gmshOptionSetNumber("Mesh.MeshSizeExtendFromBoundary", 0, &ierr);
+  gmshOptionSetNumber("Mesh.MeshSizeFromPoints", 0, &ierr);
+  gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 0, &ierr);
+  gmshOptionSetNumber("Mesh.Renumber", 0, &ierr);
+  gmshOptionSetNumber("Mesh.Algorithm3D", o->algorithm, &ierr);
+  gmshOptionSetNumber("Mesh.Optimize", 1, &ierr);
+  gmshModelMeshSetSizeCallback(gmsh_size_cb, S, &ierr);
+  gmshModelMeshGenerate(3, &ierr);
+  if ((st = gmsh_status(ctx, ierr, "meshing the volume"))) goto done;
+  double *pc = NULL;
+  size_t npc = 0, ncoord = 0, *etag = NULL, ne = 0, ntn = 0;
+  gmshModelMeshGetNodes(&R->ntag, &R->nn, &R->coord, &ncoord, &pc, &npc, -1, -1, 0, 0, &ierr);
+  gmshFree(pc);
+  if (!ierr) gmshModelMeshGetElementsByType(4, &etag, &ne, &R->tnode, &ntn, -1, 0, 1, &ierr);
+  gmshFree(etag);
+  R->nt = ntn / 4;
+  if ((st = gmsh_status(ctx, ierr, "returning the mesh"))) goto done;
+  if (ncoord != 3 * R->nn || ntn != 4 * R->nt || !R->nt) {
+    st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned no tetrahedra (%zu nodes, %zu values)", R->nn,
+                  ntn);
+    goto done;
+  }
+done:
+  if (st) gmsh_result_free(R);
+  gmshLoggerStop(&ierr);
+  gmshFinalize(&ierr);
+  vm_free(ctx, used);
+  vm_free(ctx, tags);
+  vm_free(ctx, xyz);
+  vm_free(ctx, tri);
+  return st;
+}
+
+/* ---------- the merged mesh ---------- */
+
+/* Largest "gmsh:physical" tag in use (0 if none). */
+static int32_t max_tag(const vm_mesh *m) {
+  int32_t t = 0;
+  const vm_field *ph = vm_mesh_find_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
+  if (ph && ph->type == VM_FIELD_I32 && ph->ncomp == 1)
+    for (int64_t e = 0; e < m->ne; e++)
+      if (((const int32_t *)ph->data)[e] > t) t = ((const int32_t *)ph->data)[e];
+  for (int i = 0; i < m->nattr; i++) {
+    const char *k = m->attrs[i].key;
+    if (!strncmp(k, "gmsh:physical_name:", 19) && k[19] && k[20] == ':') {
+      long v = atol(k + 21);
+      if (v > t && v < INT32_MAX) t = (int32_t)v;
+    }
+  }
+  return t;
+}
+
+static int set_name(vm_mesh *m, int dim, int32_t tag, const char *name) {
+  char key[64];
+  snprintf(key, sizeof key, "gmsh:physical_name:%d:%d", dim, (int)tag);
+  return vm_mesh_set_attr(m, key, name);
+}
+
+/* Build *out from the input, the envelope, the far field and Gmsh's tets;
+ * check that Gmsh kept every envelope and far-field triangle and vertex. */
+static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_surface *F,
+                 const gmsh_result *R, vm_mesh **out) {
+  int st = VM_OK;
+  int64_t base = m->nv, nfar = F->nv;
+  size_t maxtag = 0;
+  for (size_t i = 0; i < R->nn; i++)
+    if (R->ntag[i] > maxtag) maxtag = R->ntag[i];
+  if (maxtag > 4 * (R->nn + (size_t)base + (size_t)nfar) + 16)
+    return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned node tags up to %zu for %zu nodes", maxtag,
+                    R->nn);
+  int64_t *map = vm_alloc_array(ctx, maxtag + 1, sizeof *map);
+  uint8_t *onenv = vm_calloc(ctx, (size_t)base + 1, 1);
+  vm_mesh *o = NULL;
+  tface *tf = NULL;
+  if (!map || !onenv) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t i = 0; i < 3 * E->nf; i++) onenv[E->fv[i]] = 1;
+  for (size_t t = 0; t <= maxtag; t++) map[t] = -1;
+  int64_t nnew = 0, nseen_env = 0;
+  for (size_t i = 0; i < R->nn; i++) {
+    size_t t = R->ntag[i];
+    const double *x = R->coord + 3 * i;
+    if (t == 0 || map[t] >= 0) {
+      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned node tag %zu twice (or 0)", t);
+      goto done;
+    }
+    if (t <= (size_t)base) {
+      if (!onenv[t - 1] || memcmp(x, m->xyz + 3 * (t - 1), 3 * sizeof(double))) {
+        st = vm_error(ctx, VM_ERR_BACKEND,
+                      "Gmsh moved envelope vertex %zu: the layer would not match the fill", t - 1);
+        goto done;
+      }
+      map[t] = (int64_t)t - 1;
+      nseen_env++;
+    } else if (t <= (size_t)(base + nfar)) {
+      if (memcmp(x, F->xyz + 3 * (t - base - 1), 3 * sizeof(double))) {
+        st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh moved far-field vertex %zu",
+                      (size_t)(t - base - 1));
+        goto done;
+      }
+      map[t] = (int64_t)t - 1;
+    } else {
+      map[t] = -2; /* numbered below, in tag order */
+    }
+  }
+  /* new nodes no tet uses (an embedded point Gmsh left out) are dropped */
+  uint8_t *usedt = vm_calloc(ctx, maxtag + 1, 1);
+  if (!usedt) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (size_t i = 0; i < 4 * R->nt; i++)
+    if (R->tnode[i] <= maxtag) usedt[R->tnode[i]] = 1;
+  int64_t nunused = 0;
+  for (size_t t = (size_t)(base + nfar) + 1; t <= maxtag; t++) {
+    if (map[t] != -2) continue;
+    if (usedt[t])
+      map[t] = base + nfar + nnew++;
+    else
+      nunused++;
+  }
+  vm_free(ctx, usedt);
+  if (nunused)
+    vm_log(ctx, VM_LOG_INFO, "fill: %lld points Gmsh did not use (outside the region) dropped",
+           (long long)nunused);
+  /* the output: the input's vertices, the far field's, the new ones */
+  int64_t nin_env = 0;
+  for (int64_t v = 0; v < base; v++) nin_env += onenv[v];
+  if (nseen_env != nin_env) {
+    st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh dropped %lld envelope vertices",
+                  (long long)(nin_env - nseen_env));
+    goto done;
+  }
+  if ((st = vm_mesh_create(ctx, &o))) goto done;
+  o->dim = 3;
+  if ((st = vm_mesh_set_vertices(o, base + nfar + nnew))) goto done;
+  memcpy(o->xyz, m->xyz, (size_t)(3 * base) * sizeof(double));
+  memcpy(o->vflag, m->vflag, (size_t)base);
+  memcpy(o->vsurf, m->vsurf, (size_t)base * sizeof(int32_t));
+  memcpy(o->xyz + 3 * base, F->xyz, (size_t)(3 * nfar) * sizeof(double));
+  for (size_t i = 0; i < R->nn; i++) {
+    int64_t v = map[R->ntag[i]];
+    if (v >= base + nfar && v >= 0) memcpy(o->xyz + 3 * v, R->coord + 3 * i, 3 * sizeof(double));
+  }
+  /* elements: the input's but the envelope's own triangles, the tets, the far field */
+  uint8_t *drop = vm_calloc(ctx, (size_t)m->ne + 1, 1);
+  if (!drop) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t ndrop = 0;
+  if (!E->surface)
+    for (int64_t i = 0; i < E->nf; i++)
+      if (E->felem[i] >= 0 && !drop[E->felem[i]]) drop[E->felem[i]] = 1, ndrop++;
+  int64_t nkeep = m->ne - ndrop, nt = (int64_t)R->nt;
+  int64_t ne = nkeep + nt + F->nf;
+  int64_t nconn = m->eoff[m->ne] + 4 * nt + 3 * F->nf;
+  for (int64_t e = 0; e < m->ne; e++)
+    if (drop[e]) nconn -= vm_elem_nverts(m->etype[e]);
+  if ((st = vm_mesh_set_elements(o, ne, nconn))) {
+    vm_free(ctx, drop);
+    goto done;
+  }
+  int64_t *emap = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *emap);
+  if (!emap) {
+    vm_free(ctx, drop);
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t k = 0, c = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    emap[e] = -1;
+    if (drop[e]) continue;
+    int n = vm_elem_nverts(m->etype[e]);
+    o->etype[k] = m->etype[e];
+    memcpy(o->conn + c, m->conn + m->eoff[e], (size_t)n * sizeof(int32_t));
+    c += n;
+    emap[e] = k++;
+    o->eoff[k] = c;
+  }
+  vm_free(ctx, drop);
+  int64_t ninv = 0;
+  for (int64_t t = 0; t < nt; t++) {
+    int32_t q[4];
+    for (int i = 0; i < 4; i++) {
+      size_t tag = R->tnode[4 * t + i];
+      if (tag > maxtag || map[tag] < 0) {
+        vm_free(ctx, emap);
+        st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh tet %lld names node %zu, which it did not return",
+                      (long long)t, tag);
+        goto done;
+      }
+      q[i] = (int32_t)map[tag];
+    }
+    double vol =
+        tet_vol(o->xyz + 3 * q[0], o->xyz + 3 * q[1], o->xyz + 3 * q[2], o->xyz + 3 * q[3]);
+    if (vol < 0) {
+      int32_t s = q[1];
+      q[1] = q[2];
+      q[2] = s;
+    }
+    ninv += vol == 0;
+    o->etype[k] = VM_TET;
+    memcpy(o->conn + c, q, sizeof q);
+    c += 4;
+    o->eoff[++k] = c;
+  }
+  for (int64_t f = 0; f < F->nf; f++) {
+    o->etype[k] = VM_TRI;
+    for (int i = 0; i < 3; i++) o->conn[c++] = (int32_t)(base + F->fv[3 * f + i]);
+    o->eoff[++k] = c;
+  }
+  if (ninv) {
+    vm_free(ctx, emap);
+    st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh made %lld flat tetrahedra", (long long)ninv);
+    goto done;
+  }
+  /* fields: the input's, new items 0 (-1 for int element fields) */
+  for (int i = 0; i < m->nfield && !st; i++) {
+    const vm_field *f = &m->fields[i];
+    vm_field *g;
+    if ((st = vm_mesh_add_field(o, f->name, f->location, f->type, f->ncomp, &g))) break;
+    size_t w = (f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t)) * (size_t)f->ncomp;
+    if (f->location == VM_FIELD_VERTEX) {
+      memcpy(g->data, f->data, w * (size_t)base);
+      continue;
+    }
+    if (f->type == VM_FIELD_I32 && strcmp(f->name, "gmsh:physical"))
+      for (int64_t j = 0; j < ne * f->ncomp; j++) ((int32_t *)g->data)[j] = -1;
+    for (int64_t e = 0; e < m->ne; e++)
+      if (emap[e] >= 0)
+        memcpy((char *)g->data + w * (size_t)emap[e], (const char *)f->data + w * (size_t)e, w);
+  }
+  vm_free(ctx, emap);
+  for (int i = 0; i < m->nattr && !st; i++)
+    st = vm_mesh_set_attr(o, m->attrs[i].key, m->attrs[i].value);
+  if (st) goto done;
+  /* names: the wall (a surface input), the far field, the fill */
+  vm_field *ph = vm_mesh_find_field(o, "gmsh:physical", VM_FIELD_ELEMENT);
+  if (ph && (ph->type != VM_FIELD_I32 || ph->ncomp != 1)) {
+    st = vm_error(ctx, VM_ERR_FORMAT, "the field 'gmsh:physical' is not one int per element");
+    goto done;
+  }
+  if (!ph && (st = vm_mesh_add_field(o, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &ph)))
+    goto done;
+  int32_t top = max_tag(m), *tag = ph->data;
+  int32_t t_far = top + 1, t_fill = top + 2, t_wall = top + 3;
+  if (E->surface) {
+    int32_t named = tag_named(m, "wall");
+    if (named < 0 && (st = set_name(o, 2, t_wall, "wall"))) goto done;
+    for (int64_t e = 0; e < nkeep; e++)
+      if (o->etype[e] == VM_TRI && tag[e] <= 0) tag[e] = named >= 0 ? named : t_wall;
+  }
+  for (int64_t e = nkeep; e < nkeep + nt; e++) tag[e] = t_fill;
+  for (int64_t e = nkeep + nt; e < ne; e++) tag[e] = t_far;
+  if ((st = set_name(o, 2, t_far, "farfield")) || (st = set_name(o, 3, t_fill, "fill"))) goto done;
+  /* Gmsh kept the boundary: the tets' unshared faces are exactly the
+   * envelope's and the far field's triangles */
+  tf = vm_alloc_array(ctx, (size_t)(4 * nt + E->nf + F->nf), sizeof *tf);
+  if (!tf) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t nf = 0;
+  static const int tf4[4][3] = {{0, 1, 2}, {0, 1, 3}, {1, 2, 3}, {0, 2, 3}};
+  for (int64_t t = 0; t < nt; t++) {
+    const int32_t *q = o->conn + o->eoff[nkeep + t];
+    for (int j = 0; j < 4; j++) {
+      for (int i = 0; i < 3; i++) tf[nf].v[i] = q[tf4[j][i]];
+      sort3(tf[nf].v);
+      tf[nf++].cell = 0;
+    }
+  }
+  for (int64_t f = 0; f < E->nf + F->nf; f++) {
+    for (int i = 0; i < 3; i++)
+      tf[nf].v[i] = f < E->nf ? E->fv[3 * f + i] : (int32_t)(base + F->fv[3 * (f - E->nf) + i]);
+    sort3(tf[nf].v);
+    tf[nf++].cell = 1; /* a boundary triangle: sorts after the tets' faces */
+  }
+  qsort(tf, (size_t)nf, sizeof *tf, cmp_tface);
+  int64_t bad = 0, first = -1;
+  for (int64_t i = 0; i < nf;) {
+    int64_t j = i + 1;
+    while (j < nf && same_face(&tf[i], &tf[j])) j++;
+    int tets = 0, bnd = 0;
+    for (int64_t q = i; q < j; q++) tets += tf[q].cell == 0, bnd += tf[q].cell == 1;
+    /* interior: 2 tets; boundary: 1 tet and the triangle */
+    if (!((tets == 2 && bnd == 0) || (tets == 1 && bnd == 1))) {
+      if (first < 0) first = i;
+      bad++;
+    }
+    i = j;
+  }
+  if (bad) {
+    st = vm_error(ctx, VM_ERR_BACKEND,
+                  "Gmsh did not keep the boundary: %lld faces (vertices %d %d %d first) are not "
+                  "one envelope or far-field triangle on one tet or shared by two tets",
+                  (long long)bad, tf[first].v[0], tf[first].v[1], tf[first].v[2]);
+    goto done;
+  }
+done:
+  vm_free(ctx, tf);
+  vm_free(ctx, map);
+  vm_free(ctx, onenv);
+  if (st)
+    vm_mesh_destroy(&o);
+  else
+    *out = o;
+  return st;
+}
+
+/* ---------- optimization of the tets next to the layer ---------- */
+
+/* Vertices within `rings` tet-edge rings of the envelope that Gmsh made
+ * (index >= first_new) move; the tets touching them are optimized with the
+ * shape measure, everything else fixed. */
+static int optimize_band(vm_ctx *ctx, vm_mesh *o, const envelope *E, int64_t first_new,
+                         const vm_fill_opts *opts, int64_t *nfree) {
+  int st = VM_OK;
+  *nfree = 0;
+  int64_t *rp = NULL;
+  int32_t *ve = NULL, *lv = NULL;
+  uint8_t *ring = vm_calloc(ctx, (size_t)o->nv + 1, 1);
+  uint8_t *tsel = vm_calloc(ctx, (size_t)o->ne + 1, 1);
+  vm_mesh *sub = NULL;
+  if (!ring || !tsel) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  if ((st = vm_mesh_vertex_elements(o, &rp, &ve))) goto done;
+  for (int64_t i = 0; i < 3 * E->nf; i++) ring[E->fv[i]] = 1;
+  for (int r = 1; r <= opts->opt_rings; r++)
+    for (int64_t v = 0; v < o->nv; v++) {
+      if (ring[v] != r) continue;
+      for (int64_t j = rp[v]; j < rp[v + 1]; j++) {
+        int64_t e = ve[j];
+        if (o->etype[e] != VM_TET) continue;
+        for (int i = 0; i < 4; i++) {
+          int32_t w = o->conn[o->eoff[e] + i];
+          if (!ring[w]) ring[w] = (uint8_t)(r + 1);
+        }
+      }
+    }
+  lv = vm_alloc_array(ctx, (size_t)o->nv + 1, sizeof *lv);
+  if (!lv) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t nsel = 0, nsv = 0;
+  for (int64_t v = 0; v < o->nv; v++) lv[v] = -1;
+  for (int64_t e = 0; e < o->ne; e++) {
+    if (o->etype[e] != VM_TET) continue;
+    const int32_t *q = o->conn + o->eoff[e];
+    for (int i = 0; i < 4; i++)
+      if (q[i] >= first_new && ring[q[i]] > 1) tsel[e] = 1;
+    if (!tsel[e]) continue;
+    nsel++;
+    for (int i = 0; i < 4; i++)
+      if (lv[q[i]] < 0) lv[q[i]] = (int32_t)nsv++;
+  }
+  if (!nsel) goto done;
+  if ((st = vm_mesh_create(ctx, &sub)) || (st = vm_mesh_set_vertices(sub, nsv)) ||
+      (st = vm_mesh_set_elements(sub, nsel, 4 * nsel)))
+    goto done;
+  for (int64_t v = 0; v < o->nv; v++) {
+    if (lv[v] < 0) continue;
+    memcpy(sub->xyz + 3 * lv[v], o->xyz + 3 * v, 3 * sizeof(double));
+    int moves = v >= first_new && ring[v] > 1;
+    sub->vflag[lv[v]] = moves ? VM_VERTEX_FREE : VM_VERTEX_FIXED;
+    *nfree += moves;
+  }
+  int64_t k = 0;
+  for (int64_t e = 0; e < o->ne; e++) {
+    if (!tsel[e]) continue;
+    sub->etype[k] = VM_TET;
+    for (int i = 0; i < 4; i++) sub->conn[4 * k + i] = lv[o->conn[o->eoff[e] + i]];
+    k++;
+    sub->eoff[k] = 4 * k;
+  }
+  vm_volume_opts vo = vm_volume_opts_default();
+  vo.measure = VM_MEASURE_SHAPE;
+  vo.opt_iter = opts->opt_iter;
+  vm_volume_report rep;
+  int rs = vm_volume_run(ctx, sub, NULL, &vo, &rep);
+  if (rs < 0) {
+    st = rs;
+    goto done;
+  }
+  if (rs != VM_OK || !rep.valid) {
+    vm_log(ctx, VM_LOG_WARN, "fill: the optimization did not keep the tets valid; not applied");
+    goto done;
+  }
+  for (int64_t v = 0; v < o->nv; v++)
+    if (lv[v] >= 0 && v >= first_new && ring[v] > 1)
+      memcpy(o->xyz + 3 * v, sub->xyz + 3 * lv[v], 3 * sizeof(double));
+done:
+  vm_mesh_destroy(&sub);
+  vm_free(ctx, rp);
+  vm_free(ctx, ve);
+  vm_free(ctx, lv);
+  vm_free(ctx, ring);
+  vm_free(ctx, tsel);
+  return st;
+}
+
+/* ---------- the stage ---------- */
+
+int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mesh **out,
+                vm_fill_report *report) {
+  vm_fill_opts o = opts ? *opts : vm_fill_opts_default();
+  vm_fill_report rep;
+  memset(&rep, 0, sizeof rep);
+  *out = NULL;
+  double t0 = now();
+  if (!(o.farfield > 0) || !(o.growth > 1) || o.opt_rings < 0 || o.opt_iter < 0)
+    return vm_error(ctx, VM_ERR_ARG, "fill: farfield > 0, growth > 1, rings >= 0 needed");
+  if (in->dim != 3) return vm_error(ctx, VM_ERR_ARG, "the fill needs a 3D mesh or surface");
+  envelope E;
+  far_surface F;
+  size_field S;
+  gmsh_result R;
+  memset(&F, 0, sizeof F);
+  memset(&S, 0, sizeof S);
+  memset(&R, 0, sizeof R);
+  double *hv = NULL, *pts = NULL, *hs = NULL, *nrm = NULL;
+  int32_t *vid = NULL;
+  vm_mesh *res = NULL;
+  int st = find_envelope(ctx, in, &E);
+  if (st) goto done;
+  int64_t counts[VM_NTYPES];
+  rep.surface_input = E.surface;
+  vm_mesh_count_types(in, counts);
+  rep.layer_cells = counts[VM_TET] + counts[VM_PYRAMID] + counts[VM_PRISM] + counts[VM_HEX];
+  rep.env_faces = E.nf;
+  /* the model: the wall's faces if named, else the envelope */
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  int32_t wall = tag_named(in, "wall");
+  const vm_field *ph = vm_mesh_find_field(in, "gmsh:physical", VM_FIELD_ELEMENT);
+  int any = 0;
+  if (!E.surface && wall >= 0 && ph && ph->type == VM_FIELD_I32 && ph->ncomp == 1)
+    for (int64_t e = 0; e < in->ne; e++) {
+      if (vm_elem_dim(in->etype[e]) != 2 || ((const int32_t *)ph->data)[e] != wall) continue;
+      for (int64_t j = in->eoff[e]; j < in->eoff[e + 1]; j++)
+        for (int k = 0; k < 3; k++) {
+          double x = in->xyz[3 * in->conn[j] + k];
+          lo[k] = x < lo[k] ? x : lo[k];
+          hi[k] = x > hi[k] ? x : hi[k];
+        }
+      any = 1;
+    }
+  if (!any)
+    for (int64_t i = 0; i < 3 * E.nf; i++)
+      for (int k = 0; k < 3; k++) {
+        double x = in->xyz[3 * E.fv[i] + k];
+        lo[k] = x < lo[k] ? x : lo[k];
+        hi[k] = x > hi[k] ? x : hi[k];
+      }
+  double c[3], L = 0;
+  for (int k = 0; k < 3; k++) {
+    c[k] = (lo[k] + hi[k]) / 2;
+    if (hi[k] - lo[k] > L) L = hi[k] - lo[k];
+  }
+  if (!(L > 0) || !isfinite(L)) {
+    st = vm_error(ctx, VM_ERR_ARG, "the model has no extent (length %g)", L);
+    goto done;
+  }
+  double H = o.farfield * L, reach = 0;
+  rep.model_length = L;
+  rep.far_distance = H;
+  /* sizes at the envelope's vertices: the mean length of their edges */
+  vid = vm_alloc_array(ctx, (size_t)in->nv + 1, sizeof *vid);
+  hv = vm_calloc(ctx, (size_t)in->nv + 1, sizeof *hv);
+  double *cnt = vm_calloc(ctx, (size_t)in->nv + 1, sizeof *cnt);
+  if (!vid || !hv || !cnt) {
+    vm_free(ctx, cnt);
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t f = 0; f < E.nf; f++)
+    for (int i = 0; i < 3; i++) {
+      int32_t a = E.fv[3 * f + i], b = E.fv[3 * f + (i + 1) % 3];
+      double l = vm_dist3(in->xyz + 3 * a, in->xyz + 3 * b);
+      hv[a] += l, hv[b] += l, cnt[a] += 1, cnt[b] += 1;
+    }
+  int64_t nenv = 0;
+  for (int64_t v = 0; v < in->nv; v++) vid[v] = cnt[v] > 0 ? (int32_t)nenv++ : -1;
+  pts = vm_alloc_array(ctx, (size_t)(3 * nenv + 3), sizeof *pts);
+  hs = vm_alloc_array(ctx, (size_t)nenv + 1, sizeof *hs);
+  if (!pts || !hs) {
+    vm_free(ctx, cnt);
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  rep.env_size_min = INFINITY;
+  for (int64_t v = 0; v < in->nv; v++) {
+    if (vid[v] < 0) continue;
+    double h = hv[v] / cnt[v];
+    hs[vid[v]] = h;
+    memcpy(pts + 3 * vid[v], in->xyz + 3 * v, 3 * sizeof(double));
+    rep.env_size_min = h < rep.env_size_min ? h : rep.env_size_min;
+    rep.env_size_max = h > rep.env_size_max ? h : rep.env_size_max;
+    double d = 0;
+    for (int k = 0; k < 3; k++) {
+      double x = fabs(in->xyz[3 * v + k] - c[k]);
+      d = o.shape == VM_FAR_SPHERE ? d + x * x : (x > d ? x : d);
+    }
+    d = o.shape == VM_FAR_SPHERE ? sqrt(d) : d;
+    reach = d > reach ? d : reach;
+  }
+  vm_free(ctx, cnt);
+  if (!(rep.env_size_min > 0)) {
+    st = vm_error(ctx, VM_ERR_FORMAT, "the envelope has an edge of length 0");
+    goto done;
+  }
+  if (reach >= 0.9 * H) {
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "the far field (%s %g from the centre, %g model lengths) cuts the layer or "
+                  "comes too close to it (it reaches %g): raise --farfield",
+                  o.shape == VM_FAR_SPHERE ? "radius" : "half-width", H, o.farfield, reach);
+    goto done;
+  }
+  S.slope = o.growth - 1;
+  S.hmax = o.far_size > 0 ? o.far_size : INFINITY;
+  S.o = &o;
+  if ((st = size_build(ctx, &S, pts, hs, nenv))) goto done;
+  /* the far field's triangle size: the size field at its nearest points */
+  double hfar = INFINITY;
+  for (int ax = 0; ax < 3; ax++)
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+      double x[3] = {c[0], c[1], c[2]};
+      x[ax] += sgn * H;
+      double h = size_at(&S, x);
+      hfar = h < hfar ? h : hfar;
+    }
+  int n = (int)ceil(2 * H / hfar);
+  n = n < 2 ? 2 : n > 400 ? 400 : n;
+  rep.far_size = 2 * H / n;
+  if ((st = far_build(ctx, &F, c, H, n, o.shape == VM_FAR_SPHERE))) goto done;
+  rep.far_faces = F.nf;
+  vm_log(ctx, VM_LOG_INFO,
+         "fill: envelope %lld triangles (sizes %.3g to %.3g), far field %s at %g (%g model "
+         "lengths of %g), %lld triangles of %.3g; Gmsh %s, growth %g",
+         (long long)E.nf, rep.env_size_min, rep.env_size_max,
+         o.shape == VM_FAR_SPHERE ? "sphere" : "box", H, o.farfield, L, (long long)F.nf,
+         rep.far_size, o.algorithm == 10 ? "HXT" : "Delaunay", o.growth);
+  double t1 = now();
+  double *q = NULL;
+  int64_t nq = 0;
+  nrm = vm_calloc(ctx, (size_t)(3 * nenv + 3), sizeof *nrm);
+  if (!nrm) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  if ((st = offset_points(ctx, in, &E, vid, hs, nenv, nrm, &q, &nq))) goto done;
+  vm_log(ctx, VM_LOG_INFO, "fill: %lld points off the envelope embedded", (long long)nq);
+  /* Gmsh, then again with a point in each sliver of envelope vertices */
+  for (int pass = 0;; pass++) {
+    if ((st = gmsh_fill(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R)) ||
+        (st = merge(ctx, in, &E, &F, &R, &res)))
+      break;
+    int64_t ns = 0;
+    if (pass == 1 || (st = sliver_points(ctx, res, in->nv, vid, nrm, 10, &q, &nq, &ns)) || !ns)
+      break;
+    vm_log(ctx, VM_LOG_INFO,
+           "fill: %lld slivers of envelope vertices: meshing again with a point in each",
+           (long long)ns);
+    vm_mesh_destroy(&res);
+    gmsh_result_free(&R);
+  }
+  vm_free(ctx, q);
+  if (st) goto done;
+  rep.time_mesh = now() - t1;
+  if (vm_ctx_interrupted(ctx)) {
+    st = vm_error(ctx, VM_ERR_INTERRUPTED, "interrupted");
+    goto done;
+  }
+  rep.tets = (int64_t)R.nt;
+  rep.new_vertices = res->nv - in->nv;
+  if ((st = vm_fill_tet_quality_of(ctx, res, &rep.before))) goto done;
+  vm_log(ctx, VM_LOG_INFO,
+         "fill: %lld tets, %lld new vertices in %.2f s; tets: min dihedral %.2f deg, min "
+         "scaled Jacobian %.3f; volume ratio across the envelope %.3g, between tets %.3g",
+         (long long)rep.tets, (long long)rep.new_vertices, rep.time_mesh, rep.before.min_dihedral,
+         rep.before.sj_min, rep.before.vol_ratio_env, rep.before.vol_ratio_tets);
+  rep.after = rep.before;
+  if (o.opt_iter > 0 && o.opt_rings > 0) {
+    double t2 = now();
+    if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, &o, &rep.opt_free))) goto done;
+    rep.time_opt = now() - t2;
+    if ((st = vm_fill_tet_quality_of(ctx, res, &rep.after))) goto done;
+    vm_log(ctx, VM_LOG_INFO,
+           "fill: optimized %lld vertices within %d rings of the envelope in %.2f s: min "
+           "dihedral %.2f deg, min scaled Jacobian %.3f; volume ratio across the envelope %.3g, "
+           "between tets %.3g",
+           (long long)rep.opt_free, o.opt_rings, rep.time_opt, rep.after.min_dihedral,
+           rep.after.sj_min, rep.after.vol_ratio_env, rep.after.vol_ratio_tets);
+  }
+  rep.time_total = now() - t0;
+  *out = res;
+  res = NULL;
+done:
+  vm_mesh_destroy(&res);
+  gmsh_result_free(&R);
+  far_free(ctx, &F);
+  size_free(ctx, &S);
+  envelope_free(ctx, &E);
+  vm_free(ctx, hv);
+  vm_free(ctx, pts);
+  vm_free(ctx, hs);
+  vm_free(ctx, nrm);
+  vm_free(ctx, vid);
+  if (report) *report = rep;
+  return st;
+}
