@@ -13,6 +13,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   setup_args=(-Dsanitize=true)
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  export LSAN_OPTIONS=suppressions=$root/test/lsan.supp:print_suppressions=0
   test_args=(--timeout-multiplier 6) # instrumented code runs several times slower
 fi
 # two tests run at once on a 2-core machine: OpenMP threads that spin while
