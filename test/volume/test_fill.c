@@ -163,6 +163,8 @@ static void layer_case(vm_ctx *ctx) {
   vm_field *ph, *layer;
   vm_mesh_add_field(m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &ph);
   vm_mesh_add_field(m, "layer", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &layer);
+  /* adding a field may move the field array: find the first one again */
+  ph = vm_mesh_find_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
   for (int64_t e = 0; e < m->ne; e++) {
     ((int32_t *)ph->data)[e] = e < nt ? 3 : e < 2 * nt ? 1 : 2;
     ((int32_t *)layer->data)[e] = e < nt ? 0 : -1;
