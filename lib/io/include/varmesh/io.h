@@ -139,7 +139,12 @@ void vm_outfile_abort(vm_outfile **f);
  * attributes "gmsh:physical_name:2:<tag>" ("wall", "outer" for the output
  * of vm_prism_result); a face without a tag, or a tag without a name, goes
  * to a family named "boundary_<tag>". If the mesh has no faces at all,
- * its boundary faces (vm_mesh_boundary) form one family "boundary".
+ * its boundary faces (vm_mesh_boundary) form one family "boundary". The
+ * name says the kind of boundary, letter case ignored: a name starting
+ * with "wall" is a wall (CGNS BCWall), "farfield" a far field
+ * (BCFarfield), "symmetry" a symmetry plane (BCSymmetryPlane); any other,
+ * "outer" included (the top of a prism layer is no far field), is left to
+ * the user (BCTypeUserDefined).
  * Element fields of the cells (int or f64, one component; for example
  * "layer") are written where the format can hold them.
  *
@@ -210,8 +215,8 @@ void vm_outfile_abort(vm_outfile **f);
  * unstructured zone, coordinates in double, one element section per cell
  * type (TETRA_4, PYRA_5, PENTA_6, HEXA_8; 1-based, VTK order equals CGNS
  * order for these types), one section per face family (TRI_3 / QUAD_4),
- * a Family_t per face family (BCWall for "wall", BCFarfield for "outer",
- * else BCTypeUserDefined) and a BC_t per family referring to it by
+ * a Family_t per face family (its BC type from the name, see above) and a
+ * BC_t per family referring to it by
  * FamilyName with its element range at FaceCenter; cell fields as a
  * cell-centred FlowSolution_t. Atomic (temporary file + rename).
  * Returns VM_OK, VM_WARN_LOSSY (vertex fields, element fields of several
