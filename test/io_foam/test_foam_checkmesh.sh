@@ -6,7 +6,8 @@
 # tetrahedra) through vm-convert, and a vm-prism layer on a sphere written
 # straight to a case, whose patches are the wall (type wall) and the outer
 # surface (type patch); writing again into a case keeps its 0/ and system/.
-# Skipped (77) when checkMesh is not installed.
+# potentialFoam, when installed, runs on the mixed cube's patches. Skipped
+# (77) when checkMesh is not installed.
 # usage: test_foam_checkmesh.sh FOAM_CASES VM_GEN VM_CONVERT VM_PRISM
 set -u
 cases=$1 gen=$2 conv=$3 prism=$4
@@ -51,6 +52,46 @@ check '[ $? -eq 0 ]' "vm-gen rotcube at angle 0, hexahedra and tetrahedra"
 check '[ $? -eq 0 ] && mesh_ok "$dir/h.foam"' "vm-convert h.vmsh h.foam: checkMesh OK"
 "$conv" --binary --format foam "$dir/t.vmsh" "$dir/t" 2>/dev/null
 check '[ $? -eq 0 ] && mesh_ok "$dir/t"' "vm-convert --binary --format foam t.vmsh t: checkMesh OK"
+
+# a solver on the patches: potentialFoam on the mixed cube, the symmetry
+# side with OpenFOAM's symmetryPlane condition (refused on a patch of
+# another type), slip walls, the far field at fixed pressure, the uncovered
+# sides (defaultFaces) as the inflow
+if command -v potentialFoam >/dev/null 2>&1; then
+  c="$dir/mixed.foam"
+  mkdir -p "$c/0"
+  field() { # class object dimensions value wall farfield defaultFaces
+    printf 'FoamFile { version 2.0; format ascii; class %s; object %s; }\n' "$1" "$2"
+    printf 'dimensions %s;\ninternalField uniform %s;\nboundaryField\n{\n' "$3" "$4"
+    printf '    wall { type %s; }\n    outer { type %s; }\n' "$5" "$5"
+    printf '    farfield { type %s; }\n    symmetry { type symmetryPlane; }\n' "$6"
+    printf '    defaultFaces { type %s; }\n}\n' "$7"
+  }
+  field volVectorField U "[0 1 -1 0 0 0 0]" "(0 0 0)" slip zeroGradient \
+    "fixedValue; value uniform (1 0 0)" >"$c/0/U"
+  field volScalarField p "[0 2 -2 0 0 0 0]" 0 zeroGradient "fixedValue; value uniform 0" \
+    zeroGradient >"$c/0/p"
+  cat >"$c/system/fvSchemes" <<'END'
+FoamFile { version 2.0; format ascii; class dictionary; object fvSchemes; }
+ddtSchemes { default steadyState; }
+gradSchemes { default leastSquares; }
+divSchemes { default none; div(phi,U) bounded Gauss linear; div(div(phi,U)) Gauss linear; }
+laplacianSchemes { default Gauss linear corrected; }
+interpolationSchemes { default linear; }
+snGradSchemes { default corrected; }
+END
+  cat >"$c/system/fvSolution" <<'END'
+FoamFile { version 2.0; format ascii; class dictionary; object fvSolution; }
+solvers { Phi { solver GAMG; smoother DIC; tolerance 1e-06; relTol 0.01; } p { $Phi; } }
+potentialFlow { nNonOrthogonalCorrectors 3; }
+END
+  potentialFoam -case "$c" -writep >"$c.pf.log" 2>&1
+  rc=$?
+  check '[ $rc -eq 0 ] && ! grep -q "FATAL" "$c.pf.log" && [ "$(grep -v "^$" "$c.pf.log" | tail -1)" = End ]' "potentialFoam runs on mixed.foam's patches (exit $rc)"
+  [ $rc -eq 0 ] || tail -15 "$c.pf.log" | sed 's/^/    /'
+else
+  echo "skip: potentialFoam not on PATH"
+fi
 
 # the prism layer: boundaries "wall" and "outer", nothing in defaultFaces
 "$prism" -q -t 0.2 -n 4 "$dir/sphere.stl" "$dir/p.foam" 2>"$dir/p.err"
