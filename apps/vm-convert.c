@@ -15,12 +15,12 @@ typedef struct {
 #define A(f) offsetof(args, f)
 static const vm_opt opts[] = {
     {"--format", NULL, VM_OPT_CALL, A(fout), "F",
-     "output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply, su2, cgns)",
+     "output format (vmsh, vmsht, vtk, vtu, msh, mesh, stl, obj, off, ply, su2, cgns, foam)",
      .fn = vm_cli_opt_format, .error = "needs a value"},
     {"--in-format", NULL, VM_OPT_CALL, A(fin), "F", "input format", .fn = vm_cli_opt_format,
      .error = "needs a value"},
     {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL,
-     "binary output where the format has both (vtk, msh, stl)", .ival = 1},
+     "binary output where the format has both (vtk, msh, stl, ply, foam)", .ival = 1},
     {"--msh22", NULL, VM_OPT_FLAG, A(wo.msh_version), NULL, "write Gmsh 2.2 instead of 4.1",
      .ival = 22},
     {"--strict", NULL, VM_OPT_FLAG, A(strict), NULL,
@@ -31,8 +31,10 @@ static const vm_opt opts[] = {
 static const vm_cli_spec spec = {
     "usage: vm-convert [options] IN OUT\n"
     "Convert a mesh; formats from the extensions (.vmsh .vmsht .vtk .vtu .msh .mesh\n"
-    ".stl .obj .off .ply .su2 .cgns) unless forced. SU2 and CGNS take volume meshes\n"
-    "and surface meshes (triangles and quadrilaterals in 3D).\n",
+    ".stl .obj .off .ply .su2 .cgns .foam) unless forced. SU2 and CGNS take volume\n"
+    "meshes and surface meshes (triangles and quadrilaterals in 3D). OpenFOAM (.foam\n"
+    "or --format foam, write only): OUT is a case directory; OUT/constant/polyMesh\n"
+    "is written (replaced in an existing case, whose other files stay).\n",
     opts,
     "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
     {A(in), A(out)},

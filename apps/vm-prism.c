@@ -160,8 +160,9 @@ static const vm_opt opts[] = {
     {"--time-limit", NULL, VM_OPT_DOUBLE, A(o.time_limit), "S", "seconds for the whole run",
      .lo = 1e-300, .hi = 1e300},
     VM_CLI_OPT_THREADS,
-    {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format (vmsh, msh, vtu, vtk, cgns, su2)",
-     .fn = vm_cli_opt_format, .error = "expects a format name"},
+    {"--format", NULL, VM_OPT_CALL, A(fout), "F",
+     "output format (vmsh, msh, vtu, vtk, cgns, su2, foam)", .fn = vm_cli_opt_format,
+     .error = "expects a format name"},
     {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
      .ival = 1},
     {"--report", NULL, VM_OPT_STRING, A(report), "DIR",
@@ -181,7 +182,8 @@ static const vm_cli_spec spec = {
     "wall IN (.vmsh, .stl, .obj, .off, .ply, ...): thin layer, elastic springback,\n"
     "cutting of self-intersections (Embree), thickness restoration with smoothing,\n"
     "marching split into layers. OUT by extension: .vmsh .msh (Gmsh 4.1) .vtu .vtk\n"
-    ".cgns .su2 (wall and outer boundary as separate families / markers).\n",
+    ".cgns .su2 .foam (wall and outer boundary as separate families / markers /\n"
+    "patches; .foam is an OpenFOAM case directory).\n",
     opts,
     "exit: 0 valid layers; 1 bad input or I/O; 2 usage; 3 inverted prisms or\n"
     "intersections remain (the mesh is still written); 4 interrupted\n",

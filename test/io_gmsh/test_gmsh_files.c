@@ -120,7 +120,7 @@ int main(void) {
     for (int64_t e = 0; e < md->ne; e++)
       bad += vm_elem_dim(md->etype[e]) == 3 && !(elem_measure(md, e) > 0);
     CHECK(!bad, "gmsh.mesh: %d volume cells not positive", bad);
-    CHECK(vm_mesh_find_field(md, "medit:ref", VM_FIELD_ELEMENT) != NULL, "gmsh.mesh refs");
+    CHECK(vm_mesh_find_field(md, "gmsh:physical", VM_FIELD_ELEMENT) != NULL, "gmsh.mesh refs");
     vm_mesh_destroy(&md);
   }
   for (int i = 0; i < 4; i++) vm_mesh_destroy(&m[i]);

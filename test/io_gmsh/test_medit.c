@@ -1,4 +1,5 @@
-/* test/io_gmsh/test_medit.c: MEDIT .mesh round trips, element orientation, refs,
+/* test/io_gmsh/test_medit.c: MEDIT .mesh round trips, element orientation, refs
+ * (element refs are the tags "gmsh:physical"; names are lost, warned),
  * required vertices, a hand-written file with every cell type, 2D files. */
 #include "gmsh_testlib.h"
 
@@ -29,7 +30,7 @@ static vm_mesh *build_grouped(vm_ctx *ctx) {
   vm_field *f;
   vm_mesh_add_field(m, "medit:ref", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &f);
   for (int64_t v = 0; v < m->nv; v++) ((int32_t *)f->data)[v] = (int32_t)(v % 4) - 1;
-  vm_mesh_add_field(m, "medit:ref", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+  vm_mesh_add_field(m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
   for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = (int32_t)(100 + e);
   m->vflag[3] = VM_VERTEX_FIXED;
   m->vflag[m->nv - 1] = VM_VERTEX_FIXED;
@@ -88,8 +89,8 @@ static void test_lossy(vm_ctx *ctx) {
   vm_mesh *m = build_grouped(ctx);
   int32_t v[3] = {0, 1, 2};
   vm_mesh_add_element(m, VM_TRI, v); /* a triangle after the hexahedra */
-  vm_mesh_remove_field(m, "medit:ref", VM_FIELD_ELEMENT);
-  vm_mesh_add_field(m, "medit:ref", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, NULL);
+  vm_mesh_remove_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
+  vm_mesh_add_field(m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, NULL);
   vm_mesh_add_field(m, "weight", VM_FIELD_ELEMENT, VM_FIELD_F64, 1, NULL);
   vm_mesh_set_attr(m, "gmsh:physical_name:3:1", "fluid");
   m->vflag[0] = VM_VERTEX_SLIP;
@@ -98,7 +99,8 @@ static void test_lossy(vm_ctx *ctx) {
   int wst;
   vm_mesh *b = write_read(ctx, m, "lossy.mesh", &wst);
   CHECK(wst == VM_WARN_LOSSY, "lossy status %d", wst);
-  CHECK(lg.nwarn == 4 && tlog_has(&lg, "'weight'") && tlog_has(&lg, "gmsh:physical_name:3:1") &&
+  CHECK(lg.nwarn == 4 && tlog_has(&lg, "'weight'") &&
+            tlog_has(&lg, "the name 'fluid' of reference 1 cannot be stored") &&
             tlog_has(&lg, "1 slip vertices") && tlog_has(&lg, "groups elements by type"),
         "lossy warnings (%d): %s", lg.nwarn, lg.all);
   if (b) {
@@ -148,8 +150,8 @@ static void test_hand_file(vm_ctx *ctx) {
   for (int64_t e = 0; e < m->ne && e < 7; e++) {
     CHECK(m->etype[e] == want[e], "cell %lld is a %s", (long long)e, vm_elem_name(m->etype[e]));
     CHECK_NEAR(elem_measure(m, e), vol[e], 1e-15, vm_elem_name(m->etype[e]));
-    CHECK(ifield(m, "medit:ref", VM_FIELD_ELEMENT, e) == (e < 2 ? 10 : 18) + e, "cell %lld ref %d",
-          (long long)e, ifield(m, "medit:ref", VM_FIELD_ELEMENT, e));
+    CHECK(ifield(m, "gmsh:physical", VM_FIELD_ELEMENT, e) == (e < 2 ? 10 : 18) + e,
+          "cell %lld ref %d", (long long)e, ifield(m, "gmsh:physical", VM_FIELD_ELEMENT, e));
   }
   CHECK(ifield(m, "medit:ref", VM_FIELD_VERTEX, 9) == 4 &&
             ifield(m, "medit:ref", VM_FIELD_VERTEX, 4) == 2,
@@ -173,6 +175,39 @@ static void test_hand_file(vm_ctx *ctx) {
   }
 }
 
+/* Element refs: "gmsh:physical" is written and read back as such; an
+ * element field "medit:ref" (what older readers made) is written when
+ * there is no "gmsh:physical", and dropped with a warning when there is. */
+static void test_ref_fields(vm_ctx *ctx) {
+  vm_mesh *m = build_grouped(ctx);
+  vm_field *f;
+  vm_mesh_remove_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
+  vm_mesh_add_field(m, "medit:ref", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+  for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = (int32_t)(7 * e - 3);
+  tlog_reset(&lg);
+  int wst;
+  vm_mesh *b = write_read(ctx, m, "legacy.mesh", &wst);
+  CHECK(wst == VM_OK && lg.nwarn == 0, "legacy refs: status %d, warnings %s", wst, lg.all);
+  int64_t bad = 0;
+  for (int64_t e = 0; b && e < b->ne; e++)
+    bad += ifield(b, "gmsh:physical", VM_FIELD_ELEMENT, e) != 7 * e - 3;
+  CHECK(b && !bad && !vm_mesh_find_field(b, "medit:ref", VM_FIELD_ELEMENT),
+        "legacy refs read back as gmsh:physical (%lld differ)", (long long)bad);
+  vm_mesh_destroy(&b);
+  vm_mesh_add_field(m, "gmsh:physical", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+  for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = (int32_t)(e % 3);
+  tlog_reset(&lg);
+  b = write_read(ctx, m, "both.mesh", &wst);
+  CHECK(wst == VM_WARN_LOSSY && lg.nwarn == 1 && tlog_has(&lg, "element field 'medit:ref'"),
+        "both: status %d, warnings %s", wst, lg.all);
+  bad = 0;
+  for (int64_t e = 0; b && e < b->ne; e++)
+    bad += ifield(b, "gmsh:physical", VM_FIELD_ELEMENT, e) != e % 3;
+  CHECK(b && !bad, "both: gmsh:physical written (%lld differ)", (long long)bad);
+  vm_mesh_destroy(&b);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx;
   vm_ctx_create(&ctx);
@@ -182,6 +217,7 @@ int main(void) {
   test_round_trip(ctx);
   test_orientation(ctx);
   test_lossy(ctx);
+  test_ref_fields(ctx);
   test_hand_file(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == live0, "leaked %ld blocks", vm_ctx_alloc_live(ctx) - live0);
   tdir_remove();

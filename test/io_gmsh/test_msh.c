@@ -5,7 +5,10 @@
 static tlog lg;
 
 /* Mixed mesh with awkward doubles, groups, fields of both types and flags.
- * Elements are interleaved so that the writer's entity blocks reorder them. */
+ * Element types and entities interleave: the 4.1 writer's blocks are runs
+ * of one entity and type in mesh order, the elements numbered 1..N in the
+ * order written (so readers that go by file position, like meshio, put
+ * element data on the right cells). */
 static vm_mesh *build_mixed(vm_ctx *ctx) {
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
@@ -97,6 +100,17 @@ static void test_round_trips(vm_ctx *ctx) {
     CHECK(strstr(txt, "3 1 \"fluid region\"") != NULL, "physical name written");
     CHECK(strstr(txt, "$Entities\n0 0 1 4\n") != NULL, "1 surface and 4 volume entities");
     CHECK(strstr(txt, "\"vm_flag\"") != NULL, "vertex flags as NodeData");
+    /* 8 blocks of one element each (no two neighbours share entity and
+     * type), tags 1..8 in file order */
+    const char *el = strstr(txt, "$Elements\n8 8 1 8\n");
+    CHECK(el != NULL, "8 blocks, 8 elements, tags 1 to 8");
+    int ntag = 0, inorder = 1;
+    for (const char *p = el ? strchr(el + 10, '\n') + 1 : NULL; p && ntag < 8; ntag++) {
+      p = strchr(p, '\n') + 1; /* block header: dim, entity, type, 1 */
+      inorder &= atoi(p) == ntag + 1;
+      p = strchr(p, '\n') + 1;
+    }
+    CHECK(ntag == 8 && inorder, "4.1 element tags in file order (%d read)", ntag);
     free(txt);
   }
   vm_mesh_destroy(&m);

@@ -23,7 +23,7 @@
  * layer 0 with tag 7 and no name (a family "boundary_7"), interleaved with
  * the others so that the writers have to group them. Element fields:
  * "layer" (int) and "thickness" (f64). */
-static vm_mesh *layered_mesh(vm_ctx *ctx, int n) {
+static inline vm_mesh *layered_mesh(vm_ctx *ctx, int n) {
   vm_mesh *m;
   vm_mesh_create(ctx, &m);
   int np = n + 1;
@@ -100,13 +100,13 @@ static vm_mesh *layered_mesh(vm_ctx *ctx, int n) {
   return m;
 }
 
-static const int32_t *i32_field(const vm_mesh *m, const char *name) {
+static inline const int32_t *i32_field(const vm_mesh *m, const char *name) {
   const vm_field *f = vm_mesh_find_field(m, name, VM_FIELD_ELEMENT);
   return f && f->type == VM_FIELD_I32 ? f->data : NULL;
 }
 
 /* The name of element e's family, as the writers see it. */
-static const char *family_of(const vm_mesh *m, int64_t e, char *buf, size_t n) {
+static inline const char *family_of(const vm_mesh *m, int64_t e, char *buf, size_t n) {
   const int32_t *t = i32_field(m, "gmsh:physical");
   int tag = t ? t[e] : 0;
   char key[64];
@@ -118,7 +118,7 @@ static const char *family_of(const vm_mesh *m, int64_t e, char *buf, size_t n) {
 }
 
 /* Is b's element eb the same as a's ea: type and vertices in order? */
-static int same_elem(const vm_mesh *a, int64_t ea, const vm_mesh *b, int64_t eb) {
+static inline int same_elem(const vm_mesh *a, int64_t ea, const vm_mesh *b, int64_t eb) {
   if (a->etype[ea] != b->etype[eb]) return 0;
   int k = vm_elem_nverts(a->etype[ea]);
   return !memcmp(a->conn + a->eoff[ea], b->conn + b->eoff[eb], sizeof(int32_t) * (size_t)k);
@@ -129,7 +129,7 @@ static int same_elem(const vm_mesh *a, int64_t ea, const vm_mesh *b, int64_t eb)
  * family in mesh order (SU2) or its triangles then its quads, each in mesh
  * order (CGNS: a section per face type). Fills ord[] and returns its
  * length. */
-static int64_t writer_order(const vm_mesh *m, int cell_order, int64_t *ord) {
+static inline int64_t writer_order(const vm_mesh *m, int cell_order, int64_t *ord) {
   int64_t k = 0;
   static const int vol[4] = {VM_TET, VM_PYRAMID, VM_PRISM, VM_HEX};
   if (!cell_order) {
@@ -161,8 +161,8 @@ static int64_t writer_order(const vm_mesh *m, int cell_order, int64_t *ord) {
  * for bit, elements in the writer's order with their vertices in order,
  * faces in families of the same names; element fields listed in `fields`
  * carried value for value. Returns the number of differences. */
-static int compare_read_back(const char *what, const vm_mesh *orig, const vm_mesh *got,
-                             int cell_order, const char *const *fields) {
+static inline int compare_read_back(const char *what, const vm_mesh *orig, const vm_mesh *got,
+                                    int cell_order, const char *const *fields) {
   int bad = 0;
   CHECK(got->nv == orig->nv, "%s: %lld vertices, want %lld", what, (long long)got->nv,
         (long long)orig->nv);
@@ -211,7 +211,7 @@ static int compare_read_back(const char *what, const vm_mesh *orig, const vm_mes
 }
 
 /* Two meshes bit for bit (counts, coordinates, elements, fields, attributes). */
-static const char *mesh_diff(const vm_mesh *a, const vm_mesh *b) {
+static inline const char *mesh_diff(const vm_mesh *a, const vm_mesh *b) {
   if (a->dim != b->dim) return "dim";
   if (a->nv != b->nv || a->ne != b->ne) return "counts";
   if (a->nv && memcmp(a->xyz, b->xyz, sizeof(double) * 3 * (size_t)a->nv)) return "coordinates";
@@ -237,7 +237,7 @@ static const char *mesh_diff(const vm_mesh *a, const vm_mesh *b) {
  * bits in use) and a jittered torus of quadrilaterals. interleave 0: the
  * triangles then the quads, as CGNS stores them (a section per type);
  * 1: the two alternate (SU2 keeps any order). */
-static vm_mesh *surface_mesh(vm_ctx *ctx, int interleave) {
+static inline vm_mesh *surface_mesh(vm_ctx *ctx, int interleave) {
   vm_mesh *s, *m;
   vm_mesh_create(ctx, &s);
   vm_gen_jitter j = {0.2, 7};
@@ -259,7 +259,7 @@ static vm_mesh *surface_mesh(vm_ctx *ctx, int interleave) {
 }
 
 /* Whole file into a malloc'd NUL-terminated string. */
-static char *slurp(const char *path, size_t *len) {
+static inline char *slurp(const char *path, size_t *len) {
   FILE *f = fopen(path, "rb");
   if (!f) return NULL;
   fseek(f, 0, SEEK_END);

@@ -113,10 +113,13 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
       next += n;
     }
     int F, FB, BC;
+    /* "outer" (the top of a prism layer) is no far field: user defined */
+    int kind = ex_family_kind(g->name[f]);
     CGNS_ENUMT(BCType_t)
-    bt = !strcmp(g->name[f], "wall")    ? CGNS_ENUMV(BCWall)
-         : !strcmp(g->name[f], "outer") ? CGNS_ENUMV(BCFarfield)
-                                        : CGNS_ENUMV(BCTypeUserDefined);
+    bt = kind == EX_FAM_WALL       ? CGNS_ENUMV(BCWall)
+         : kind == EX_FAM_FARFIELD ? CGNS_ENUMV(BCFarfield)
+         : kind == EX_FAM_SYMMETRY ? CGNS_ENUMV(BCSymmetryPlane)
+                                   : CGNS_ENUMV(BCTypeUserDefined);
     cgsize_t range[2] = {first, next - 1};
     if (cg_family_write(fn, B, g->name[f], &F) || cg_fambc_write(fn, B, F, "FamBC", bt, &FB) ||
         cg_boco_write(fn, B, Z, g->name[f], CGNS_ENUMV(FamilySpecified), CGNS_ENUMV(PointRange), 2,

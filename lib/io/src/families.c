@@ -1,8 +1,9 @@
 /* lib/io/src/families.c: cells and boundary-face families for the
- * solver formats (SU2, CGNS). */
+ * solver formats (SU2, CGNS, OpenFOAM). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "families_private.h"
 #include "varmesh/topology.h"
@@ -166,4 +167,11 @@ int ex_groups_build(vm_ctx *ctx, const vm_mesh *m, ex_groups *g) {
   g->fbeg[g->nfam] = nf;
   vm_free(ctx, tg);
   return st;
+}
+
+int ex_family_kind(const char *name) {
+  if (!strncasecmp(name, "wall", 4)) return EX_FAM_WALL;
+  if (!strcasecmp(name, "farfield")) return EX_FAM_FARFIELD;
+  if (!strcasecmp(name, "symmetry")) return EX_FAM_SYMMETRY;
+  return EX_FAM_OTHER;
 }

@@ -1,5 +1,6 @@
-/* lib/io/src/families_private.h: what the SU2 and CGNS writers share: the
- * cells of the mesh and its boundary faces grouped into named families. */
+/* lib/io/src/families_private.h: what the SU2, CGNS and OpenFOAM writers
+ * share: the cells of the mesh, its boundary faces grouped into named
+ * families, and the kind of boundary a family's name says. */
 #ifndef VARMESH_FAMILIES_PRIVATE_H
 #define VARMESH_FAMILIES_PRIVATE_H
 
@@ -36,5 +37,12 @@ int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char 
  * are its triangles and quads in mesh order and there are no families. */
 int ex_groups_build(vm_ctx *ctx, const vm_mesh *m, ex_groups *g);
 void ex_groups_free(vm_ctx *ctx, ex_groups *g);
+
+/* The kind of boundary a family's name says (letter case ignored): a name
+ * starting with "wall" is a wall, "farfield" a far field, "symmetry" a
+ * symmetry plane; anything else ("outer", the top of a prism layer, "inlet",
+ * ...) is another boundary, which the writers leave to the user. */
+enum { EX_FAM_OTHER = 0, EX_FAM_WALL, EX_FAM_FARFIELD, EX_FAM_SYMMETRY };
+int ex_family_kind(const char *name);
 
 #endif

@@ -9,6 +9,22 @@
  * context's message with "name: " unless it already does. Returns st. */
 int vm_error_name_prefix(vm_ctx *ctx, int st, const char *name);
 
+/* Atomic output of a directory tree (a format whose output is a directory).
+ * vm_outdir_open makes an empty temporary directory beside `path`
+ * ("<parent>/.<name>.tmp.<pid>.<n>"; path may not be a file); the writer
+ * fills the directory vm_outdir_tmp names; commit puts it at `path`,
+ * replacing what was there (the old tree is moved aside, then removed),
+ * and abort (or a failed commit) removes the temporary tree. Between the
+ * two renames of a commit that replaces a tree, `path` is briefly absent. */
+typedef struct vm_outdir vm_outdir;
+int vm_outdir_open(vm_ctx *ctx, const char *path, vm_outdir **out);
+const char *vm_outdir_tmp(const vm_outdir *d);
+int vm_outdir_commit(vm_outdir **d);
+void vm_outdir_abort(vm_outdir **d);
+/* Remove a file or a directory tree (symbolic links are removed, never
+ * followed); 0 if it is gone, -1 with errno if something stayed. */
+int vm_rmtree(const char *path);
+
 int vm_read_vmsh(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out);
 int vm_write_vmsh(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 int vm_write_vmsh_text(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
@@ -32,5 +48,6 @@ int vm_read_su2(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, v
 int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 int vm_read_cgns(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, vm_mesh **out);
 int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
+int vm_write_foam(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 
 #endif

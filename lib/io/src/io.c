@@ -1,8 +1,11 @@
 /* lib/io/src/io.c: format dispatch by extension, whole-file reading with size
- * checks, and atomic output through a temporary file and rename. */
+ * checks, and atomic output through a temporary file (or directory) and
+ * rename. */
 #include "varmesh/io.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -34,6 +37,7 @@ static const struct vm_format_entry {
     {VM_FMT_PLY, {"ply"}, vm_read_ply, vm_write_ply},
     {VM_FMT_SU2, {"su2"}, vm_read_su2, vm_write_su2},
     {VM_FMT_CGNS, {"cgns"}, vm_read_cgns, vm_write_cgns},
+    {VM_FMT_FOAM, {"foam", "openfoam"}, NULL, vm_write_foam},
 };
 #define NFORMATS (sizeof format_tab / sizeof format_tab[0])
 
@@ -51,10 +55,16 @@ int vm_format_from_name(const char *name) {
 }
 
 int vm_format_from_path(const char *path) {
-  const char *dot = strrchr(path, '.');
-  const char *slash = strrchr(path, '/');
-  if (!dot || (slash && dot < slash)) return VM_FMT_AUTO;
-  return vm_format_from_name(dot + 1);
+  /* trailing slashes ignored: "case.foam/" is a .foam case directory */
+  size_t n = strlen(path);
+  while (n > 1 && path[n - 1] == '/') n--;
+  size_t dot = n;
+  while (dot > 0 && path[dot - 1] != '.' && path[dot - 1] != '/') dot--;
+  if (dot == 0 || path[dot - 1] != '.' || n - dot >= 16) return VM_FMT_AUTO;
+  char ext[16];
+  memcpy(ext, path + dot, n - dot);
+  ext[n - dot] = 0;
+  return vm_format_from_name(ext);
 }
 
 const char *vm_format_name(int f) {
@@ -140,6 +150,12 @@ int vm_mesh_read(vm_ctx *ctx, const char *path, int format, vm_mesh **out) {
   if (format == VM_FMT_AUTO) format = vm_format_from_path(path);
   if (format == VM_FMT_AUTO)
     return vm_error(ctx, VM_ERR_ARG, "%s: cannot tell the format from the extension", path);
+  vm_reader_fn rd;
+  vm_writer_fn wr;
+  handlers(format, &rd, &wr);
+  if (!rd)
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be read", path,
+                    vm_format_name(format));
   uint8_t *buf;
   size_t len;
   int st = vm_read_file(ctx, path, &buf, &len);
@@ -240,6 +256,135 @@ int vm_outfile_commit(vm_outfile **pf) {
   }
   outfile_free(f);
   *pf = NULL;
+  return VM_OK;
+}
+
+struct vm_outdir {
+  vm_ctx *ctx;
+  char *path, *tmp;
+};
+
+/* "<dir>/.<base><tag><pid>.<n>" beside path (path without trailing '/') */
+static char *beside(vm_ctx *ctx, const char *path, const char *tag) {
+  static _Thread_local unsigned long counter;
+  size_t n = strlen(path) + strlen(tag) + 48;
+  char *s = vm_malloc(ctx, n);
+  if (!s) return NULL;
+  const char *slash = strrchr(path, '/');
+  int dl = slash ? (int)(slash - path + 1) : 0;
+  snprintf(s, n, "%.*s.%s%s%ld.%lu", dl, path, path + dl, tag, (long)getpid(), ++counter);
+  return s;
+}
+
+/* Remove `name` in the directory dfd, descending through directories
+ * without following links. */
+static int rm_at(int dfd, const char *name) {
+  struct stat st;
+  if (fstatat(dfd, name, &st, AT_SYMLINK_NOFOLLOW) != 0) return errno == ENOENT ? 0 : -1;
+  if (!S_ISDIR(st.st_mode)) return unlinkat(dfd, name, 0);
+  int fd = openat(dfd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW);
+  if (fd < 0) return -1;
+  DIR *d = fdopendir(fd);
+  if (!d) {
+    close(fd);
+    return -1;
+  }
+  int bad = 0;
+  struct dirent *e;
+  while ((e = readdir(d)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) bad |= rm_at(fd, e->d_name);
+  closedir(d);
+  return unlinkat(dfd, name, AT_REMOVEDIR) || bad ? -1 : 0;
+}
+
+int vm_rmtree(const char *path) { return rm_at(AT_FDCWD, path); }
+
+int vm_outdir_open(vm_ctx *ctx, const char *path, vm_outdir **out) {
+  *out = NULL;
+  size_t len = strlen(path);
+  while (len > 1 && path[len - 1] == '/') len--;
+  vm_outdir *d = vm_calloc(ctx, 1, sizeof *d);
+  char *p = vm_malloc(ctx, len + 1);
+  if (!d || !p) {
+    vm_free(ctx, d);
+    vm_free(ctx, p);
+    return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", path);
+  }
+  memcpy(p, path, len);
+  p[len] = 0;
+  struct stat st;
+  int e = 0;
+  if (stat(p, &st) == 0 && !S_ISDIR(st.st_mode)) e = ENOTDIR;
+  char *tmp = e ? NULL : beside(ctx, p, ".tmp.");
+  if (!e && !tmp) e = ENOMEM;
+  if (!e && mkdir(tmp, 0777) != 0) e = errno;
+  if (e) {
+    vm_free(ctx, tmp);
+    vm_free(ctx, d);
+    int st2 = e == ENOMEM ? VM_ERR_NOMEM : VM_ERR_IO;
+    st2 = vm_error(ctx, st2, "%s: cannot create: %s", p, strerror(e));
+    vm_free(ctx, p);
+    return st2;
+  }
+  d->ctx = ctx;
+  d->path = p;
+  d->tmp = tmp;
+  *out = d;
+  return VM_OK;
+}
+
+const char *vm_outdir_tmp(const vm_outdir *d) { return d->tmp; }
+
+static void outdir_free(vm_outdir *d) {
+  vm_ctx *ctx = d->ctx;
+  vm_free(ctx, d->tmp);
+  vm_free(ctx, d->path);
+  vm_free(ctx, d);
+}
+
+void vm_outdir_abort(vm_outdir **pd) {
+  if (!pd || !*pd) return;
+  vm_rmtree((*pd)->tmp);
+  outdir_free(*pd);
+  *pd = NULL;
+}
+
+int vm_outdir_commit(vm_outdir **pd) {
+  vm_outdir *d = *pd;
+  vm_ctx *ctx = d->ctx;
+  /* rename() replaces nothing but an empty directory: move the old tree
+   * aside first, put it back if the new one cannot take its place */
+  char *old = NULL;
+  struct stat st;
+  int st2 = VM_OK;
+  if (lstat(d->path, &st) == 0) {
+    if (!(old = beside(ctx, d->path, ".old."))) {
+      st2 = vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", d->path);
+    } else if (rename(d->path, old) != 0) {
+      st2 = vm_error(ctx, VM_ERR_IO, "%s: cannot move the old one aside: %s", d->path,
+                     strerror(errno));
+      vm_free(ctx, old);
+      old = NULL;
+    }
+  }
+  if (!st2 && rename(d->tmp, d->path) != 0) {
+    st2 = vm_error(ctx, VM_ERR_IO, "%s: cannot rename into place: %s", d->path, strerror(errno));
+    if (old) rename(old, d->path);
+    vm_free(ctx, old);
+    old = NULL;
+  }
+  if (st2) {
+    vm_outdir_abort(pd);
+    return st2;
+  }
+  if (old) {
+    if (vm_rmtree(old))
+      vm_log(ctx, VM_LOG_WARN, "%s: the old one (moved to %s) could not be removed: %s", d->path,
+             old, strerror(errno));
+    vm_free(ctx, old);
+  }
+  outdir_free(d);
+  *pd = NULL;
   return VM_OK;
 }
 

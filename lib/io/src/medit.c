@@ -6,7 +6,12 @@
 #include "formats_private.h"
 #include "lex_private.h"
 
+/* Vertex references travel as the vertex field "medit:ref"; element
+ * references are the element field "gmsh:physical", the tags every format
+ * groups boundaries by (an element field "medit:ref", as older readers
+ * made, is written when "gmsh:physical" is absent). */
 #define MEDIT_REF "medit:ref"
+#define MEDIT_PHYS "gmsh:physical"
 
 /* Cell keywords, in the order the writer emits them (vm type order).
  * MEDIT (libMeshb's GMF) lists the vertices of its linear cells in the
@@ -265,7 +270,7 @@ int vm_read_medit(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
     r.m->dim = r.dim ? r.dim : 3;
     if (!vm_mesh_find_field(r.m, MEDIT_REF, VM_FIELD_VERTEX))
       st = vm_mesh_add_field(r.m, MEDIT_REF, VM_FIELD_VERTEX, VM_FIELD_I32, 1, NULL);
-    if (!st) st = vm_mesh_add_field(r.m, MEDIT_REF, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+    if (!st) st = vm_mesh_add_field(r.m, MEDIT_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
     if (!st && r.m->ne) memcpy(f->data, r.eref, (size_t)r.m->ne * sizeof *r.eref);
   }
   vm_free(ctx, r.eref);
@@ -278,9 +283,17 @@ int vm_read_medit(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len,
 }
 
 /* A reference field we can write: 1-component int. */
-static const int32_t *ref_data(const vm_mesh *m, int loc) {
-  const vm_field *f = vm_mesh_find_field(m, MEDIT_REF, loc);
+static const int32_t *ref_field(const vm_mesh *m, const char *name, int loc) {
+  const vm_field *f = vm_mesh_find_field(m, name, loc);
   return f && f->type == VM_FIELD_I32 && f->ncomp == 1 ? f->data : NULL;
+}
+
+/* The references written: vertices' "medit:ref"; elements' "gmsh:physical",
+ * else "medit:ref". */
+static const int32_t *ref_data(const vm_mesh *m, int loc) {
+  if (loc == VM_FIELD_VERTEX) return ref_field(m, MEDIT_REF, loc);
+  const int32_t *r = ref_field(m, MEDIT_PHYS, loc);
+  return r ? r : ref_field(m, MEDIT_REF, loc);
 }
 
 /* Logs each thing MEDIT cannot carry; returns nonzero if anything is lost. */
@@ -288,14 +301,21 @@ static int medit_losses(vm_ctx *ctx, const vm_mesh *m, const char *path, int *wd
   int lossy = 0;
   for (int i = 0; i < m->nfield; i++) {
     const vm_field *f = &m->fields[i];
-    if (!strcmp(f->name, MEDIT_REF) && ref_data(m, f->location) == f->data) continue;
+    if (ref_data(m, f->location) == f->data) continue;
     vm_log(ctx, VM_LOG_WARN, "%s: %s field '%s' cannot be stored in MEDIT .mesh; dropped", path,
            f->location == VM_FIELD_VERTEX ? "vertex" : "element", f->name);
     lossy = 1;
   }
   for (int i = 0; i < m->nattr; i++) {
-    vm_log(ctx, VM_LOG_WARN, "%s: attribute '%s' cannot be stored in MEDIT .mesh; dropped", path,
-           m->attrs[i].key);
+    const char *k = m->attrs[i].key, *tag = NULL;
+    if (!strncmp(k, "gmsh:physical_name:", 19) && (tag = strchr(k + 19, ':')))
+      vm_log(ctx, VM_LOG_WARN,
+             "%s: the name '%s' of reference %s cannot be stored in MEDIT .mesh (the reference "
+             "is kept); dropped",
+             path, m->attrs[i].value, tag + 1);
+    else
+      vm_log(ctx, VM_LOG_WARN, "%s: attribute '%s' cannot be stored in MEDIT .mesh; dropped", path,
+             k);
     lossy = 1;
   }
   int64_t nslip = 0;

@@ -1190,7 +1190,6 @@ typedef struct {
 } ekey;
 
 typedef struct {
-  int64_t *order; /* element indices in block order: (dim, entity, type, index) */
   int32_t *ent;   /* entity tag per element */
   int32_t *phys;  /* physical tag per element */
   msh_went *ents; /* sorted by (dim, tag) */
@@ -1237,7 +1236,6 @@ static int field_role(const vm_field *f) {
 }
 
 static void plan_free(vm_ctx *ctx, msh_plan *p) {
-  vm_free(ctx, p->order);
   vm_free(ctx, p->ent);
   vm_free(ctx, p->phys);
   vm_free(ctx, p->ents);
@@ -1267,11 +1265,10 @@ static int plan_groups(vm_ctx *ctx, const vm_mesh *m, const char *path, msh_plan
   const vm_field *fe = vm_mesh_find_field(m, MSH_ENT, VM_FIELD_ELEMENT);
   if (fp && field_role(fp) != 1) fp = NULL;
   if (fe && field_role(fe) != 1) fe = NULL;
-  p->order = vm_alloc_array(ctx, (size_t)ne, sizeof *p->order);
   p->ent = vm_alloc_array(ctx, (size_t)ne, sizeof *p->ent);
   p->phys = vm_alloc_array(ctx, (size_t)ne, sizeof *p->phys);
   ekey *k = vm_alloc_array(ctx, (size_t)ne, sizeof *k);
-  if (!p->order || !p->ent || !p->phys || !k) {
+  if (!p->ent || !p->phys || !k) {
     vm_free(ctx, k);
     return VM_ERR_NOMEM;
   }
@@ -1328,10 +1325,8 @@ static int plan_groups(vm_ctx *ctx, const vm_mesh *m, const char *path, msh_plan
   }
   qsort(k, (size_t)ne, sizeof *k, cmp_ekey);
   p->nent = 0;
-  for (int64_t e = 0; e < ne; e++) {
-    p->order[e] = k[e].idx;
+  for (int64_t e = 0; e < ne; e++)
     p->nent += !e || k[e].k[0] != k[e - 1].k[0] || k[e].k[1] != k[e - 1].k[1];
-  }
   p->ents = vm_calloc(ctx, (size_t)p->nent, sizeof *p->ents);
   if (!p->ents) {
     st = VM_ERR_NOMEM;
@@ -1455,15 +1450,20 @@ static void write_nodes41(FILE *fp, int bin, const vm_mesh *m, const msh_plan *p
   fputs("$EndNodes\n", fp);
 }
 
-/* A block: elements of one type on one entity (the type fixes the dimension). */
+/* A block: elements of one type on one entity (the type fixes the dimension).
+ * Blocks are the runs of such elements in mesh order, and element tags are
+ * 1..N in file order, which is the mesh's: readers that number elements by
+ * their position in the file (meshio puts $ElementData on cells that way)
+ * and readers that go by the tags (Gmsh, ours) then agree, and a round trip
+ * keeps the element order. A mesh whose types or groups interleave gets
+ * many small blocks, which is valid .msh. */
 static int same_block(const vm_mesh *m, const msh_plan *p, int64_t a, int64_t b) {
   return p->ent[a] == p->ent[b] && m->etype[a] == m->etype[b];
 }
 
 static void write_elems41(FILE *fp, int bin, const vm_mesh *m, const msh_plan *p) {
   int64_t ne = m->ne, nblk = 0;
-  const int64_t *o = p->order;
-  for (int64_t i = 0; i < ne; i++) nblk += !i || !same_block(m, p, o[i], o[i - 1]);
+  for (int64_t e = 0; e < ne; e++) nblk += !e || !same_block(m, p, e, e - 1);
   fputs("$Elements\n", fp);
   if (bin) {
     put_u64(fp, (uint64_t)nblk);
@@ -1474,19 +1474,18 @@ static void write_elems41(FILE *fp, int bin, const vm_mesh *m, const msh_plan *p
     fprintf(fp, "%lld %lld %d %lld\n", (long long)nblk, (long long)ne, ne ? 1 : 0, (long long)ne);
   }
   for (int64_t i = 0, j; i < ne; i = j) {
-    for (j = i + 1; j < ne && same_block(m, p, o[j], o[i]);) j++;
-    int t = m->etype[o[i]];
+    for (j = i + 1; j < ne && same_block(m, p, j, i);) j++;
+    int t = m->etype[i];
     if (bin) {
       put_i32(fp, vm_elem_dim(t));
-      put_i32(fp, p->ent[o[i]]);
+      put_i32(fp, p->ent[i]);
       put_i32(fp, gmsh_of_vm[t]);
       put_u64(fp, (uint64_t)(j - i));
     } else {
-      fprintf(fp, "%d %d %d %lld\n", vm_elem_dim(t), (int)p->ent[o[i]], gmsh_of_vm[t],
+      fprintf(fp, "%d %d %d %lld\n", vm_elem_dim(t), (int)p->ent[i], gmsh_of_vm[t],
               (long long)(j - i));
     }
-    for (int64_t a = i; a < j; a++) {
-      int64_t e = o[a];
+    for (int64_t e = i; e < j; e++) {
       if (bin)
         put_u64(fp, (uint64_t)(e + 1));
       else

@@ -149,8 +149,16 @@ int vm_vtk_field_written(const vm_field *f, int flags) {
 
 int vm_vtk_report_lost(vm_ctx *ctx, const vm_mesh *m, const char *path, int flags) {
   int lost = 0;
-  for (int i = 0; i < m->nattr; i++, lost++)
-    vm_log(ctx, VM_LOG_WARN, "%s: VTK cannot carry attribute '%s'", path, m->attrs[i].key);
+  for (int i = 0; i < m->nattr; i++, lost++) {
+    const char *k = m->attrs[i].key, *tag = NULL;
+    if (!strncmp(k, "gmsh:physical_name:", 19) && (tag = strchr(k + 19, ':')))
+      vm_log(ctx, VM_LOG_WARN,
+             "%s: VTK cannot carry attribute '%s' (the name '%s' of tag %s; the tag stays in the "
+             "cell data gmsh:physical)",
+             path, k, m->attrs[i].value, tag + 1);
+    else
+      vm_log(ctx, VM_LOG_WARN, "%s: VTK cannot carry attribute '%s'", path, k);
+  }
   for (int i = 0; i < m->nfield; i++)
     if (!vm_vtk_field_written(&m->fields[i], flags)) {
       vm_log(ctx, VM_LOG_WARN, "%s: point field '%s' is shadowed by the vertex flags", path,

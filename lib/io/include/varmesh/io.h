@@ -30,6 +30,7 @@ typedef enum {
   VM_FMT_PLY,       /* .ply   ASCII or binary (surfaces) */
   VM_FMT_SU2,       /* .su2   SU2's native mesh, ASCII (volume meshes, markers) */
   VM_FMT_CGNS,      /* .cgns  CGNS unstructured zone through libcgns */
+  VM_FMT_FOAM,      /* .foam  OpenFOAM case directory (constant/polyMesh), write only */
   VM_FMT_COUNT
 } vm_format;
 
@@ -42,8 +43,8 @@ const char *vm_format_name(int format);
 int vm_have_cgns(void);
 
 typedef struct vm_write_opts {
-  int binary;      /* VTK legacy, .msh, STL: 1 binary, 0 ASCII (default 0 for
-                      VTK/.msh/STL; VTU always writes base64 binary) */
+  int binary;      /* VTK legacy, .msh, STL, PLY, OpenFOAM: 1 binary, 0 ASCII
+                      (default 0; VTU always writes base64 binary) */
   int msh_version; /* 41 (default) or 22 */
 } vm_write_opts;
 
@@ -65,8 +66,9 @@ int vm_mesh_read(vm_ctx *ctx, const char *path, int format, vm_mesh **out);
 int vm_mesh_read_memory(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, int format,
                         vm_mesh **out);
 /* Write a mesh atomically: either the complete file appears at `path` or
- * nothing there changes. Returns VM_WARN_LOSSY (> 0) if the format could not
- * carry something (each loss is logged at VM_LOG_WARN). opts may be NULL. */
+ * nothing there changes (VM_FMT_FOAM writes a directory: see "OpenFOAM"
+ * below). Returns VM_WARN_LOSSY (> 0) if the format could not carry
+ * something (each loss is logged at VM_LOG_WARN). opts may be NULL. */
 int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
                   const vm_write_opts *opts);
 
@@ -130,8 +132,8 @@ void vm_outfile_abort(vm_outfile **f);
  * coordinates to float and its OBJ reader skips unparsable vertex lines
  * silently, so the io library parses and writes these formats itself. */
 
-/* Solver formats (SU2, CGNS): volume meshes with named boundaries, and
- * surface meshes.
+/* Solver formats (SU2, CGNS, OpenFOAM): volume meshes with named
+ * boundaries, and (SU2, CGNS) surface meshes.
  *
  * How faces are grouped. The volume elements of the mesh's top dimension
  * become the cells. Boundary faces (TRI / QUAD elements of the mesh) are
@@ -139,7 +141,13 @@ void vm_outfile_abort(vm_outfile **f);
  * attributes "gmsh:physical_name:2:<tag>" ("wall", "outer" for the output
  * of vm_prism_result); a face without a tag, or a tag without a name, goes
  * to a family named "boundary_<tag>". If the mesh has no faces at all,
- * its boundary faces (vm_mesh_boundary) form one family "boundary".
+ * its boundary faces (vm_mesh_boundary) form one family "boundary"
+ * (OpenFOAM: the patch "defaultFaces"). The name says the kind of
+ * boundary, letter case ignored: a name starting with "wall" is a wall
+ * (CGNS BCWall, OpenFOAM type wall), "farfield" a far field (BCFarfield,
+ * type patch), "symmetry" a symmetry plane (BCSymmetryPlane, type
+ * symmetryPlane); any other, "outer" included (the top of a prism layer is
+ * no far field), is left to the user (BCTypeUserDefined, type patch).
  * Element fields of the cells (int or f64, one component; for example
  * "layer") are written where the format can hold them.
  *
@@ -210,8 +218,8 @@ void vm_outfile_abort(vm_outfile **f);
  * unstructured zone, coordinates in double, one element section per cell
  * type (TETRA_4, PYRA_5, PENTA_6, HEXA_8; 1-based, VTK order equals CGNS
  * order for these types), one section per face family (TRI_3 / QUAD_4),
- * a Family_t per face family (BCWall for "wall", BCFarfield for "outer",
- * else BCTypeUserDefined) and a BC_t per family referring to it by
+ * a Family_t per face family (its BC type from the name, see above) and a
+ * BC_t per family referring to it by
  * FamilyName with its element range at FaceCenter; cell fields as a
  * cell-centred FlowSolution_t. Atomic (temporary file + rename).
  * Returns VM_OK, VM_WARN_LOSSY (vertex fields, element fields of several
@@ -259,6 +267,45 @@ void vm_outfile_abort(vm_outfile **f);
  * whole node tree at open), is not thread-safe, and
  * its warnings are silenced by a global handler (cg_configure) so that the
  * library prints nothing; do not feed it untrusted input. */
+
+/* OpenFOAM (VM_FMT_FOAM, "foam"; write only). `path` is a case directory
+ * (a path ending in ".foam" is one, suffix and all; trailing '/' ignored);
+ * the writer makes path/constant/polyMesh/{points, faces, owner, neighbour,
+ * boundary} with FoamFile headers (version 2.0; class vectorField,
+ * faceList, labelList, polyBoundaryMesh; location "constant/polyMesh";
+ * owner and neighbour note nPoints, nCells, nFaces, nInternalFaces).
+ * ASCII by default: points with 17 significant digits (they read back bit
+ * for bit). opts->binary: OpenFOAM's binary format (arch
+ * "LSB;label=32;scalar=64" on this machine's byte order; faces as a
+ * faceCompactList; boundary stays text).
+ *  - Cells: the tetrahedra, pyramids, prisms and hexahedra in mesh order;
+ *    points: the vertices cells use, in vertex order (others dropped,
+ *    warned).
+ *  - Faces: each face shared by two cells once, owner the lower cell,
+ *    neighbour the higher, vertices in the owner's order (right-hand
+ *    normal from owner to neighbour), in upper-triangular order (owner,
+ *    then neighbour, increasing); then the boundary faces patch by patch,
+ *    each oriented as its cell has it (out of the domain).
+ *  - Patches: the families above in tag order (faces matched to the
+ *    cells' boundary faces by vertex set, in mesh order), names made
+ *    OpenFOAM words (other characters '_', "patch_" before a name not
+ *    starting with a letter or '_'; equal names share a patch; warned);
+ *    types wall (inGroups wall), symmetryPlane (if its faces are flat to
+ *    OpenFOAM's tolerance; else symmetry, warned) or patch. Boundary faces
+ *    no element covers form the patch "defaultFaces" (type patch; warned).
+ *  - Atomic: a new case is built in a temporary directory beside path and
+ *    renamed into place, with a minimal system/controlDict, fvSchemes and
+ *    fvSolution (so that checkMesh runs on it). In an existing case only
+ *    constant/polyMesh is replaced (built as constant/.polyMesh.tmp.*, the
+ *    old one moved aside, then removed; put back if the rename fails);
+ *    missing system/ files are added, nothing else is touched.
+ * Returns VM_OK, VM_WARN_LOSSY (fields, vertex flags, attributes other
+ * than the boundary names, unused vertices, boundary elements between two
+ * cells or on no cell or repeated, renamed boundaries; one VM_LOG_WARN
+ * each), VM_ERR_UNSUPPORTED (no volume cells: "OpenFOAM needs 3D cells";
+ * more than 2^31 - 1 cell faces), VM_ERR_ARG (a face of three or more
+ * cells, a cell with a repeated vertex), VM_ERR_IO (path is a file, or
+ * writing failed: nothing changed), VM_ERR_NOMEM. */
 
 #ifdef __cplusplus
 }
