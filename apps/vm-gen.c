@@ -8,6 +8,7 @@
 
 #include "cli.h"
 #include "varmesh/aircraft.h"
+#include "varmesh/shapes.h"
 #include "varmesh/rotcube.h"
 #include "varmesh/io.h"
 
@@ -39,6 +40,8 @@ typedef struct {
   const char *what, *out;
   vm_rotcube_opts o;
   vm_aircraft_opts ao;
+  int level;
+  double radius;
   vm_write_opts wo;
 } args;
 
@@ -89,6 +92,14 @@ static const vm_opt opts[] = {
     {"--components", NULL, VM_OPT_FLAG, A(ao.tag_components), NULL,
      "add the int cell field 'component' (0 fuselage, 1-2 wings, 3-4 stabilizers, 5 fin)",
      .ival = 1},
+    {.kind = VM_OPT_HEADING,
+     .help = "\n"
+             "usage: vm-gen sphere [options] OUT\n"
+             "A closed, outward-oriented icosphere about the origin (the smooth body of the\n"
+             "solver tests: potential flow around it has a known surface pressure).\n"},
+    {"--level", NULL, VM_OPT_INT, A(level), "N",
+     "subdivisions of the icosahedron, 0..8 (default 3: 1280 triangles)", .lo = 0, .hi = 8},
+    {"--radius", NULL, VM_OPT_DOUBLE, A(radius), "R", "radius (default 1)", .lo = 1e-6, .hi = 1e6},
     {0}};
 
 static const vm_cli_spec spec = {
@@ -108,6 +119,8 @@ int main(int argc, char **argv) {
   vm_cli_init(&cli, "vm-gen");
   args a = {.o = vm_rotcube_opts_default(),
             .ao = vm_aircraft_opts_default(),
+            .level = 3,
+            .radius = 1,
             .wo = vm_write_opts_default()};
   a.ao.span = NAN; /* not given: the default proportions, below */
   vm_mesh *m = NULL;
@@ -115,8 +128,9 @@ int main(int argc, char **argv) {
   if (rc != VM_CLI_RUN) goto done;
   rc = VM_EXIT_OK;
   int plane = a.what && !strcmp(a.what, "aircraft");
-  if (!a.what || (strcmp(a.what, "rotcube") && !plane) || !a.out) {
-    rc = vm_cli_usage_error(&cli, "expected: vm-gen rotcube|aircraft [options] OUT");
+  int sphere = a.what && !strcmp(a.what, "sphere");
+  if (!a.what || (strcmp(a.what, "rotcube") && !plane && !sphere) || !a.out) {
+    rc = vm_cli_usage_error(&cli, "expected: vm-gen rotcube|aircraft|sphere [options] OUT");
     goto done;
   }
   if (isnan(a.ao.span)) a.ao.span = 0.9 * a.ao.length;
@@ -124,8 +138,14 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "--span must be 0.35 to 2.5 times the length");
     goto done;
   }
-  int grc =
-      plane ? vm_gen_aircraft(cli.ctx, &a.ao, &m) : vm_gen_rotated_cube(cli.ctx, &a.o, &m, NULL);
+  int grc;
+  if (sphere) {
+    grc = vm_mesh_create(cli.ctx, &m);
+    if (grc == VM_OK) grc = vm_gen_icosphere(m, NULL, a.radius, a.level, 0, NULL);
+  } else {
+    grc =
+        plane ? vm_gen_aircraft(cli.ctx, &a.ao, &m) : vm_gen_rotated_cube(cli.ctx, &a.o, &m, NULL);
+  }
   if (grc < 0 || vm_mesh_write(cli.ctx, m, a.out, VM_FMT_AUTO, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
   }

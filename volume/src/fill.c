@@ -1225,11 +1225,11 @@ done:
 
 /* ---------- optimization of the tets next to the layer ---------- */
 
-/* Vertices within `rings` tet-edge rings of the envelope that Gmsh made
+/* Vertices within `rings` tet-edge rings of the envelope or the far field that Gmsh made
  * (index >= first_new) move; the tets touching them are optimized with the
  * shape measure, everything else fixed. */
 static int optimize_band(vm_ctx *ctx, vm_mesh *o, const envelope *E, int64_t first_new,
-                         const vm_fill_opts *opts, int64_t *nfree) {
+                         int64_t nfar, const vm_fill_opts *opts, int64_t *nfree) {
   int st = VM_OK;
   *nfree = 0;
   int64_t *rp = NULL;
@@ -1243,6 +1243,9 @@ static int optimize_band(vm_ctx *ctx, vm_mesh *o, const envelope *E, int64_t fir
   }
   if ((st = vm_mesh_vertex_elements(o, &rp, &ve))) goto done;
   for (int64_t i = 0; i < 3 * E->nf; i++) ring[E->fv[i]] = 1;
+  /* and next to the far field (its vertices come just before first_new):
+   * the shell inside it is Gmsh's too */
+  for (int64_t v = first_new - nfar; v < first_new; v++) ring[v] = 1;
   for (int r = 1; r <= opts->opt_rings; r++)
     for (int64_t v = 0; v < o->nv; v++) {
       if (ring[v] != r) continue;
@@ -1466,6 +1469,22 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     goto done;
   }
   if ((st = offset_points(ctx, in, &E, vid, hs, nenv, nrm, &q, &nq))) goto done;
+  /* a shell just inside the far field (its vertices moved in by half a
+   * triangle size): without it Delaunay leaves tets with two or three faces
+   * on the far field along the box's edges, and OpenFOAM's cell
+   * determinant, made of a cell's interior faces only, is 0 there */
+  {
+    double *t = vm_realloc(ctx, q, (size_t)(3 * (nq + F.nv)) * sizeof *t);
+    if (!t) {
+      vm_free(ctx, q);
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    q = t;
+    double f = (H - 0.5 * rep.far_size) / H;
+    for (int64_t i = 0; i < F.nv; i++, nq++)
+      for (int k = 0; k < 3; k++) q[3 * nq + k] = c[k] + f * (F.xyz[3 * i + k] - c[k]);
+  }
   vm_log(ctx, VM_LOG_INFO, "fill: %lld points off the envelope embedded", (long long)nq);
   /* Gmsh, then again with a point in each sliver of envelope vertices */
   for (int pass = 0;; pass++) {
@@ -1499,7 +1518,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   rep.after = rep.before;
   if (o.opt_iter > 0 && o.opt_rings > 0) {
     double t2 = now();
-    if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, &o, &rep.opt_free))) goto done;
+    if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, F.nv, &o, &rep.opt_free))) goto done;
     rep.time_opt = now() - t2;
     if ((st = vm_fill_tet_quality_of(ctx, res, &rep.after))) goto done;
     vm_log(ctx, VM_LOG_INFO,
