@@ -96,12 +96,13 @@ static void print_json(const args *a, const vm_fill_report *r) {
   vm_json_string(stdout, a->in);
   printf(", \"output\": ");
   vm_json_string(stdout, a->out);
-  printf(", \"layer_cells\": %lld, \"envelope_faces\": %lld, \"farfield_faces\": %lld, "
-         "\"tets\": %lld, \"new_vertices\": %lld, \"optimized_vertices\": %lld, "
-         "\"time_mesh\": %.3f, \"time_opt\": %.3f, \"time_total\": %.3f",
-         (long long)r->layer_cells, (long long)r->env_faces, (long long)r->far_faces,
-         (long long)r->tets, (long long)r->new_vertices, (long long)r->opt_free, r->time_mesh,
-         r->time_opt, r->time_total);
+  printf(
+      ", \"layer_cells\": %lld, \"envelope_faces\": %lld, \"farfield_faces\": %lld, "
+      "\"tets\": %lld, \"new_vertices\": %lld, \"optimized_vertices\": %lld, "
+      "\"flat_envelope_tets\": %lld, \"time_mesh\": %.3f, \"time_opt\": %.3f, \"time_total\": %.3f",
+      (long long)r->layer_cells, (long long)r->env_faces, (long long)r->far_faces,
+      (long long)r->tets, (long long)r->new_vertices, (long long)r->opt_free,
+      (long long)r->flat_env_tets, r->time_mesh, r->time_opt, r->time_total);
   printf(", \"model_length\": ");
   vm_json_double(stdout, r->model_length);
   printf(", \"farfield_distance\": ");

@@ -586,6 +586,42 @@ done:
   return st;
 }
 
+/* The envelope must be a closed, manifold triangulation: every edge on
+ * exactly two of its triangles. */
+static int check_closed(vm_ctx *ctx, const envelope *E) {
+  int64_t ne = 3 * E->nf;
+  tface *ed = vm_alloc_array(ctx, (size_t)(ne + 1), sizeof *ed);
+  if (!ed) return VM_ERR_NOMEM;
+  for (int64_t f = 0; f < E->nf; f++)
+    for (int i = 0; i < 3; i++) {
+      int32_t a = E->fv[3 * f + i], b = E->fv[3 * f + (i + 1) % 3];
+      tface *t = &ed[3 * f + i];
+      t->v[0] = a < b ? a : b;
+      t->v[1] = a < b ? b : a;
+      t->v[2] = 0;
+      t->cell = (int32_t)f;
+    }
+  qsort(ed, (size_t)ne, sizeof *ed, cmp_tface);
+  int64_t bad = 0, first = -1;
+  for (int64_t i = 0; i < ne;) {
+    int64_t j = i + 1;
+    while (j < ne && same_face(&ed[i], &ed[j])) j++;
+    if (j - i != 2) {
+      if (first < 0) first = i;
+      bad++;
+    }
+    i = j;
+  }
+  int st = VM_OK;
+  if (bad)
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "the envelope is not closed: %lld edges are on one triangle or on more than "
+                  "two (the first: vertices %d and %d)",
+                  (long long)bad, ed[first].v[0], ed[first].v[1]);
+  vm_free(ctx, ed);
+  return st;
+}
+
 /* ---------- the far field ---------- */
 
 typedef struct {
@@ -918,7 +954,9 @@ static int gmsh_fill(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far
   gmshOptionSetNumber("Mesh.Optimize", 1, &ierr);
   gmshModelMeshSetSizeCallback(gmsh_size_cb, S, &ierr);
   gmshModelMeshGenerate(3, &ierr);
-  if ((st = gmsh_status(ctx, ierr, "meshing the volume"))) goto done;
+  if ((st = gmsh_status(
+           ctx, ierr, "meshing the volume (does the envelope intersect itself or the far field?)")))
+    goto done;
   double *pc = NULL;
   size_t npc = 0, ncoord = 0, *etag = NULL, ne = 0, ntn = 0;
   gmshModelMeshGetNodes(&R->ntag, &R->nn, &R->coord, &ncoord, &pc, &npc, -1, -1, 0, 0, &ierr);
@@ -1343,7 +1381,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   int32_t *vid = NULL;
   vm_mesh *res = NULL;
   int st = find_envelope(ctx, in, &E);
-  if (st) goto done;
+  if (st || (st = check_closed(ctx, &E))) goto done;
   int64_t counts[VM_NTYPES];
   rep.surface_input = E.surface;
   vm_mesh_count_types(in, counts);
@@ -1485,7 +1523,9 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     for (int64_t i = 0; i < F.nv; i++, nq++)
       for (int k = 0; k < 3; k++) q[3 * nq + k] = c[k] + f * (F.xyz[3 * i + k] - c[k]);
   }
-  vm_log(ctx, VM_LOG_INFO, "fill: %lld points off the envelope embedded", (long long)nq);
+  vm_log(ctx, VM_LOG_INFO,
+         "fill: %lld points off the envelope and %lld inside the far field embedded",
+         (long long)(nq - F.nv), (long long)F.nv);
   /* Gmsh, then again with a point in each sliver of envelope vertices */
   for (int pass = 0;; pass++) {
     if ((st = gmsh_fill(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R)) ||
@@ -1508,6 +1548,36 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     goto done;
   }
   rep.tets = (int64_t)R.nt;
+  /* flat tets of four envelope vertices that stayed: the envelope comes
+   * closer to itself there than a tet can bridge well (the layer's top
+   * nearly touches another part of the layer); no vertex of theirs may move */
+  {
+    int64_t nflat = 0;
+    double worst = 180, at[3] = {0, 0, 0};
+    for (int64_t e = 0; e < res->ne; e++) {
+      if (res->etype[e] != VM_TET) continue;
+      const int32_t *cv = res->conn + res->eoff[e];
+      if (cv[0] >= in->nv || cv[1] >= in->nv || cv[2] >= in->nv || cv[3] >= in->nv) continue;
+      const double *p[4] = {res->xyz + 3 * cv[0], res->xyz + 3 * cv[1], res->xyz + 3 * cv[2],
+                            res->xyz + 3 * cv[3]};
+      double lo, hi;
+      tet_angles(p, &lo, &hi);
+      lo *= 180 / PI;
+      if (lo >= 5) continue;
+      nflat++;
+      if (lo < worst) {
+        worst = lo;
+        for (int k = 0; k < 3; k++) at[k] = (p[0][k] + p[1][k] + p[2][k] + p[3][k]) / 4;
+      }
+    }
+    rep.flat_env_tets = nflat;
+    if (nflat)
+      vm_log(ctx, VM_LOG_WARN,
+             "fill: %lld tets of four envelope vertices are flat (min dihedral < 5 deg, worst "
+             "%.3g deg at %.4g %.4g %.4g): the envelope comes closer to itself there than a tet "
+             "can bridge; no vertex of theirs may move (a thinner layer there would help)",
+             (long long)nflat, worst, at[0], at[1], at[2]);
+  }
   rep.new_vertices = res->nv - in->nv;
   if ((st = vm_fill_tet_quality_of(ctx, res, &rep.before))) goto done;
   vm_log(ctx, VM_LOG_INFO,

@@ -59,8 +59,10 @@ typedef struct vm_fill_report {
   int64_t new_vertices; /* vertices added (inside and on the far field) */
   int surface_input;    /* the input was a closed surface: it became the wall */
   double model_length, far_distance, far_size, env_size_min, env_size_max;
-  int64_t opt_free;                       /* vertices the optimizer moved */
-  vm_fill_tet_quality before, after;      /* before and after the optimization */
+  int64_t opt_free;                  /* vertices the optimizer moved */
+  int64_t flat_env_tets;             /* tets of four envelope vertices with a dihedral angle below
+                                        5 degrees (no vertex of theirs may move) */
+  vm_fill_tet_quality before, after; /* before and after the optimization */
   double time_mesh, time_opt, time_total; /* seconds */
 } vm_fill_report;
 
