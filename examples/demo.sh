@@ -2,7 +2,9 @@
 # examples/demo.sh: set up a fresh Debian machine (packages, build) and run
 # varmesh's main job on its bundled, generated example: the aircraft model
 # through every stage of examples/Makefile (model -> surface -> prism layers
-# -> exports -> reports), then the volume stage on the paper's rotated cube.
+# -> tetrahedra out to the far field -> exports, an OpenFOAM case -> reports),
+# checkMesh and potentialFoam on that case, then the volume stage on the
+# paper's rotated cube.
 # Results go to out/. Run as root (apt-get) or on a machine that has the
 # packages of .ci/install-deps.
 set -eu
@@ -20,6 +22,19 @@ out="$root/out/pipeline"
 mkdir -p "$out"
 echo "== the pipeline on the generated aircraft: make -C examples (incremental)"
 make -C examples --no-print-directory VM_BIN="$bin" OUT="$out"
+foam="$out/aircraft.foam"
+if [ -d "$foam/constant/polyMesh" ] && command -v checkMesh >/dev/null 2>&1; then
+  # Debian's OpenFOAM finds its etc/ through WM_PROJECT_DIR, which it does not set
+  [ -n "${WM_PROJECT_DIR:-}" ] || export WM_PROJECT_DIR=/usr/share/openfoam
+  echo "== OpenFOAM on the solver-ready mesh: checkMesh, potentialFoam ($foam)"
+  checkMesh -case "$foam" >"$foam/checkMesh.log" 2>&1 || true
+  grep -E "cells:|non-orthogonality Max|skewness|Mesh OK|Failed" "$foam/checkMesh.log" | sed 's/^ */  /'
+  if potentialFoam -case "$foam" >"$foam/potentialFoam.log" 2>&1; then
+    echo "  potentialFoam: $(grep 'Solving for Phi' "$foam/potentialFoam.log" | tail -1 | sed 's/^GAMG: *//')"
+  else
+    echo "  potentialFoam failed: $(grep -A2 FATAL "$foam/potentialFoam.log" | tail -2 | tr '\n' ' ')"
+  fi
+fi
 echo "== the volume stage on the paper's rotated cube (n = 16, inner cube turned by pi)"
 "$bin/vm-gen" rotcube --n 16 --angle pi "$root/out/rotcube.vtk"
 "$bin/vm-volume" --staged --progress-every 50 --report "$root/out/rotcube-report" \
@@ -27,10 +42,11 @@ echo "== the volume stage on the paper's rotated cube (n = 16, inner cube turned
 echo
 echo "== results ($(( $(date +%s) - t0 )) s in all)"
 echo "in $out:"
-for f in aircraft.stl aircraft.surface.vmsh aircraft.prism.vmsh aircraft.msh aircraft.vtu; do
+for f in aircraft.stl aircraft.surface.vmsh aircraft.prism.vmsh aircraft.fill.vmsh aircraft.msh \
+  aircraft.vtu aircraft.su2 aircraft.cgns aircraft.foam; do
   [ -e "$out/$f" ] && printf '  %-24s %s\n' "$f" "$(du -h "$out/$f" | cut -f1)"
 done
-for r in surface prism; do
+for r in surface prism fill; do
   d="$out/aircraft-report-$r"
   if [ -s "$d/index.html" ]; then
     echo "  aircraft-report-$r/index.html  (open in a browser: pictures and histograms)"
