@@ -8,7 +8,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/types.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "varmesh/topology.h"
 #include "varmesh/volume.h"
@@ -981,6 +984,126 @@ done:
   return st;
 }
 
+/* Gmsh in a child process: an assertion or a crash inside Gmsh (its
+ * boundary recovery aborts on some inputs) becomes one error line here
+ * instead of ending the caller's process. The child sends its result
+ * through a pipe; its stderr (where an assertion is printed) through
+ * another. */
+static int write_all(int fd, const void *buf, size_t n) {
+  const char *p = buf;
+  while (n) {
+    ssize_t k = write(fd, p, n);
+    if (k <= 0) return -1;
+    p += k;
+    n -= (size_t)k;
+  }
+  return 0;
+}
+
+static int read_all(int fd, void *buf, size_t n) {
+  char *p = buf;
+  while (n) {
+    ssize_t k = read(fd, p, n);
+    if (k <= 0) return -1;
+    p += k;
+    n -= (size_t)k;
+  }
+  return 0;
+}
+
+typedef struct {
+  int status;
+  size_t nn, nt;
+  char msg[480];
+} gmsh_header;
+
+static int gmsh_fill_isolated(vm_ctx *ctx, const vm_mesh *m, const envelope *E,
+                              const far_surface *F, int64_t base, const double *q, int64_t nq,
+                              size_field *S, const vm_fill_opts *o, gmsh_result *R) {
+  memset(R, 0, sizeof *R);
+  int pd[2], ed[2];
+  if (pipe(pd)) return vm_error(ctx, VM_ERR_IO, "fill: cannot make a pipe for Gmsh");
+  if (pipe(ed)) {
+    close(pd[0]);
+    close(pd[1]);
+    return vm_error(ctx, VM_ERR_IO, "fill: cannot make a pipe for Gmsh");
+  }
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid < 0) {
+    close(pd[0]), close(pd[1]), close(ed[0]), close(ed[1]);
+    return vm_error(ctx, VM_ERR_IO, "fill: cannot start Gmsh's process");
+  }
+  if (pid == 0) {
+    close(pd[0]);
+    close(ed[0]);
+    dup2(ed[1], 2);
+    gmsh_header h;
+    memset(&h, 0, sizeof h);
+    h.status = gmsh_fill(ctx, m, E, F, base, q, nq, S, o, R);
+    if (h.status) snprintf(h.msg, sizeof h.msg, "%s", vm_ctx_error(ctx));
+    h.nn = R->nn;
+    h.nt = R->nt;
+    int bad = write_all(pd[1], &h, sizeof h);
+    if (!bad && !h.status)
+      bad = write_all(pd[1], R->ntag, R->nn * sizeof *R->ntag) ||
+            write_all(pd[1], R->coord, 3 * R->nn * sizeof *R->coord) ||
+            write_all(pd[1], R->tnode, 4 * R->nt * sizeof *R->tnode);
+    _exit(bad ? 3 : 0);
+  }
+  close(pd[1]);
+  close(ed[1]);
+  gmsh_header h;
+  int st = VM_OK;
+  if (read_all(pd[0], &h, sizeof h)) {
+    st = VM_ERR_BACKEND;
+  } else if (h.status) {
+    st = vm_error(ctx, h.status, "%s", h.msg);
+  } else {
+    R->nn = h.nn;
+    R->nt = h.nt;
+    R->ntag = malloc(h.nn * sizeof *R->ntag + 1);
+    R->coord = malloc(3 * h.nn * sizeof *R->coord + 1);
+    R->tnode = malloc(4 * h.nt * sizeof *R->tnode + 1);
+    if (!R->ntag || !R->coord || !R->tnode)
+      st = vm_error(ctx, VM_ERR_NOMEM, "fill: out of memory reading Gmsh's mesh");
+    else if (read_all(pd[0], R->ntag, h.nn * sizeof *R->ntag) ||
+             read_all(pd[0], R->coord, 3 * h.nn * sizeof *R->coord) ||
+             read_all(pd[0], R->tnode, 4 * h.nt * sizeof *R->tnode))
+      st = VM_ERR_BACKEND;
+  }
+  close(pd[0]);
+  /* the child's last line on stderr: an assertion's message */
+  char buf[4096], last[512] = "";
+  size_t got = 0;
+  ssize_t k;
+  while ((k = read(ed[0], buf + got, sizeof buf - 1 - got)) > 0) {
+    got += (size_t)k;
+    if (got >= sizeof buf - 1) {
+      buf[got] = 0;
+      memmove(buf, buf + got / 2, got - got / 2 + 1);
+      got -= got / 2;
+    }
+  }
+  close(ed[0]);
+  buf[got] = 0;
+  while (got && (buf[got - 1] == '\n' || buf[got - 1] == '\r')) buf[--got] = 0;
+  const char *nl = strrchr(buf, '\n');
+  snprintf(last, sizeof last, "%.500s", nl ? nl + 1 : buf);
+  int ws = 0;
+  waitpid(pid, &ws, 0);
+  if (st == VM_ERR_BACKEND || (st == VM_OK && !(WIFEXITED(ws) && WEXITSTATUS(ws) == 0))) {
+    gmsh_result_free(R);
+    if (WIFSIGNALED(ws))
+      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh crashed (signal %d)%s%s", WTERMSIG(ws),
+                    *last ? ": " : "", last);
+    else
+      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh's process failed%s%s", *last ? ": " : "", last);
+  }
+  if (st) gmsh_result_free(R);
+  return st;
+}
+
 /* ---------- the merged mesh ---------- */
 
 /* Largest "gmsh:physical" tag in use (0 if none). */
@@ -1526,19 +1649,42 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   vm_log(ctx, VM_LOG_INFO,
          "fill: %lld points off the envelope and %lld inside the far field embedded",
          (long long)(nq - F.nv), (long long)F.nv);
-  /* Gmsh, then again with a point in each sliver of envelope vertices */
-  for (int pass = 0;; pass++) {
-    if ((st = gmsh_fill(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R)) ||
-        (st = merge(ctx, in, &E, &F, &R, &res)))
-      break;
-    int64_t ns = 0;
-    if (pass == 1 || (st = sliver_points(ctx, res, in->nv, vid, nrm, 10, &q, &nq, &ns)) || !ns)
-      break;
+  /* Gmsh; if it fails with the points off the envelope, once more without
+   * them; then again with a point in each sliver of envelope vertices,
+   * kept only if Gmsh succeeds */
+  st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R);
+  if (st == VM_ERR_BACKEND && nq > F.nv) {
+    vm_log(ctx, VM_LOG_WARN, "fill: %s; meshing again without the points off the envelope",
+           vm_ctx_error(ctx));
+    vm_ctx_clear_error(ctx);
+    int64_t noff = nq - F.nv;
+    memmove(q, q + 3 * noff, (size_t)(3 * F.nv) * sizeof *q);
+    nq = F.nv;
+    st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R);
+  }
+  if (!st) st = merge(ctx, in, &E, &F, &R, &res);
+  int64_t ns = 0;
+  if (!st && !(st = sliver_points(ctx, res, in->nv, vid, nrm, 10, &q, &nq, &ns)) && ns) {
     vm_log(ctx, VM_LOG_INFO,
            "fill: %lld slivers of envelope vertices: meshing again with a point in each",
            (long long)ns);
-    vm_mesh_destroy(&res);
-    gmsh_result_free(&R);
+    gmsh_result R2;
+    vm_mesh *res2 = NULL;
+    int st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2);
+    if (!st2) st2 = merge(ctx, in, &E, &F, &R2, &res2);
+    if (st2 == VM_OK) {
+      vm_mesh_destroy(&res);
+      gmsh_result_free(&R);
+      res = res2;
+      R = R2;
+    } else if (st2 == VM_ERR_BACKEND) {
+      vm_log(ctx, VM_LOG_WARN, "fill: %s; the first mesh is kept", vm_ctx_error(ctx));
+      vm_ctx_clear_error(ctx);
+      gmsh_result_free(&R2);
+    } else {
+      st = st2;
+      gmsh_result_free(&R2);
+    }
   }
   vm_free(ctx, q);
   if (st) goto done;
