@@ -1019,8 +1019,9 @@ typedef struct {
 
 static int gmsh_fill_isolated(vm_ctx *ctx, const vm_mesh *m, const envelope *E,
                               const far_surface *F, int64_t base, const double *q, int64_t nq,
-                              size_field *S, const vm_fill_opts *o, gmsh_result *R) {
+                              size_field *S, const vm_fill_opts *o, gmsh_result *R, int *crashed) {
   memset(R, 0, sizeof *R);
+  if (crashed) *crashed = 0;
   int pd[2], ed[2];
   if (pipe(pd)) return vm_error(ctx, VM_ERR_IO, "fill: cannot make a pipe for Gmsh");
   if (pipe(ed)) {
@@ -1054,9 +1055,9 @@ static int gmsh_fill_isolated(vm_ctx *ctx, const vm_mesh *m, const envelope *E,
   close(pd[1]);
   close(ed[1]);
   gmsh_header h;
-  int st = VM_OK;
+  int st = VM_OK, lost = 0; /* lost: the child's answer did not arrive whole */
   if (read_all(pd[0], &h, sizeof h)) {
-    st = VM_ERR_BACKEND;
+    lost = 1;
   } else if (h.status) {
     st = vm_error(ctx, h.status, "%s", h.msg);
   } else {
@@ -1070,7 +1071,7 @@ static int gmsh_fill_isolated(vm_ctx *ctx, const vm_mesh *m, const envelope *E,
     else if (read_all(pd[0], R->ntag, h.nn * sizeof *R->ntag) ||
              read_all(pd[0], R->coord, 3 * h.nn * sizeof *R->coord) ||
              read_all(pd[0], R->tnode, 4 * h.nt * sizeof *R->tnode))
-      st = VM_ERR_BACKEND;
+      lost = 1;
   }
   close(pd[0]);
   /* the child's last line on stderr: an assertion's message */
@@ -1092,11 +1093,13 @@ static int gmsh_fill_isolated(vm_ctx *ctx, const vm_mesh *m, const envelope *E,
   snprintf(last, sizeof last, "%.500s", nl ? nl + 1 : buf);
   int ws = 0;
   waitpid(pid, &ws, 0);
-  if (st == VM_ERR_BACKEND || (st == VM_OK && !(WIFEXITED(ws) && WEXITSTATUS(ws) == 0))) {
+  if (lost || (st == VM_OK && !(WIFEXITED(ws) && WEXITSTATUS(ws) == 0))) {
     gmsh_result_free(R);
     if (WIFSIGNALED(ws))
       st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh crashed (signal %d)%s%s", WTERMSIG(ws),
                     *last ? ": " : "", last);
+    if (crashed)
+      *crashed = 1;
     else
       st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh's process failed%s%s", *last ? ": " : "", last);
   }
@@ -1649,18 +1652,19 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   vm_log(ctx, VM_LOG_INFO,
          "fill: %lld points off the envelope and %lld inside the far field embedded",
          (long long)(nq - F.nv), (long long)F.nv);
-  /* Gmsh; if it fails with the points off the envelope, once more without
+  /* Gmsh; if it crashes with the points off the envelope, once more without
    * them; then again with a point in each sliver of envelope vertices,
    * kept only if Gmsh succeeds */
-  st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R);
-  if (st == VM_ERR_BACKEND && nq > F.nv) {
+  int crashed = 0;
+  st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R, &crashed);
+  if (st == VM_ERR_BACKEND && crashed && nq > F.nv) {
     vm_log(ctx, VM_LOG_WARN, "fill: %s; meshing again without the points off the envelope",
            vm_ctx_error(ctx));
     vm_ctx_clear_error(ctx);
     int64_t noff = nq - F.nv;
     memmove(q, q + 3 * noff, (size_t)(3 * F.nv) * sizeof *q);
     nq = F.nv;
-    st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R);
+    st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R, NULL);
   }
   if (!st) st = merge(ctx, in, &E, &F, &R, &res);
   int64_t ns = 0;
@@ -1670,7 +1674,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
            (long long)ns);
     gmsh_result R2;
     vm_mesh *res2 = NULL;
-    int st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2);
+    int st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2, NULL);
     if (!st2) st2 = merge(ctx, in, &E, &F, &R2, &res2);
     if (st2 == VM_OK) {
       vm_mesh_destroy(&res);
