@@ -290,6 +290,65 @@ int vm_report_quality_rows(vm_report *r, const char *heading, const vm_quality *
   return st;
 }
 
+/* A mesh out to a far field (boundaries named "wall" and "farfield"): the
+ * middle slice shows the far field and the model as a dot, so two more
+ * slices zoom on the wall: a window of the wall's bounding box and a sixth
+ * of its size around it, the plane across the wall's middle-sized extent
+ * at a fifth of it from the centre (through a wing of an aircraft). */
+static int near_wall_slices(vm_report *r, const char *prefix, const char *label, const vm_mesh *m) {
+  vm_ctx *ctx = r->ctx;
+  const vm_field *ph = vm_mesh_find_field(m, "gmsh:physical", VM_FIELD_ELEMENT);
+  int32_t wall = -1, far = -1;
+  for (int i = 0; i < m->nattr; i++) {
+    const char *k = m->attrs[i].key, *v = m->attrs[i].value;
+    if (strncmp(k, "gmsh:physical_name:2:", 21)) continue;
+    if (!strcmp(v, "wall")) wall = (int32_t)atol(k + 21);
+    if (!strcmp(v, "farfield")) far = (int32_t)atol(k + 21);
+  }
+  if (!ph || ph->type != VM_FIELD_I32 || ph->ncomp != 1 || wall < 0 || far < 0) return VM_OK;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (vm_elem_dim(m->etype[e]) != 2 || ((const int32_t *)ph->data)[e] != wall) continue;
+    for (int64_t j = m->eoff[e]; j < m->eoff[e + 1]; j++)
+      for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(lo[k], m->xyz[3 * m->conn[j] + k]);
+        hi[k] = fmax(hi[k], m->xyz[3 * m->conn[j] + k]);
+      }
+  }
+  if (!(hi[0] >= lo[0])) return VM_OK;
+  int ord[3] = {0, 1, 2}; /* axes by extent */
+  for (int i = 0; i < 3; i++)
+    for (int j = i + 1; j < 3; j++)
+      if (hi[ord[j]] - lo[ord[j]] < hi[ord[i]] - lo[ord[i]]) {
+        int t = ord[i];
+        ord[i] = ord[j];
+        ord[j] = t;
+      }
+  int axis = ord[1];
+  double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+  double value = 0.5 * (lo[axis] + hi[axis]) + 0.2 * (hi[axis] - lo[axis]);
+  double wlo[3], whi[3];
+  for (int k = 0; k < 3; k++) wlo[k] = lo[k] - ext / 6, whi[k] = hi[k] + ext / 6;
+  char name[128];
+  snprintf(name, sizeof name, "%sslice-near", prefix);
+  char *cap = format(ctx,
+                     "%s: near the wall: the elements cut by the plane %c = %.6g, in a window of "
+                     "the wall's bounding box and a sixth of its size around it, coloured by "
+                     "their scaled Jacobian.",
+                     label, "xyz"[axis], value);
+  int st =
+      cap ? vm_report_slice_window(r, name, cap, m, axis, value, NULL, wlo, whi) : VM_ERR_NOMEM;
+  vm_free(ctx, cap);
+  if (st >= 0 && vm_mesh_find_field(m, "layer", VM_FIELD_ELEMENT)) {
+    snprintf(name, sizeof name, "%sslice-near-layer", prefix);
+    cap = format(ctx, "%s: the same, coloured by the element field 'layer' (-1: the fill).", label);
+    st = cap ? vm_report_slice_window(r, name, cap, m, axis, value, "layer", wlo, whi)
+             : VM_ERR_NOMEM;
+    vm_free(ctx, cap);
+  }
+  return st;
+}
+
 int vm_report_mesh(vm_report *r, const char *prefix, const char *label, const vm_mesh *m,
                    const vm_quality_opts *opts, const char *surface_field) {
   vm_ctx *ctx = r->ctx;
@@ -337,6 +396,7 @@ int vm_report_mesh(vm_report *r, const char *prefix, const char *label, const vm
       vm_free(ctx, cap);
     }
   }
+  if (st >= 0 && n3 > 0) st = near_wall_slices(r, prefix, label, m);
   if (st >= 0 && n2 > 0 && m->dim == 3) {
     static const char *const defaults[] = {"mean_curvature_filtered", "mean_curvature"};
     const char *field = surface_field;
@@ -1209,6 +1269,12 @@ static int above(double d) { return d >= 0; }
 
 int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m, int axis,
                     double value, const char *field) {
+  return vm_report_slice_window(r, name, caption, m, axis, value, field, NULL, NULL);
+}
+
+int vm_report_slice_window(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
+                           int axis, double value, const char *field, const double wlo[3],
+                           const double whi[3]) {
   vm_ctx *ctx = r->ctx;
   if (!valid_name(name)) return vm_error(ctx, VM_ERR_ARG, "report: bad figure name");
   if (axis < 0 || axis > 2) return vm_error(ctx, VM_ERR_ARG, "report: slice axis %d", axis);
@@ -1224,6 +1290,9 @@ int vm_report_slice(vm_report *r, const char *name, const char *caption, const v
   double lo[3], hi[3];
   vm_mesh_bounds(m, lo, hi);
   if (isnan(value)) value = 0.5 * (lo[axis] + hi[axis]);
+  if (wlo && whi)
+    for (int k = 0; k < 3; k++)
+      if (k != axis) lo[k] = wlo[k], hi[k] = whi[k];
 
   /* the cut polygon of every element the plane crosses: up to 12 points */
   double *sj = f ? NULL : vm_alloc_array(ctx, (size_t)m->ne, sizeof *sj);
@@ -1238,9 +1307,15 @@ int vm_report_slice(vm_report *r, const char *name, const char *caption, const v
     int t = m->etype[e];
     if (vm_elem_dim(t) != 3) continue;
     const int32_t *cv = m->conn + m->eoff[e];
-    int nv = vm_elem_nverts(t), na = 0;
-    for (int i = 0; i < nv; i++) na += above(m->xyz[3 * cv[i] + axis] - value);
+    int nv = vm_elem_nverts(t), na = 0, out0 = 0, out1 = 0, out2 = 0, out3 = 0;
+    for (int i = 0; i < nv; i++) {
+      const double *x = m->xyz + 3 * cv[i];
+      na += above(x[axis] - value);
+      out0 += x[a0]<lo[a0], out1 += x[a0]> hi[a0], out2 += x[a1]<lo[a1], out3 += x[a1]> hi[a1];
+    }
     if (na == 0 || na == nv) continue;
+    /* outside the window (all its vertices beyond one side of it) */
+    if (wlo && (out0 == nv || out1 == nv || out2 == nv || out3 == nv)) continue;
     const int(*ed)[2];
     int nedges = elem_edges(t, &ed), np = 0;
     double fv = 0;
@@ -1289,6 +1364,9 @@ int vm_report_slice(vm_report *r, const char *name, const char *caption, const v
   cairo_set_source_rgb(cr, 0.97, 0.97, 0.97);
   cairo_rectangle(cr, ox + s * lo[a0], oy - s * hi[a1], s * dx, s * dy);
   cairo_fill(cr);
+  cairo_save(cr);
+  cairo_rectangle(cr, ox + s * lo[a0], oy - s * hi[a1], s * dx, s * dy);
+  cairo_clip(cr); /* a window: the cells crossing its border are cut at it */
   /* pass 0 fills the cut polygons in element order, pass 1 draws the cuts
    * of the element faces on top, so folded (tangled) cells show their lines */
   for (int pass = 0; pass < 2; pass++) {
@@ -1359,6 +1437,7 @@ int vm_report_slice(vm_report *r, const char *name, const char *caption, const v
       cairo_stroke(cr);
     }
   }
+  cairo_restore(cr);
   /* frame with the bounding box's coordinates */
   static const char axn[3] = {'x', 'y', 'z'};
   char buf[200];

@@ -116,12 +116,21 @@ int vm_report_surface(vm_report *r, const char *name, const char *caption, const
 int vm_report_slice(vm_report *r, const char *name, const char *caption, const vm_mesh *m, int axis,
                     double value, const char *field);
 
+/* The same in a window: only [wlo, whi] along the two in-plane axes is
+ * drawn (the cells crossing its border cut at it). wlo, whi NULL: the
+ * whole bounding box, as vm_report_slice. */
+int vm_report_slice_window(vm_report *r, const char *name, const char *caption, const vm_mesh *m,
+                           int axis, double value, const char *field, const double wlo[3],
+                           const double whi[3]);
+
 /* The standard pictures of one mesh, named "<prefix>quality", "<prefix>slice",
  * "<prefix>surface": the rows of vm_report_quality_rows under `label`,
  * the histograms, a slice through the middle of the bounding box across its
  * longest side (z on ties) if there are volume elements (and the same slice
  * coloured by the element field "layer", "<prefix>slice-layer", if the mesh
- * has it: prism layers), and a rendered
+ * has it: prism layers), for a mesh out to a far field (boundaries named
+ * "wall" and "farfield") the same two zoomed on the wall ("<prefix>slice-near",
+ * "<prefix>slice-near-layer"), and a rendered
  * surface if there are triangles or quads in 3D, coloured by
  * `surface_field` (NULL: "mean_curvature_filtered" or else "mean_curvature"
  * if the mesh has it, else the scaled Jacobian). prefix may be "" or NULL. */
