@@ -159,7 +159,8 @@ int vm_surf_polys_add(vm_surf_polys *P, const int64_t *v, int64_t k, int64_t rec
   return VM_OK;
 }
 
-/* Largest polygon the ear clipper accepts (its cost grows as k^3 at worst). */
+/* Largest polygon read (triangulated in time linear in its size: convex
+ * ones as fans, others by ear clipping within a linear budget). */
 #define VM_SURF_MAX_POLYGON 1024
 
 static double cross2(const double *a, const double *b, const double *c) {
@@ -194,16 +195,26 @@ static int earclip(vm_mesh *m, const int32_t *v, int k, double *uv, int *link, i
     nxt[i] = (i + 1) % k;
     prv[i] = (i + k - 1) % k;
   }
+  /* a convex polygon (every corner turning left) is a fan: linear time */
+  int convex = 1;
+  for (int i = 0; i < k && convex; i++)
+    convex = cross2(uv + 2 * prv[i], uv + 2 * i, uv + 2 * nxt[i]) > 0;
+  /* ear clipping costs k^2 to k^3 steps: past a budget linear in k (a
+   * hostile file's huge non-convex polygons) the rest becomes a fan, its
+   * triangles counted as forced, so reading stays linear in the file */
+  long budget = convex ? 0 : 64L * k + 4096;
   int rem = k, cur = 0;
   while (rem > 3) {
     int found = -1;
-    for (int tries = 0, c = cur; tries < rem; tries++, c = nxt[c]) {
+    for (int tries = 0, c = cur; tries < rem && budget > 0; tries++, c = nxt[c]) {
       int a = prv[c], b = nxt[c];
       const double *pa = uv + 2 * a, *pc = uv + 2 * c, *pb = uv + 2 * b;
+      budget--;
       if (cross2(pa, pc, pb) <= 0) continue;
       int ok = 1;
       for (int j = nxt[b]; j != a && ok; j = nxt[j]) {
         const double *pj = uv + 2 * j;
+        budget--;
         if ((pj[0] == pa[0] && pj[1] == pa[1]) || (pj[0] == pb[0] && pj[1] == pb[1]) ||
             (pj[0] == pc[0] && pj[1] == pc[1]))
           continue;
@@ -216,7 +227,7 @@ static int earclip(vm_mesh *m, const int32_t *v, int k, double *uv, int *link, i
     }
     if (found < 0) {
       found = cur;
-      (*forced)++;
+      if (!convex) (*forced)++;
     }
     int a = prv[found], b = nxt[found];
     int32_t tri[3] = {v[a], v[found], v[b]};

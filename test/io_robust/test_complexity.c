@@ -1,0 +1,218 @@
+/* test/io_robust/test_complexity.c: hostile input gets linear time. Each
+ * reader's worst case as far as we know it, crafted at about 1 MB and 10 MB:
+ *  - OBJ and PLY: star polygons of 1,024 vertices where ear clipping found
+ *    no ear and searched k^3 steps (a 1.2 MB file took 86-93 s);
+ *  - OBJ: convex 1,024-gons;
+ *  - STL: points whose coordinates put them all in one slot of the fixed
+ *    hash the vertex merge used (8.9 MB took 39 s).
+ * The CPU time of the 10 MB file must stay within 30 times the 1 MB file's
+ * (linear: 10; n log n: about 12) and below 10 s (1 MB/s: the readers take
+ * 0.2-0.3 s; before, the stars took 54 s), and every file must read (a mesh with
+ * the right number of triangles). CPU time, not wall time: another process
+ * on the machine does not make it flaky. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "varmesh/io.h"
+#include "vmtest.h"
+
+typedef struct {
+  char *p;
+  size_t n, cap;
+} buf;
+
+static void put(buf *b, const char *fmt, ...) {
+  va_list ap;
+  for (;;) {
+    va_start(ap, fmt);
+    int k = vsnprintf(b->p + b->n, b->cap - b->n, fmt, ap);
+    va_end(ap);
+    if (k >= 0 && (size_t)k < b->cap - b->n) {
+      b->n += (size_t)k;
+      return;
+    }
+    b->cap = 2 * b->cap + 1024;
+    b->p = realloc(b->p, b->cap);
+  }
+}
+
+enum { K = 1024 };
+
+/* A star polygon {K/3} (self-intersecting) whose points alternate between
+ * two radii: every corner turns left, yet every candidate ear holds points
+ * of the inner circle, so the ear clipper scanned all K corners, each
+ * against all K others, for every one of the K triangles. */
+static void star(double *x, double *y) {
+  for (int i = 0; i < K; i++) {
+    int j = (3 * i) % K;
+    double r = j % 2 ? 0.3 : 1.0, a = 2 * 3.14159265358979 * j / K;
+    x[i] = r * cos(a), y[i] = r * sin(a);
+  }
+}
+
+static void make_poly(buf *b, const char *fmt, size_t target, int convex, int64_t *ntri) {
+  double x[K], y[K];
+  if (convex)
+    for (int i = 0; i < K; i++)
+      x[i] = cos(2 * 3.14159265358979 * i / K), y[i] = sin(2 * 3.14159265358979 * i / K);
+  else
+    star(x, y);
+  /* polygons sharing nothing, each its own K vertices */
+  int np = 0;
+  buf body = {0};
+  size_t per = 0;
+  /* estimate the bytes per polygon with one */
+  for (int i = 0; i < K; i++) put(&body, "%.6g %.6g %d\n", x[i], y[i], 0);
+  per = body.n + 8 * K;
+  body.n = 0;
+  np = (int)(target / per) + 1;
+  b->n = 0;
+  if (!strcmp(fmt, "obj")) {
+    for (int p = 0; p < np; p++)
+      for (int i = 0; i < K; i++) put(b, "v %.6g %.6g %d\n", x[i], y[i], p);
+    for (int p = 0; p < np; p++) {
+      put(b, "f");
+      for (int i = 0; i < K; i++) put(b, " %d", p * K + i + 1);
+      put(b, "\n");
+    }
+  } else {
+    put(b,
+        "ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+        "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
+        "end_header\n",
+        np * K, np);
+    for (int p = 0; p < np; p++)
+      for (int i = 0; i < K; i++) put(b, "%.6g %.6g %d\n", x[i], y[i], p);
+    for (int p = 0; p < np; p++) {
+      put(b, "%d", K);
+      for (int i = 0; i < K; i++) put(b, " %d", p * K + i);
+      put(b, "\n");
+    }
+  }
+  free(body.p);
+  *ntri = (int64_t)np * (K - 2);
+}
+
+/* The vertex merge once hashed each point with a fixed, invertible mix
+ * (splitmix64's finalizer over the coordinates' bits): a file could choose
+ * its z coordinates so every point landed in one slot of the table. These
+ * are those points (each distinct; x = the point's number, y = 0.5, z the
+ * double whose bits make the hash's low 32 bits 0). */
+static uint64_t mix64(uint64_t x) {
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return x;
+}
+
+static uint64_t inv_mul(uint64_t a) { /* a odd: a^-1 mod 2^64 by Newton */
+  uint64_t x = a;
+  for (int i = 0; i < 6; i++) x *= 2 - a * x;
+  return x;
+}
+
+static uint64_t unmix64(uint64_t x) {
+  x ^= x >> 31 ^ x >> 62;
+  x *= inv_mul(0x94d049bb133111ebULL);
+  x ^= x >> 27 ^ x >> 54;
+  x *= inv_mul(0xbf58476d1ce4e5b9ULL);
+  x ^= x >> 30 ^ x >> 60;
+  return x;
+}
+
+static double colliding_z(double x, double y, uint64_t salt) {
+  uint64_t h = 0x9e3779b97f4a7c15ULL, b;
+  memcpy(&b, &x, sizeof b);
+  h = mix64(h ^ b);
+  memcpy(&b, &y, sizeof b);
+  h = mix64(h ^ b);
+  for (uint64_t k = 0;; k++) {
+    uint64_t bz = unmix64((salt * 0x9e3779b97f4a7c15ULL + k) << 32) ^ h;
+    double z;
+    memcpy(&z, &bz, sizeof z);
+    if (isfinite(z) && z != 0 && fabs(z) < 1e300 && fabs(z) > 1e-300) return z;
+  }
+}
+
+static void make_stl(buf *b, size_t target, int64_t *ntri) {
+  b->n = 0;
+  put(b, "solid s\n");
+  int64_t t = 0;
+  while (b->n < target) {
+    put(b, "facet normal 0 0 1\n outer loop\n");
+    for (int i = 0; i < 3; i++) {
+      int64_t c = 3 * t + i;
+      double x = (double)c, y = 0.5;
+      put(b, "  vertex %.17g %.17g %.17g\n", x, y, colliding_z(x, y, (uint64_t)c + 1));
+    }
+    put(b, " endloop\nendfacet\n");
+    t++;
+  }
+  put(b, "endsolid s\n");
+  *ntri = t;
+}
+
+static double cpu_read(vm_ctx *ctx, const char *path, const buf *b, int64_t want_tri,
+                       const char *what) {
+  FILE *f = fopen(path, "wb");
+  fwrite(b->p, 1, b->n, f);
+  fclose(f);
+  clock_t t0 = clock();
+  vm_mesh *m = NULL;
+  int st = vm_mesh_read(ctx, path, VM_FMT_AUTO, &m);
+  double dt = (double)(clock() - t0) / CLOCKS_PER_SEC;
+  CHECK(st >= 0 && m && m->ne == want_tri, "%s (%zu bytes): read %d, %lld triangles of %lld: %s",
+        what, b->n, st, m ? (long long)m->ne : -1LL, (long long)want_tri, vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
+  remove(path);
+  return dt;
+}
+
+int main(void) {
+  vm_ctx *ctx = NULL;
+  vm_ctx_create(&ctx);
+  vm_ctx_set_log(ctx, NULL, NULL);
+  char dir[] = "/tmp/vm_complexity_XXXXXX";
+  if (!mkdtemp(dir)) return 1;
+  char path[256];
+  buf b = {0};
+  struct {
+    const char *name, *ext;
+    int kind; /* 0 poly comb, 1 poly convex, 2 stl */
+  } cases[] = {{"OBJ stars", "obj", 0},
+               {"OBJ convex", "obj", 1},
+               {"PLY stars", "ply", 0},
+               {"STL one slot", "stl", 2}};
+  for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    double t[2];
+    size_t bytes[2];
+    for (int s = 0; s < 2; s++) {
+      size_t target = s ? 10u << 20 : 1u << 20;
+      int64_t ntri = 0;
+      if (cases[c].kind == 2)
+        make_stl(&b, target, &ntri);
+      else
+        make_poly(&b, cases[c].ext, target, cases[c].kind == 1, &ntri);
+      snprintf(path, sizeof path, "%s/x.%s", dir, cases[c].ext);
+      bytes[s] = b.n;
+      t[s] = cpu_read(ctx, path, &b, ntri, cases[c].name);
+    }
+    double ratio = t[1] / fmax(t[0], 1e-3);
+    fprintf(stderr, "%-14s %8.2f MB %7.3f s  %8.2f MB %7.3f s  ratio %.1f\n", cases[c].name,
+            bytes[0] / 1048576.0, t[0], bytes[1] / 1048576.0, t[1], ratio);
+    CHECK(ratio < 30 && t[1] < 10, "%s: 10 MB in %.2f s, 1 MB in %.2f s: not linear", cases[c].name,
+          t[1], t[0]);
+  }
+  free(b.p);
+  rmdir(dir);
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("complexity");
+}
