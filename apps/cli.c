@@ -304,7 +304,11 @@ int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *ar
 int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
   long n;
   (void)args;
-  if (vm_cli_int(cli, opt->name, value, 0, 100000000, &n)) return VM_EXIT_USAGE;
+  /* at most 4 threads a core (and 4 on a machine that says nothing): libgomp
+   * failed with its own message from 32,768 threads and crashed from 65,536 */
+  long cores = sysconf(_SC_NPROCESSORS_ONLN);
+  long most = 4 * (cores > 0 ? cores : 1);
+  if (vm_cli_int(cli, opt->name, value, 0, most, &n)) return VM_EXIT_USAGE;
   vm_ctx_set_threads(cli->ctx, (int)n);
   return VM_EXIT_OK;
 }

@@ -139,7 +139,7 @@ void vm_cli_print_help(const vm_cli_spec *spec, FILE *f);
 
 /* Callbacks for the options most programs share:
  *   -q, --quiet       cli->quiet = 1
- *   --threads N       vm_ctx_set_threads, N in [0, 1e8]
+ *   --threads N       vm_ctx_set_threads, N in [0, 4 x the online cores]
  *   --format F        int at offset = vm_cli_format(F); a missing value is
  *                     `error` if the option has one */
 int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
