@@ -301,6 +301,15 @@ int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *ar
   return VM_EXIT_OK;
 }
 
+int vm_cli_volume_output(const vm_cli *cli, const char *path, int fmt) {
+  if (fmt == VM_FMT_STL || fmt == VM_FMT_OBJ || fmt == VM_FMT_OFF || fmt == VM_FMT_PLY)
+    return vm_cli_usage_error(cli,
+                              "%s: %s holds surfaces only and the result is a volume mesh; "
+                              "write .vmsh, .vtu, .msh, .su2, .cgns or an OpenFOAM case",
+                              path, vm_format_name(fmt));
+  return VM_EXIT_OK;
+}
+
 int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
   long n;
   (void)args;

@@ -63,6 +63,11 @@ int vm_cli_operand(const vm_cli *cli, const char *a, const char **const *slots, 
  * error (VM_EXIT_USAGE) for a missing or unknown name. */
 int vm_cli_format(const vm_cli *cli, const char *name, int *fmt);
 
+/* For a stage whose result is a volume mesh (vm-prism, vm-fill, vm-volume):
+ * a usage error (VM_EXIT_USAGE, nothing read or written) if `fmt` holds
+ * surfaces only (STL, OBJ, OFF, PLY), else VM_EXIT_OK. */
+int vm_cli_volume_output(const vm_cli *cli, const char *path, int fmt);
+
 /* Option tables. A program describes its options once, in a static const
  * array of vm_opt ended by {0}; vm_cli_parse reads the command line from
  * it, and --help prints the usage text made from it. Values land in the

@@ -139,6 +139,9 @@ int main(int argc, char **argv) {
   a.o.algorithm = a.algorithm == 1 ? 10 : 1;
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO)
     a.fout = vm_format_from_path(a.in);
+  if ((rc = vm_cli_volume_output(
+           &cli, a.out, a.fout != VM_FMT_AUTO ? a.fout : vm_format_from_path(a.out))) != VM_EXIT_OK)
+    goto done;
   if (vm_mesh_read(cli.ctx, a.in, VM_FMT_AUTO, &m) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;

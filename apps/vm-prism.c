@@ -349,6 +349,7 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "cannot tell the output format of '%s' (use --format)", a.out);
     goto done;
   }
+  if ((rc = vm_cli_volume_output(&cli, a.out, a.fout)) != VM_EXIT_OK) goto done;
   if (a.fout == VM_FMT_CGNS && !vm_have_cgns()) {
     vm_cli_error(&cli, "this build has no CGNS support (libcgns)");
     rc = VM_EXIT_USAGE;

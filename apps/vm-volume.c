@@ -340,6 +340,9 @@ int main(int argc, char **argv) {
   }
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO)
     a.fout = vm_format_from_path(a.in);
+  if ((rc = vm_cli_volume_output(
+           &cli, a.out, a.fout != VM_FMT_AUTO ? a.fout : vm_format_from_path(a.out))) != VM_EXIT_OK)
+    goto done;
   if ((rc = read_input(&cli, &a, &s)) != VM_EXIT_OK ||
       (rc = boundary_conditions(&cli, &a, s.m, &s.slip)) != VM_EXIT_OK ||
       (a.report_dir && (rc = open_report(&cli, &a, &s)) != VM_EXIT_OK))
