@@ -150,8 +150,17 @@ int main(int argc, char **argv) {
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
   if (rc != VM_CLI_RUN) goto done;
   rc = VM_EXIT_OK;
-  if (vm_mesh_read(cli.ctx, a.path, a.fin, &m) < 0 || vm_mesh_quality(m, &a.qo, &q) < 0 ||
-      vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
+  if (vm_mesh_read(cli.ctx, a.path, a.fin, &m) < 0) {
+    rc = vm_cli_input_error(&cli, NULL);
+    goto done;
+  }
+  /* an empty mesh passes no check and has nothing to report */
+  if (m->ne == 0) {
+    vm_cli_error(&cli, "%s: the mesh has no elements (%lld vertices)", a.path, (long long)m->nv);
+    rc = VM_EXIT_INPUT;
+    goto done;
+  }
+  if (vm_mesh_quality(m, &a.qo, &q) < 0 || vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }

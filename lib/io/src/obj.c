@@ -131,6 +131,14 @@ static int read_obj(vm_surf_text *t, vm_mesh *m, vm_surf_polys *P) {
       note(&other, t->line);
     }
   } while (vm_surf_next_line(t));
+  /* nothing an OBJ file is made of: random bytes, a renamed binary file */
+  if (m->nv == 0 && P->n == 0 && other.n) {
+    st = vm_error(ctx, VM_ERR_FORMAT,
+                  "%s: line %lld: not an OBJ file: no vertex or face, and '%s' is no OBJ "
+                  "statement",
+                  name, (long long)other.line, other_kw);
+    goto done;
+  }
   if ((st = vm_surf_polys_build(P, name, "line", 1, m)) < 0) goto done;
   warn(ctx, name, &extra, "extra vertex values (colors or weights)");
   warn(ctx, name, &normals, "vertex normals (vn)");
