@@ -11,12 +11,28 @@
 
 #include "varmesh/io.h"
 
+/* A message as it reaches the terminal: control bytes (from a file's
+ * contents quoted in a message: escape sequences could drive the terminal)
+ * shown as \xHH, and one line. */
+static void put_clean(const char *prefix, const char *msg, const char *suffix) {
+  fputs(prefix, stderr);
+  for (const unsigned char *p = (const unsigned char *)msg; *p; p++) {
+    if (*p < 0x20 || *p == 0x7f)
+      fprintf(stderr, "\\x%02x", *p);
+    else
+      fputc(*p, stderr);
+  }
+  fputs(suffix, stderr);
+}
+
 static void log_stderr(void *user, int level, const char *msg) {
   const vm_cli *cli = user;
   if (level == VM_LOG_ERROR) return; /* errors are printed by the caller, once */
   if (cli->quiet && level >= VM_LOG_INFO) return;
   if (level == VM_LOG_DEBUG && !cli->verbose) return;
-  fprintf(stderr, "%s: %s%s\n", cli->prog, level == VM_LOG_WARN ? "warning: " : "", msg);
+  char pre[160];
+  snprintf(pre, sizeof pre, "%s: %s", cli->prog, level == VM_LOG_WARN ? "warning: " : "");
+  put_clean(pre, msg, "\n");
 }
 
 static volatile int cli_interrupted;
@@ -50,7 +66,9 @@ void vm_cli_error(const vm_cli *cli, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(buf, sizeof buf, fmt, ap);
   va_end(ap);
-  fprintf(stderr, "%s: error: %s\n", cli->prog, buf);
+  char pre[160];
+  snprintf(pre, sizeof pre, "%s: error: ", cli->prog);
+  put_clean(pre, buf, "\n");
 }
 
 int vm_cli_input_error(const vm_cli *cli, const char *path) {
@@ -67,7 +85,10 @@ int vm_cli_usage_error(const vm_cli *cli, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(buf, sizeof buf, fmt, ap);
   va_end(ap);
-  fprintf(stderr, "%s: error: %s (see %s --help)\n", cli->prog, buf, cli->prog);
+  char pre[160], post[160];
+  snprintf(pre, sizeof pre, "%s: error: ", cli->prog);
+  snprintf(post, sizeof post, " (see %s --help)\n", cli->prog);
+  put_clean(pre, buf, post);
   return VM_EXIT_USAGE;
 }
 

@@ -87,12 +87,20 @@ static void handlers(int fmt, vm_reader_fn *rd, vm_writer_fn *wr) {
 int vm_read_file(vm_ctx *ctx, const char *path, uint8_t **buf, size_t *len) {
   *buf = NULL;
   *len = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return vm_error(ctx, VM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  /* opened without blocking: a FIFO blocked fopen until a writer came */
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return vm_error(ctx, VM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
   struct stat st;
-  if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
-    fclose(f);
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    close(fd);
     return vm_error(ctx, VM_ERR_IO, "%s: not a regular file", path);
+  }
+  int fl = fcntl(fd, F_GETFL);
+  if (fl >= 0) fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+  FILE *f = fdopen(fd, "rb");
+  if (!f) {
+    close(fd);
+    return vm_error(ctx, VM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
   }
   if ((uint64_t)st.st_size > (uint64_t)SIZE_MAX / 2) {
     fclose(f);

@@ -313,8 +313,9 @@ static int read_data(ply_reader *R, vm_mesh *m, vm_surf_polys *P) {
         }
         for (int64_t q = 0; q < k; q++) {
           if ((st = read_value(R, Q->type, &v)) < 0) goto done;
-          if (!(v >= -1e18 && v <= 1e18)) {
-            st = data_fail(R, "bad vertex index %g", v);
+          /* a float-typed index must still be a whole number (1.7 was read as 1) */
+          if (!(v >= -1e18 && v <= 1e18) || v != floor(v)) {
+            st = data_fail(R, "bad vertex index %.17g", v);
             goto done;
           }
           face[q] = (int64_t)v;
