@@ -25,7 +25,7 @@ static void put_clean(const char *prefix, const char *msg, const char *suffix) {
   fputs(suffix, stderr);
 }
 
-static void log_stderr(void *user, int level, const char *msg) {
+void vm_cli_log(void *user, int level, const char *msg) {
   const vm_cli *cli = user;
   if (level == VM_LOG_ERROR) return; /* errors are printed by the caller, once */
   if (cli->quiet && level >= VM_LOG_INFO) return;
@@ -55,7 +55,7 @@ void vm_cli_init(vm_cli *cli, const char *prog) {
     fprintf(stderr, "%s: error: out of memory\n", prog);
     exit(VM_EXIT_INPUT);
   }
-  vm_ctx_set_log(cli->ctx, log_stderr, cli);
+  vm_ctx_set_log(cli->ctx, vm_cli_log, cli);
 }
 
 void vm_cli_finish(vm_cli *cli) { vm_ctx_destroy(&cli->ctx); }

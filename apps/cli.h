@@ -28,6 +28,9 @@ typedef struct vm_cli {
  * Exits with VM_EXIT_INPUT if the context cannot be made. */
 void vm_cli_init(vm_cli *cli, const char *prog);
 void vm_cli_finish(vm_cli *cli);
+/* The log callback vm_cli_init installs (user: the vm_cli): warnings, and
+ * info unless quiet, on stderr with control bytes escaped. */
+void vm_cli_log(void *user, int level, const char *msg);
 /* SIGINT and SIGTERM ask the library to stop at the next safe point
  * (vm_ctx_set_interrupt): the stage then writes its best state and exits
  * VM_EXIT_INTERRUPTED; a second signal exits at once with 128 + signal,

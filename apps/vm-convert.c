@@ -1,7 +1,11 @@
 /* apps/vm-convert.c: convert a mesh between the formats varmesh reads and
  * writes, saying what the target format cannot carry. */
+#define _XOPEN_SOURCE 700 /* nftw */
+#include <ftw.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "varmesh/io.h"
@@ -24,7 +28,7 @@ static const vm_opt opts[] = {
     {"--msh22", NULL, VM_OPT_FLAG, A(wo.msh_version), NULL, "write Gmsh 2.2 instead of 4.1",
      .ival = 22},
     {"--strict", NULL, VM_OPT_FLAG, A(strict), NULL,
-     "exit 3 if the output format cannot carry everything", .ival = 1},
+     "exit 3, writing nothing, if the output format cannot carry everything", .ival = 1},
     VM_CLI_OPT_QUIET("no warnings"),
     {0}};
 
@@ -36,10 +40,76 @@ static const vm_cli_spec spec = {
     "or --format foam, write only): OUT is a case directory; OUT/constant/polyMesh\n"
     "is written (replaced in an existing case, whose other files stay).\n",
     opts,
-    "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information lost\n",
+    "exit: 0 ok, 1 bad input or I/O failure, 2 usage, 3 --strict and information would be\n"
+    "lost (nothing written)\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
+
+/* --strict: a trial write into a private temporary directory first, its
+ * messages held back and naming OUT; only a lossless trial lets the real
+ * write happen (a lossy file was written before the exit 3, and with
+ * OUT == IN the input was gone). */
+typedef struct {
+  vm_cli *cli;
+  const char *trial, *out;
+  char *held;
+  size_t len;
+} trial_log;
+
+static void hold(void *user, int level, const char *msg) {
+  trial_log *t = user;
+  if (level != VM_LOG_WARN) return;
+  char line[1400];
+  const char *hit = strstr(msg, t->trial);
+  if (hit)
+    snprintf(line, sizeof line, "%.*s%s%s", (int)(hit - msg), msg, t->out, hit + strlen(t->trial));
+  else
+    snprintf(line, sizeof line, "%s", msg);
+  size_t n = strlen(line) + 1;
+  char *p = realloc(t->held, t->len + n);
+  if (!p) return;
+  memcpy(p + t->len, line, n);
+  t->held = p;
+  t->len += n;
+}
+
+static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw) {
+  (void)sb, (void)flag, (void)ftw;
+  return remove(path);
+}
+
+/* VM_WARN_LOSSY if writing m as OUT would lose something (the warnings
+ * printed, naming OUT), VM_OK if not, < 0 on a failure of the trial. */
+static int strict_trial(vm_cli *cli, const vm_mesh *m, const char *out, int fmt,
+                        const vm_write_opts *wo) {
+  const char *tmpdir = getenv("TMPDIR");
+  char dir[4096], trial[8192];
+  snprintf(dir, sizeof dir, "%s/vm-convert-strict.XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+  if (!mkdtemp(dir))
+    return vm_error(cli->ctx, VM_ERR_IO, "%s: cannot make a temporary directory", dir);
+  const char *base = strrchr(out, '/');
+  base = base ? base + 1 : out;
+  snprintf(trial, sizeof trial, "%s/%s", dir, *base ? base : "out");
+  trial_log t = {cli, trial, out, NULL, 0};
+  vm_ctx_set_log(cli->ctx, hold, &t);
+  int st = vm_mesh_write(cli->ctx, m, trial, fmt, wo);
+  vm_ctx_set_log(cli->ctx, vm_cli_log, cli);
+  nftw(dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+  if (st < 0) { /* the trial's error names OUT */
+    char msg[1400];
+    const char *e = vm_ctx_error(cli->ctx), *hit = strstr(e, trial);
+    if (hit) {
+      snprintf(msg, sizeof msg, "%.*s%s%s", (int)(hit - e), e, out, hit + strlen(trial));
+      vm_error(cli->ctx, st, "%s", msg);
+    }
+  }
+  if (st == VM_WARN_LOSSY)
+    for (size_t i = 0; i < t.len; i += strlen(t.held + i) + 1)
+      vm_cli_log(cli, VM_LOG_WARN, t.held + i);
+  free(t.held);
+  return st;
+}
 
 int main(int argc, char **argv) {
   vm_cli cli;
@@ -54,13 +124,18 @@ int main(int argc, char **argv) {
     goto done;
   }
   int st = vm_mesh_read(cli.ctx, a.in, a.fin, &m);
-  if (st >= 0) st = vm_mesh_write(cli.ctx, m, a.out, a.fout, &a.wo);
-  if (st < 0) {
-    rc = vm_cli_input_error(&cli, NULL);
-  } else if (st == VM_WARN_LOSSY && a.strict) {
-    vm_cli_error(&cli, "%s: the output format could not carry everything (see warnings)", a.out);
-    rc = VM_EXIT_CHECK;
+  if (st >= 0 && a.strict) {
+    st = strict_trial(&cli, m, a.out, a.fout, &a.wo);
+    if (st == VM_WARN_LOSSY) {
+      vm_cli_error(&cli,
+                   "%s: the output format cannot carry everything (see warnings); nothing written",
+                   a.out);
+      rc = VM_EXIT_CHECK;
+      goto done;
+    }
   }
+  if (st >= 0) st = vm_mesh_write(cli.ctx, m, a.out, a.fout, &a.wo);
+  if (st < 0) rc = vm_cli_input_error(&cli, NULL);
 done:
   vm_mesh_destroy(&m);
   vm_cli_finish(&cli);

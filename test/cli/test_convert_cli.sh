@@ -67,7 +67,19 @@ check '[ ! -e "$dir/bad.vmsh" ]' "no output on failure"
 check '[ $? -eq 2 ]' "missing OUT is a usage error"
 "$conv" --strict -q "$dir/m.vmsh" "$dir/m_strict.stl" 2>/dev/null
 rc=$?
-check '[ $rc -eq 1 ] || [ $rc -eq 3 ]' "--strict refuses a lossy conversion (volume mesh to STL: $rc)"
+check '[ $rc -eq 1 ] && [ ! -e "$dir/m_strict.stl" ]' "--strict refuses a volume mesh to STL and writes nothing ($rc)"
+"$conv" --strict "$dir/m.vmsh" "$dir/m_strict.mesh" 2>/dev/null
+rc=$?
+check '[ $rc -eq 3 ] && [ ! -e "$dir/m_strict.mesh" ]' "--strict refuses a lossy conversion and writes nothing (fields to MEDIT: $rc)"
+cp "$dir/m.vmsh" "$dir/m_keep.vmsh"
+"$conv" --strict --format medit "$dir/m_keep.vmsh" "$dir/m_keep.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 3 ] && cmp -s "$dir/m.vmsh" "$dir/m_keep.vmsh"' "--strict with OUT == IN: exit 3, the input intact (it was replaced by the lossy STL: $rc)"
+check 'grep -q "m_keep.vmsh: " "$dir/err" && ! grep -q "vm-convert-strict" "$dir/err"' "the warnings name OUT, not the trial: $(head -1 "$dir/err")"
+"$conv" --strict "$dir/m.vmsh" "$dir/m_err.stl" 2>"$dir/err"
+check 'grep -q "m_err.stl" "$dir/err" && ! grep -q "vm-convert-strict" "$dir/err"' "an error of the trial names OUT: $(head -1 "$dir/err")"
+"$conv" --strict -q "$dir/m.vmsh" "$dir/m_strict.vtu"
+check '[ $? -eq 0 ] && [ -s "$dir/m_strict.vtu" ]' "--strict writes a lossless conversion"
 "$conv" --version | grep -q "vm-convert (varmesh)"
 check '[ $? -eq 0 ]' "--version"
 "$qual" --help | grep -q "require-valid"
