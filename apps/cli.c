@@ -37,9 +37,21 @@ void vm_cli_log(void *user, int level, const char *msg) {
 
 static volatile int cli_interrupted;
 
+/* A stage that stops at a safe point: the first signal asks it to, a
+ * second one ends the program at once, without a temporary file left. */
 static void on_signal(int sig) {
-  if (cli_interrupted) _exit(128 + sig);
+  if (cli_interrupted) {
+    vm_io_remove_temporaries();
+    _exit(128 + sig);
+  }
   cli_interrupted = 1;
+}
+
+/* Every other program (and every program until it asks for the above):
+ * the first signal ends it at once, without a temporary file left. */
+static void on_signal_exit(int sig) {
+  vm_io_remove_temporaries();
+  _exit(128 + sig);
 }
 
 void vm_cli_catch_interrupts(vm_cli *cli) {
@@ -56,6 +68,9 @@ void vm_cli_init(vm_cli *cli, const char *prog) {
     exit(VM_EXIT_INPUT);
   }
   vm_ctx_set_log(cli->ctx, vm_cli_log, cli);
+  signal(SIGINT, on_signal_exit);
+  signal(SIGTERM, on_signal_exit);
+  signal(SIGHUP, on_signal_exit);
 }
 
 void vm_cli_finish(vm_cli *cli) { vm_ctx_destroy(&cli->ctx); }

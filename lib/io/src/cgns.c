@@ -182,16 +182,20 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
     ex_groups_free(ctx, &g);
     return vm_error(ctx, VM_ERR_ARG, "%s: path too long", path);
   }
+  vm_io_tmp_register(tmp);
   st = write_file(ctx, m, &g, tmp, path);
   ex_groups_free(ctx, &g);
   if (st) {
+    vm_io_tmp_unregister(tmp);
     remove(tmp);
     return st;
   }
   if (rename(tmp, path)) {
+    vm_io_tmp_unregister(tmp);
     remove(tmp);
     return vm_error(ctx, VM_ERR_IO, "%s: cannot rename the temporary file", path);
   }
+  vm_io_tmp_unregister(tmp);
   return ex_groups_lossy(ctx, m, path, "CGNS", 1) ? VM_WARN_LOSSY : VM_OK;
 }
 

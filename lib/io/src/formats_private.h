@@ -50,4 +50,10 @@ int vm_read_cgns(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, 
 int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 int vm_write_foam(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write_opts *o);
 
+/* A temporary file written outside vm_outfile (CGNS): registered while it
+ * exists so that vm_io_remove_temporaries finds it. path stays valid until
+ * unregistered. */
+void vm_io_tmp_register(char *path);
+void vm_io_tmp_unregister(const char *path);
+
 #endif

@@ -224,11 +224,41 @@ int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out) {
   f->ctx = ctx;
   f->tmp = tmp;
   f->path = p;
+  vm_io_tmp_register(tmp);
   *out = f;
   return VM_OK;
 }
 
 FILE *vm_outfile_fp(vm_outfile *f) { return f->fp; }
+
+/* The temporary files being written, for a signal handler to remove
+ * (vm_io_remove_temporaries): a fixed table of pointers to their names,
+ * claimed and released with atomic operations, read without locks. */
+#define TMP_SLOTS 64
+static char *tmp_slot[TMP_SLOTS];
+
+void vm_io_tmp_register(char *path) {
+  for (int i = 0; i < TMP_SLOTS; i++) {
+    char *expect = NULL;
+    if (__atomic_compare_exchange_n(&tmp_slot[i], &expect, path, 0, __ATOMIC_SEQ_CST,
+                                    __ATOMIC_SEQ_CST))
+      return;
+  }
+}
+
+void vm_io_tmp_unregister(const char *path) {
+  for (int i = 0; i < TMP_SLOTS; i++) {
+    char *expect = (char *)path;
+    __atomic_compare_exchange_n(&tmp_slot[i], &expect, NULL, 0, __ATOMIC_SEQ_CST, __ATOMIC_SEQ_CST);
+  }
+}
+
+void vm_io_remove_temporaries(void) {
+  for (int i = 0; i < TMP_SLOTS; i++) {
+    char *p = __atomic_load_n(&tmp_slot[i], __ATOMIC_SEQ_CST);
+    if (p) unlink(p);
+  }
+}
 
 static void outfile_free(vm_outfile *f) {
   vm_ctx *ctx = f->ctx;
@@ -241,6 +271,7 @@ void vm_outfile_abort(vm_outfile **pf) {
   if (!pf || !*pf) return;
   vm_outfile *f = *pf;
   if (f->fp) fclose(f->fp);
+  vm_io_tmp_unregister(f->tmp);
   remove(f->tmp);
   outfile_free(f);
   *pf = NULL;
@@ -262,6 +293,7 @@ int vm_outfile_commit(vm_outfile **pf) {
     vm_outfile_abort(pf);
     return st;
   }
+  vm_io_tmp_unregister(f->tmp);
   outfile_free(f);
   *pf = NULL;
   return VM_OK;

@@ -307,6 +307,11 @@ void vm_outfile_abort(vm_outfile **f);
  * cells, a cell with a repeated vertex), VM_ERR_IO (path is a file, or
  * writing failed: nothing changed), VM_ERR_NOMEM. */
 
+/* Remove every temporary file an output is being written to (the files
+ * that become OUT on success). Async-signal-safe: for a signal handler
+ * that ends the program, so that no OUT.tmp.* is left behind. */
+void vm_io_remove_temporaries(void);
+
 #ifdef __cplusplus
 }
 #endif
