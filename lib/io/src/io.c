@@ -1,6 +1,7 @@
 /* lib/io/src/io.c: format dispatch by extension, whole-file reading with size
  * checks, and atomic output through a temporary file (or directory) and
  * rename. */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "varmesh/io.h"
 
 #include <dirent.h>
@@ -184,6 +185,9 @@ int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
   if (!wr)
     return vm_error(ctx, VM_ERR_UNSUPPORTED, "%s: format '%s' cannot be written", path,
                     vm_format_name(format));
+  if (!strcmp(path, "-") && (format == VM_FMT_CGNS || format == VM_FMT_FOAM))
+    return vm_error(ctx, VM_ERR_UNSUPPORTED, "-: %s cannot be written to standard output",
+                    vm_format_name(format));
   vm_write_opts def = vm_write_opts_default();
   int st = vm_mesh_check(m);
   if (st < 0) return st;
@@ -194,25 +198,100 @@ struct vm_outfile {
   vm_ctx *ctx;
   FILE *fp;
   char *path;
-  char *tmp;
+  char *tmp;  /* NULL: written straight through (stdout, a device, a FIFO) */
+  int mode;   /* the permissions of the file replaced (-1: a new file) */
+  int stream; /* fp is stdout: not closed */
 };
 
 int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out) {
   *out = NULL;
   static const char suffix[] = ".tmp.";
-  size_t n = strlen(path) + sizeof suffix + 48;
   vm_outfile *f = vm_calloc(ctx, 1, sizeof *f);
-  char *tmp = vm_malloc(ctx, n);
   char *p = vm_strdup(ctx, path);
-  if (!f || !tmp || !p) {
+  if (!f || !p) {
     vm_free(ctx, f);
-    vm_free(ctx, tmp);
     vm_free(ctx, p);
+    return VM_ERR_NOMEM;
+  }
+  f->ctx = ctx;
+  f->path = p;
+  f->mode = -1;
+  /* "-": standard output */
+  if (!strcmp(path, "-")) {
+    f->fp = stdout;
+    f->stream = 1;
+    *out = f;
+    return VM_OK;
+  }
+  /* a symbolic link: its target is written (the link stays); a device or
+   * a FIFO: written straight through (renaming a file onto it replaced it:
+   * /dev/null became a regular file); a file: its permissions kept */
+  struct stat st;
+  char *target = NULL;
+  if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+    target = realpath(path, NULL);
+    if (!target) {
+      /* a dangling link: its target's name, relative to the link's folder */
+      char lk[4096];
+      ssize_t k = readlink(path, lk, sizeof lk - 1);
+      if (k > 0) {
+        lk[k] = 0;
+        const char *slash = strrchr(path, '/');
+        size_t dl = lk[0] == '/' || !slash ? 0 : (size_t)(slash - path + 1);
+        target = malloc(dl + (size_t)k + 1);
+        if (target) {
+          memcpy(target, path, dl);
+          memcpy(target + dl, lk, (size_t)k + 1);
+        }
+      }
+    }
+    if (target) {
+      char *t = vm_strdup(ctx, target);
+      free(target);
+      if (!t) {
+        vm_free(ctx, p);
+        vm_free(ctx, f);
+        return VM_ERR_NOMEM;
+      }
+      vm_free(ctx, f->path);
+      f->path = p = t;
+    }
+  }
+  if (stat(p, &st) == 0) {
+    if (S_ISDIR(st.st_mode)) {
+      vm_free(ctx, p);
+      vm_free(ctx, f);
+      return vm_error(ctx, VM_ERR_IO, "%s: is a directory", path);
+    }
+    if (!S_ISREG(st.st_mode)) {
+      f->fp = fopen(p, "wb");
+      if (!f->fp) {
+        int e = errno;
+        vm_free(ctx, p);
+        vm_free(ctx, f);
+        return vm_error(ctx, VM_ERR_IO, "%s: cannot open for writing: %s", path, strerror(e));
+      }
+      *out = f;
+      return VM_OK;
+    }
+    if (!(st.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH))) {
+      vm_free(ctx, p);
+      vm_free(ctx, f);
+      return vm_error(ctx, VM_ERR_IO, "%s: the file is read-only (mode %04o): not replaced", path,
+                      (unsigned)(st.st_mode & 07777));
+    }
+    f->mode = (int)(st.st_mode & 07777);
+  }
+  size_t n = strlen(p) + sizeof suffix + 48;
+  char *tmp = vm_malloc(ctx, n);
+  if (!tmp) {
+    vm_free(ctx, p);
+    vm_free(ctx, f);
     return VM_ERR_NOMEM;
   }
   /* pid + a counter keep concurrent writers of the same path apart */
   static _Thread_local unsigned long counter;
-  snprintf(tmp, n, "%s%s%ld.%lu", path, suffix, (long)getpid(), ++counter);
+  snprintf(tmp, n, "%s%s%ld.%lu", p, suffix, (long)getpid(), ++counter);
   f->fp = fopen(tmp, "wb");
   if (!f->fp) {
     int e = errno;
@@ -221,9 +300,7 @@ int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out) {
     vm_free(ctx, p);
     return vm_error(ctx, VM_ERR_IO, "%s: cannot create: %s", path, strerror(e));
   }
-  f->ctx = ctx;
   f->tmp = tmp;
-  f->path = p;
   vm_io_tmp_register(tmp);
   *out = f;
   return VM_OK;
@@ -270,9 +347,11 @@ static void outfile_free(vm_outfile *f) {
 void vm_outfile_abort(vm_outfile **pf) {
   if (!pf || !*pf) return;
   vm_outfile *f = *pf;
-  if (f->fp) fclose(f->fp);
-  vm_io_tmp_unregister(f->tmp);
-  remove(f->tmp);
+  if (f->fp && !f->stream) fclose(f->fp);
+  if (f->tmp) {
+    vm_io_tmp_unregister(f->tmp);
+    remove(f->tmp);
+  }
   outfile_free(f);
   *pf = NULL;
 }
@@ -281,13 +360,19 @@ int vm_outfile_commit(vm_outfile **pf) {
   vm_outfile *f = *pf;
   vm_ctx *ctx = f->ctx;
   int bad = fflush(f->fp) != 0 || ferror(f->fp);
-  bad |= fclose(f->fp) != 0;
+  if (!f->stream) bad |= fclose(f->fp) != 0;
   f->fp = NULL;
   if (bad) {
     int st = vm_error(ctx, VM_ERR_IO, "%s: write failed: %s", f->path, strerror(errno));
     vm_outfile_abort(pf);
     return st;
   }
+  if (!f->tmp) { /* written straight through */
+    outfile_free(f);
+    *pf = NULL;
+    return VM_OK;
+  }
+  if (f->mode >= 0) chmod(f->tmp, (mode_t)f->mode);
   if (rename(f->tmp, f->path) != 0) {
     int st = vm_error(ctx, VM_ERR_IO, "%s: cannot rename into place: %s", f->path, strerror(errno));
     vm_outfile_abort(pf);
