@@ -143,6 +143,48 @@ static void adjacency(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The figures do not depend on units: a valid mesh scaled by 1e-120 or
+ * 1e120 stays valid with the same phi_min (every det underflowed to 0 at
+ * 1e-120: "inverted"); a target_size field with a value that is not a
+ * positive finite size is refused, not measured (-1, NaN and 1e200 made a
+ * valid mesh "inverted"). */
+static void units(vm_ctx *ctx) {
+  vm_rotcube_opts o = vm_rotcube_opts_default();
+  o.n = 4;
+  o.alpha = 0.3;
+  o.cells = VM_GEN_MIXED;
+  vm_mesh *m = NULL;
+  vm_gen_rotated_cube(ctx, &o, &m, NULL);
+  vm_quality q0, q;
+  vm_mesh_quality(m, NULL, &q0);
+  CHECK(q0.all.inverted_nodes == 0, "units: the mixed cube at 0.3 is valid (%lld)",
+        (long long)q0.all.inverted_nodes);
+  double scales[2] = {1e-120, 1e120};
+  for (int k = 0; k < 2; k++) {
+    vm_mesh *c = NULL;
+    vm_mesh_clone(m, &c);
+    for (int64_t i = 0; i < 3 * c->nv; i++) c->xyz[i] *= scales[k];
+    int st = vm_mesh_quality(c, NULL, &q);
+    CHECK(st == VM_OK && q.all.inverted_nodes == 0, "units: scaled by %g: %lld inverted nodes",
+          scales[k], (long long)q.all.inverted_nodes);
+    CHECK(fabs(q.all.phi_min - q0.all.phi_min) <= 1e-12 * fabs(q0.all.phi_min) &&
+              fabs(q.all.sj_min - q0.all.sj_min) <= 1e-12,
+          "units: scaled by %g: phi_min %.17g (%.17g), sj_min %.17g (%.17g)", scales[k],
+          q.all.phi_min, q0.all.phi_min, q.all.sj_min, q0.all.sj_min);
+    vm_mesh_destroy(&c);
+  }
+  double bad[3] = {-1, NAN, 1e300 * 10};
+  for (int k = 0; k < 3; k++) {
+    vm_field *f;
+    vm_mesh_add_field(m, "target_size", VM_FIELD_ELEMENT, VM_FIELD_F64, 1, &f);
+    for (int64_t e = 0; e < m->ne; e++) ((double *)f->data)[e] = e == 5 ? bad[k] : 0.2;
+    int st = vm_mesh_quality(m, NULL, &q);
+    CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "element 5: target_size"),
+          "units: target_size %g refused: %d %s", bad[k], st, vm_ctx_error(ctx));
+  }
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx;
   vm_ctx_create(&ctx);
@@ -151,6 +193,7 @@ int main(void) {
   rotated_cube(ctx);
   mixed_cube(ctx);
   adjacency(ctx);
+  units(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == live0, "leak: %ld blocks", vm_ctx_alloc_live(ctx) - live0);
   vm_ctx_destroy(&ctx);
   return vmtest_end("quality");

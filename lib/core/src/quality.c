@@ -128,6 +128,16 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
   q->top_dim = vm_mesh_count_types(m, counts);
   const vm_field *tsz = vm_mesh_find_field(m, "target_size", VM_FIELD_ELEMENT);
   if (tsz && tsz->type != VM_FIELD_F64) tsz = NULL;
+  /* a size the measures divide by: positive and finite, or the run is
+   * meaningless (1e200, -1 or NaN made a valid mesh "inverted") */
+  if (tsz && !(o.target_size > 0))
+    for (int64_t e = 0; e < m->ne; e++) {
+      double h = ((const double *)tsz->data)[e * tsz->ncomp];
+      if (vm_elem_dim(m->etype[e]) == q->top_dim && !(isfinite(h) && h > 0 && h < 1e300))
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "element %lld: target_size %.17g is not a positive finite size",
+                        (long long)e, h);
+    }
   int have_size = o.target_size > 0 || tsz;
 
   /* per type: node rules, target inverse at unit size, ideal SJ normalizer */
@@ -164,11 +174,24 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
     }
     int k = vm_elem_nverts(t);
     double x[VM_MAX_ELEM_VERTS * 3];
+    /* scaled by the power of two nearest its extent: the figures do not
+     * depend on units (a valid mesh scaled by 1e-120 had every det
+     * underflow to 0: "inverted"), and a power of two changes no rounding:
+     * at ordinary scales every sign is the one of the raw coordinates */
+    const double *p0 = m->xyz + 3 * m->conn[m->eoff[e]];
+    double ext = 0;
     for (int i = 0; i < k; i++) {
       const double *p = m->xyz + 3 * m->conn[m->eoff[e] + i];
-      x[3 * i] = p[0];
-      x[3 * i + 1] = p[1];
-      x[3 * i + 2] = m->dim == 2 ? 0 : p[2];
+      for (int c = 0; c < (m->dim == 2 ? 2 : 3); c++) ext = fmax(ext, fabs(p[c] - p0[c]));
+    }
+    int ex = 0;
+    if (ext > 0 && isfinite(ext)) frexp(ext, &ex);
+    double L = ldexp(1.0, ex);
+    for (int i = 0; i < k; i++) {
+      const double *p = m->xyz + 3 * m->conn[m->eoff[e] + i];
+      x[3 * i] = ldexp(p[0], -ex);
+      x[3 * i + 1] = ldexp(p[1], -ex);
+      x[3 * i + 2] = m->dim == 2 ? 0 : ldexp(p[2], -ex);
     }
     double nrm[3] = {0, 0, 1};
     if (d == 2 && m->dim == 3) {
@@ -185,8 +208,8 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
         for (int i = 0; i < 3; i++) nrm[i] /= l;
     }
     double h = o.target_size > 0 ? o.target_size : tsz ? ((double *)tsz->data)[e * tsz->ncomp] : 1;
-    double scale = pow(h, -d); /* det C at size h = det C at unit size / h^d */
-    double s_scale = 1.0 / (h * h);
+    /* det C at size h = det C of the frame times (L/h)^d */
+    double scale = pow(L / h, d);
     vm_type_quality *tq = &q->type[t];
     tq->count++;
     int inv = 0;
@@ -194,21 +217,23 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
     const vm_qrule *R = rules[t];
     for (int n = 0; n < R->nnodes; n++) {
       node_val v = eval_node(&R->nodes[n], d, x, tinv[t] + 9 * n, nrm);
-      double detc = v.det_c * scale, s = v.s * s_scale;
+      double detc = v.det_c * scale;
       tq->nodes++;
-      if (detc <= 0) {
+      /* the sign in the element's frame: no scale can flip or zero it */
+      if (v.det_c <= 0) {
         tq->inverted_nodes++;
         inv = 1;
       }
-      double phi = s > 0 ? detc / (d == 3 ? pow(s / 3, 1.5) : s / 2) : -INFINITY;
+      /* phi is scale-free: from the frame's values */
+      double phi = v.s > 0 ? v.det_c / (d == 3 ? pow(v.s / 3, 1.5) : v.s / 2) : -INFINITY;
       if (phi < tq->phi_min) tq->phi_min = phi;
       if (phi < ephi_min) ephi_min = phi;
       if (have_size) {
         double psi = 2 * detc / (1 + detc * detc);
         if (psi < tq->psi_min) tq->psi_min = psi;
         if (detc < q->min_det) q->min_det = detc;
-      } else if (v.det_c < q->min_det) {
-        q->min_det = v.det_c;
+      } else if (v.det_c * pow(L, d) < q->min_det) {
+        q->min_det = v.det_c * pow(L, d);
       }
     }
     double sjm = INFINITY;
