@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "varmesh/jacobian.h"
+#include "varmesh/quadrature.h"
 #include "varmesh/quality.h"
 #include "varmesh/rotcube.h"
 #include "varmesh/volume.h"
@@ -106,9 +107,74 @@ static void no_repair(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The repair's map from the nodes of (24) to the Bernstein coefficients of
+ * det J (volume.c, hex_node_coef): with the node order of the rule table,
+ * the mean of each coefficient's nodes, as triquadratic Bernstein
+ * coefficients, gives det J of the trilinear map of a perturbed cube. */
+static int node_coef(int n) {
+  int j3 = n & 1, i3 = n >> 1 & 1, k2 = n >> 2 & 1, i2 = n >> 3 & 1, k = n >> 4 & 1, j = n >> 5 & 1;
+  return 9 * (i2 + i3) + 3 * (j + j3) + (k + k2);
+}
+
+static double det3(const double *E) {
+  return E[0] * (E[4] * E[8] - E[5] * E[7]) - E[1] * (E[3] * E[8] - E[5] * E[6]) +
+         E[2] * (E[3] * E[7] - E[4] * E[6]);
+}
+
+static void bernstein_map(void) {
+  /* VTK hex vertex -> unit cube corner */
+  static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  double x[24];
+  for (int v = 0; v < 8; v++)
+    for (int d = 0; d < 3; d++) x[3 * v + d] = corner[v][d] + 0.3 * sin(7.0 * v + 3.0 * d + 1);
+  const vm_qrule *R = vm_qrule_get(VM_HEX, VM_RULE_GEOMETRIC);
+  double b[27] = {0};
+  int cnt[27] = {0};
+  for (int n = 0; n < R->nnodes; n++) {
+    double E[9];
+    vm_qnode_edges(&R->nodes[n], 3, x, E);
+    b[node_coef(n)] += det3(E);
+    cnt[node_coef(n)]++;
+  }
+  double err = 0;
+  for (int c = 0; c < 27; c++) b[c] /= cnt[c];
+  for (int t = 0; t < 27; t++) {
+    double p[3] = {0.1 + 0.35 * (t % 3), 0.15 + 0.3 * (t / 3 % 3), 0.05 + 0.4 * (t / 9)};
+    /* J of the trilinear map: column d = sum over vertices of x_v dN_v/dp_d */
+    double J[9] = {0};
+    for (int v = 0; v < 8; v++)
+      for (int d = 0; d < 3; d++) {
+        double g = 1;
+        for (int e = 0; e < 3; e++) {
+          double f = corner[v][e] ? p[e] : 1 - p[e];
+          if (e == d) f = corner[v][e] ? 1 : -1;
+          g *= f;
+        }
+        for (int r = 0; r < 3; r++) J[3 * r + d] += g * x[3 * v + r];
+      }
+    double val = 0;
+    for (int a = 0; a < 3; a++)
+      for (int bb = 0; bb < 3; bb++)
+        for (int cc = 0; cc < 3; cc++) {
+          double B[3][3];
+          for (int e = 0; e < 3; e++) {
+            double u = p[e];
+            B[e][0] = (1 - u) * (1 - u);
+            B[e][1] = 2 * u * (1 - u);
+            B[e][2] = u * u;
+          }
+          val += b[9 * a + 3 * bb + cc] * B[0][a] * B[1][bb] * B[2][cc];
+        }
+    err = fmax(err, fabs(val - det3(J)));
+  }
+  CHECK(err < 1e-12, "Bernstein coefficients from the nodes of (24): det J off by %g", err);
+}
+
 int main(void) {
   vm_ctx *ctx;
   vm_ctx_create(&ctx);
+  bernstein_map();
   pi_cube(ctx, 12);
   no_repair(ctx);
   vm_ctx_destroy(&ctx);
