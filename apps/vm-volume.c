@@ -464,14 +464,16 @@ int main(int argc, char **argv) {
   vm_volume_opts f = schedule_opts(&a, 0, 1);
   int differs = r.staged || f.method != o.method || f.eps_inner != o.eps_inner ||
                 f.theta_untangle != o.theta_untangle;
-  if (r.st == VM_WARN_INVERTED && a.auto_schedule && differs && !r.rep.timed_out) {
-    /* the first schedule stalled: the other one, from the best state */
+  if (r.st == VM_WARN_INVERTED && r.rep.M_final > 0 && a.auto_schedule && differs &&
+      !r.rep.timed_out) {
+    /* the first schedule stalled with inverted nodes left (not the repair:
+     * another untangling schedule would not help it): the other one, from
+     * the best state */
     if (!cli.quiet)
       fprintf(stderr,
-              "vm-volume: the %s schedule stalled (M %lld, %lld cells not certified); "
-              "falling back to the direct schedule (foldover)\n",
-              r.staged ? "staged" : "direct", (long long)r.rep.M_final,
-              (long long)(r.rep.cert_invalid + r.rep.cert_undecided));
+              "vm-volume: the %s schedule stalled with %lld inverted nodes left; going on "
+              "from its best state with the direct schedule (foldover)\n",
+              r.staged ? "staged" : "direct", (long long)r.rep.M_final);
     vm_volume_report first = r.rep;
     f.progress = progress;
     f.user = &ps;
