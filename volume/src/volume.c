@@ -482,8 +482,10 @@ static int hex_node_coef(int n) {
  * cells not certified every node of the rule is (for a prism the 12 of (24)
  * imply det J > 0). Elsewhere a positive node is guarded (eps = delta0: it
  * stays positive, so a certified cell keeps the determinants it has) and a
- * non-positive one is left out (a certified cell may have some). */
-static int repair_roles(ut_state *s, const uint8_t *verdict) {
+ * non-positive one is left out (a certified cell may have some). In the
+ * cells marked `soft` (may be NULL) the positive nodes are penalized
+ * instead of guarded. */
+static int repair_roles(ut_state *s, const uint8_t *verdict, const uint8_t *soft) {
   int st = vm_problem_node_dets(s->P, s->m->xyz, s->dets);
   if (st < 0) return st;
   const int32_t *nel = vm_problem_node_elements(s->P);
@@ -510,6 +512,9 @@ static int repair_roles(ut_state *s, const uint8_t *verdict) {
     for (int64_t r = q; r < q1; r++) {
       int n = (int)(r - q), pos = s->dets[r] > 0;
       int pen = bad && (hex ? n < ngeo && pen_coef[hex_node_coef(n)] : 1);
+      /* near the cells a guarded round could not repair, the certified
+       * cells' positive nodes are only penalized: no wall */
+      if (!bad && soft && soft[e] && pos) pen = 1;
       s->guard[r] = pos && !pen;
       s->nw[r] = s->guard[r] || pen ? 1 : 0;
     }
@@ -530,13 +535,15 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   const vm_volume_opts *o0 = s->o;
   uint8_t *verdict = vm_malloc(ctx, (size_t)m->ne + 1);
   uint8_t *emask = vm_malloc(ctx, (size_t)m->ne + 1);
+  uint8_t *soft = vm_malloc(ctx, (size_t)m->ne + 1);
   uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
   uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
   double *best = vm_alloc_array(ctx, (size_t)m->nv * 3 + 1, sizeof *best);
   int64_t *vrp = NULL;
   int32_t *vel = NULL;
-  int st = verdict && best && emask && vmark && saved ? vm_mesh_vertex_elements(m, &vrp, &vel)
-                                                      : VM_ERR_NOMEM;
+  int st = verdict && best && emask && soft && vmark && saved
+               ? vm_mesh_vertex_elements(m, &vrp, &vel)
+               : VM_ERR_NOMEM;
   int rings = s->o->repair_rings;
   int64_t nbad = st < 0 ? -1 : certify(s, verdict), best_bad = nbad;
   s->rep->cert_bad_init = nbad;
@@ -544,7 +551,7 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   if (st >= 0) memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
   int stalls = 0;
   for (int round = 0; st >= 0 && nbad > 0 && round<o0->repair_rounds && * budget> 0 &&
-                      !out_of_time(s) && stalls < 2;
+                      !out_of_time(s) && stalls < 3;
        round++) {
     if (round == 0) {
       s->repair_stage = 1;
@@ -559,7 +566,15 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
       }
       s->phase_name = "repair";
     }
-    if ((st = repair_roles(s, verdict)) < 0 || (st = stats(s, m->xyz)) < 0) break;
+    /* after a round without progress, the walls of the certified cells
+     * around the rest are lowered to penalties, one ring more each time */
+    if (stalls > 0) {
+      for (int64_t e = 0; e < m->ne; e++) soft[e] = verdict[e] != VM_JAC_VALID;
+      grow_mask(m, stalls, vrp, vel, soft, vmark);
+    }
+    if ((st = repair_roles(s, verdict, stalls > 0 ? soft : NULL)) < 0 ||
+        (st = stats(s, m->xyz)) < 0)
+      break;
     /* only the cells within `rings` of those not certified are assembled and
      * only their inner vertices move: the rest of the mesh keeps its
      * certified cells and costs nothing */
@@ -611,6 +626,7 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   s->phase_name = "untangle";
   vm_free(ctx, verdict);
   vm_free(ctx, emask);
+  vm_free(ctx, soft);
   vm_free(ctx, vmark);
   vm_free(ctx, saved);
   vm_free(ctx, vrp);

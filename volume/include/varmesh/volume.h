@@ -83,7 +83,9 @@ typedef struct vm_volume_opts {
   int repair_rounds;         /* certify-and-repair rounds at most (default 20) */
   int repair_rings;          /* rings of elements around the uncertified ones
                                 that a repair round may move (default 4; 3 more
-                                after a round without progress) */
+                                after a round without progress, when the
+                                certified cells next to the others also lose
+                                their guards, one ring more each time) */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;
