@@ -33,6 +33,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.repair = 1;
   o.repair_rounds = 20;
   o.repair_rings = 4;
+  o.repair_round_iter = 1000;
   return o;
 }
 
@@ -589,7 +590,12 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
     s->eps_restart = 0;
     /* the untangling counters keep the schedule's iterations */
     int u0 = s->rep->iter_untangle, l0 = s->rep->iter_local;
-    st = untangle_rounds(s, prm, budget);
+    /* a round ends at its own budget: a fold squeezed flat against a guard
+     * would otherwise keep the local rounds busy until the run's budget */
+    int round_budget = *budget < o0->repair_round_iter ? *budget : o0->repair_round_iter;
+    int used0 = round_budget;
+    st = untangle_rounds(s, prm, &round_budget);
+    *budget -= used0 - round_budget;
     memcpy(m->vflag, saved, (size_t)m->nv);
     s->outer_mask = NULL;
     int st2 = vm_problem_set_active(s->P, NULL);

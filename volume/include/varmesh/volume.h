@@ -81,6 +81,8 @@ typedef struct vm_volume_opts {
                                 nodes of those cells untangled locally, every
                                 positive node elsewhere guarded (default 1) */
   int repair_rounds;         /* certify-and-repair rounds at most (default 20) */
+  int repair_round_iter;     /* iterations of one repair round at most (default
+                                1000: the n = 16 pi cube's rounds took 280-480) */
   int repair_rings;          /* rings of elements around the uncertified ones
                                 that a repair round may move (default 4; 3 more
                                 after a round without progress, when the
