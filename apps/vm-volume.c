@@ -454,6 +454,12 @@ int main(int argc, char **argv) {
   r.staged = a.o.staged || (a.auto_schedule && has_type(s.m, VM_HEX));
   vm_volume_opts o = schedule_opts(&a, r.staged, 0);
   a.o.method = o.method;
+  /* the first schedule chosen for the user gets a quarter of the iterations,
+   * so that a stall (local rounds churning: the direct adaptive schedule on
+   * the n = 8 pi/2 cube's 6-tet split spent all 20,000 and left 4 inverted,
+   * which the foldover fallback untangles in 125) leaves the rest to the
+   * fallback */
+  if (a.auto_schedule && o.max_iter >= 4) o.max_iter /= 4;
   progress_state ps = {&cli, a.every, NULL, s.hist};
   o.progress = progress;
   o.user = &ps;
@@ -478,7 +484,7 @@ int main(int argc, char **argv) {
     f.progress = progress;
     f.user = &ps;
     if (o.time_limit > 0) f.time_limit = fmax(o.time_limit - first.time_total, 1e-3);
-    f.max_iter = o.max_iter - first.iter_untangle - first.iter_local - first.iter_repair;
+    f.max_iter = a.o.max_iter - first.iter_untangle - first.iter_local - first.iter_repair;
     if (f.max_iter < 1) f.max_iter = 1;
     r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &f, &r.rep);
     merge_reports(&r.rep, &first);
