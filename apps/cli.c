@@ -60,7 +60,36 @@ void vm_cli_catch_interrupts(vm_cli *cli) {
   vm_ctx_set_interrupt(cli->ctx, &cli_interrupted);
 }
 
+/* libgomp reads OMP_WAIT_POLICY once, when it is loaded (before main), and
+ * its default spins idle threads for a while, which costs several times the
+ * run time beside any other busy process (issue #23). If the variable is
+ * unset, set it to passive and execute this program again, once (the
+ * second start finds it set); the arguments come from /proc/self/cmdline.
+ * If anything fails the program just goes on with the default. */
+static void omp_passive_reexec(void) {
+#ifdef __linux__
+  if (getenv("OMP_WAIT_POLICY")) return;
+  if (setenv("OMP_WAIT_POLICY", "passive", 1)) return;
+  FILE *f = fopen("/proc/self/cmdline", "rb");
+  if (!f) return;
+  static char buf[1 << 16];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  int trunc = !feof(f);
+  fclose(f);
+  if (trunc || n == 0) return;
+  buf[n] = 0;
+  static char *argv[4096];
+  int argc = 0;
+  for (size_t k = 0; k < n && argc < 4095; k += strlen(buf + k) + 1) argv[argc++] = buf + k;
+  if (argc == 4095) return;
+  argv[argc] = NULL;
+  fflush(NULL);
+  execv("/proc/self/exe", argv);
+#endif
+}
+
 void vm_cli_init(vm_cli *cli, const char *prog) {
+  omp_passive_reexec();
   memset(cli, 0, sizeof *cli);
   cli->prog = prog;
   if (vm_ctx_create(&cli->ctx) != VM_OK) {

@@ -2,6 +2,7 @@
  * vm-volume before it reports success. */
 #include "cli_verify.h"
 
+#include "varmesh/jacobian.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/verify.h"
 
@@ -21,6 +22,21 @@ int vm_cli_verify(const vm_cli *cli, const char *path, const vm_mesh *m, int rul
                  (long long)be);
     return VM_EXIT_CHECK;
   }
+  /* valid to a solver: det J > 0 everywhere in every cell, certified from
+   * its Bernstein coefficients (the corner simplices do not imply it) */
+  vm_jac_report jr;
+  if (vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
+    vm_cli_error(cli, "%s", vm_ctx_error(cli->ctx));
+    return VM_EXIT_INPUT;
+  }
+  if (jr.invalid + jr.undecided > 0) {
+    vm_cli_error(cli,
+                 "%s: verify: element %lld (%s) is not certified valid (det J > 0 everywhere "
+                 "in the cell); %lld cells certified invalid, %lld undecided, of %lld",
+                 path, (long long)jr.first_bad, vm_elem_name(m->etype[jr.first_bad]),
+                 (long long)jr.invalid, (long long)jr.undecided, (long long)jr.cells);
+    return VM_EXIT_CHECK;
+  }
   vm_mesh_count_types(m, counts);
   if (counts[VM_PRISM]) {
     if (vm_verify_prism_layer(m, &ip, &wc, fp) < 0) {
@@ -38,9 +54,12 @@ int vm_cli_verify(const vm_cli *cli, const char *path, const vm_mesh *m, int rul
     }
   }
   if (text)
-    fprintf(
-        out, "verify: every quadrature simplex (%s rule) positively oriented%s (exact)\n", rname,
-        counts[VM_PRISM] ? "; prism layer: outer faces intersect neither each other nor the wall"
-                         : "");
+    fprintf(out,
+            "verify: every quadrature simplex (%s rule) positively oriented (exact), every cell "
+            "certified det J > 0%s\n",
+            rname,
+            counts[VM_PRISM]
+                ? "; prism layer: outer faces intersect neither each other nor the wall"
+                : "");
   return VM_EXIT_OK;
 }

@@ -7,7 +7,8 @@
 #include "varmesh/mesh.h"
 
 /* Exact checks (volume/src/verify_cgal.cpp): every quadrature simplex of
- * `rule` (VM_RULE_CORNER or VM_RULE_GEOMETRIC) positively oriented and, when
+ * `rule` (VM_RULE_CORNER or VM_RULE_GEOMETRIC) positively oriented, every
+ * cell certified valid (varmesh/jacobian.h: det J > 0 everywhere) and, when
  * the mesh has prisms, their outer faces intersecting neither each other nor
  * the wall. `path` names the mesh in messages.
  * Returns VM_EXIT_OK (and, if `text`, prints one "verify: ..." line on

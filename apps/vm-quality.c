@@ -110,7 +110,9 @@ static const vm_opt opts[] = {
      .fn = vm_cli_opt_format},
     {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "machine-readable summary on stdout", .ival = 1},
     {"--require-valid", NULL, VM_OPT_FLAG, A(require_valid), NULL,
-     "exit 3 if any quadrature simplex is inverted (M > 0)", .ival = 1},
+     "exit 3 if any quadrature simplex is inverted (M > 0) or a cell is not certified valid "
+     "(det J > 0 everywhere in it)",
+     .ival = 1},
     {"--min-sj", NULL, VM_OPT_DOUBLE, A(min_sj), "X",
      "exit 3 if the minimum scaled Jacobian is below X", .lo = -1, .hi = 1},
     {"--verify", NULL, VM_OPT_FLAG, A(verify), NULL,
@@ -171,6 +173,13 @@ int main(int argc, char **argv) {
   if (a.require_valid && q.all.inverted_nodes > 0) {
     vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", a.path,
                  (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);
+    rc = VM_EXIT_CHECK;
+  } else if (a.require_valid && jr.invalid + jr.undecided > 0) {
+    vm_cli_error(&cli,
+                 "%s: %lld cells not certified valid (det J > 0 everywhere): %lld invalid, %lld "
+                 "undecided; the first is element %lld",
+                 a.path, (long long)(jr.invalid + jr.undecided), (long long)jr.invalid,
+                 (long long)jr.undecided, (long long)jr.first_bad);
     rc = VM_EXIT_CHECK;
   }
   if (q.measured && q.all.sj_min < a.min_sj) {

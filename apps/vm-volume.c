@@ -10,6 +10,7 @@
 #include "cli_report.h"
 #include "cli_verify.h"
 #include "varmesh/io.h"
+#include "varmesh/jacobian.h"
 #include "varmesh/quality.h"
 #include "varmesh/slip.h"
 #include "varmesh/topology.h"
@@ -37,7 +38,8 @@ static void progress(void *user, const vm_volume_progress *p) {
 
 typedef struct {
   const char *in, *out, *report_dir;
-  int json, free_boundary, slip_boundary, fout, every, method;
+  int json, free_boundary, slip_boundary, fout, every, method, direct;
+  int auto_schedule; /* neither --staged nor --direct: chosen from the mesh, with fallback */
   double feature_deg, corner_deg;
   vm_volume_opts o;
   vm_write_opts wo;
@@ -76,6 +78,10 @@ static const vm_opt opts[] = {
      "hexahedra: untangle their 6-tet split first, then the rule's nodes with the split held "
      "valid (for twisted meshes; implies --untangle foldover --eps-inner 3 --theta-untangle "
      "0.999 unless those are given)",
+     .ival = 1},
+    {"--direct", NULL, VM_OPT_FLAG, A(direct), NULL,
+     "the direct schedule even on hexahedra (default: staged when the mesh has hexahedra, "
+     "direct otherwise, and the other one if the first stalls)",
      .ival = 1},
     {"--rule", NULL, VM_OPT_CHOICE, A(o.rule), NULL,
      "quadrature (default corner; geometric: 64 per hex)", .choices = rules},
@@ -121,10 +127,12 @@ static const vm_cli_spec spec = {
     "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
     "never move. OUT is written in the format of its extension, else IN's.\n",
     opts,
-    "exit: 0 valid result (checked as vm-quality --verify does, with exact predicates);\n"
-    "1 bad input or I/O; 2 usage; 3 inverted elements remain or the exact check failed\n"
-    "(the best mesh is still written); 4 interrupted or --time-limit reached (the best\n"
-    "state so far written; a second interrupt exits at once without writing)\n",
+    "exit: 0 valid result: every cell certified det J > 0 everywhere, checked as\n"
+    "vm-quality --verify does (exact predicates, Bernstein certification); 1 bad input\n"
+    "or I/O; 2 usage; 3 cells not certified valid remain, an inverted element has only\n"
+    "fixed vertices, or the check failed (the best mesh is still written); 4 interrupted\n"
+    "or --time-limit reached (the best state so far written; a second interrupt exits\n"
+    "at once without writing)\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
@@ -137,6 +145,9 @@ typedef struct {
   int64_t bad;  /* inverted nodes of the rule used, as vm_mesh_quality counts them */
   double slip_dist;
   int verified;
+  vm_jac_report cert; /* the independent certification of the written mesh */
+  int staged;         /* the schedule that ran last */
+  int fell_back;      /* the first schedule stalled, the other one ran */
 } outcome;
 
 /* The boundary conditions of this run on m's flags (the file's own flags are
@@ -178,27 +189,42 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
 /* The exit code the run earns before the exact check. */
 static int run_code(const outcome *r) {
   if (r->st == VM_ERR_INTERRUPTED || r->rep.timed_out) return VM_EXIT_INTERRUPTED;
-  return r->bad > 0 || !r->rep.valid ? VM_EXIT_CHECK : VM_EXIT_OK;
+  return r->bad > 0 || !r->rep.valid || r->cert.invalid + r->cert.undecided > 0 ? VM_EXIT_CHECK
+                                                                                : VM_EXIT_OK;
 }
 
 static void print_summary(const vm_cli *cli, const args *a, const outcome *r, int rc) {
   const vm_volume_report *rep = &r->rep;
   if (!cli->quiet) {
-    if (a->o.staged)
+    if (r->staged && rep->split_M_init > 0)
       fprintf(stderr, "vm-volume: staged: the 6-tet split's M %lld (max %lld) %s after %.2f s\n",
               (long long)rep->split_M_init, (long long)rep->split_M_max,
               rep->split_valid ? "untangled" : "NOT untangled", rep->time_split);
     fprintf(stderr,
             "vm-volume: %s: M %lld -> %lld (max %lld), %d untangling + %d local + %d "
-            "optimization iterations, %.2f s (untangled after %.2f s)\n",
+            "optimization + %d repair iterations, %.2f s",
             a->out, (long long)rep->M_init, (long long)rep->M_final, (long long)rep->M_max,
-            rep->iter_untangle, rep->iter_local, rep->iter_opt, rep->time_total,
-            rep->time_untangle);
+            rep->iter_untangle, rep->iter_local, rep->iter_opt, rep->iter_repair, rep->time_total);
+    if (rep->valid)
+      fprintf(stderr, " (certified valid after %.2f s)\n", rep->time_certified);
+    else
+      fprintf(stderr, "\n");
+    if (rep->cert_bad_init > 0)
+      fprintf(stderr,
+              "vm-volume: repair: %lld cells with M = 0 but not certified valid -> %lld, %d "
+              "rounds\n",
+              (long long)rep->cert_bad_init, (long long)(r->cert.invalid + r->cert.undecided),
+              rep->repair_rounds);
     fprintf(stderr,
             "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
-            "corner tets %lld in %lld elements%s\n",
+            "corner tets %lld in %lld elements\n",
             rep->phi_min, rep->psi_min, r->q.all.sj_min, (long long)r->q.all.inverted_nodes,
-            (long long)r->q.all.inverted_elems,
+            (long long)r->q.all.inverted_elems);
+    fprintf(stderr,
+            "vm-volume: certified (det J > 0 everywhere in the cell): %lld of %lld cells; %lld "
+            "invalid, %lld undecided%s\n",
+            (long long)(r->cert.cells - r->cert.invalid - r->cert.undecided),
+            (long long)r->cert.cells, (long long)r->cert.invalid, (long long)r->cert.undecided,
             rc == VM_EXIT_CHECK ? "  -- NOT VALID"
             : rc == VM_EXIT_INTERRUPTED
                 ? (rep->timed_out && r->st != VM_ERR_INTERRUPTED ? "  -- time limit reached"
@@ -224,7 +250,7 @@ static void print_json(const args *a, const outcome *r, int rc) {
          "\"inverted_corner_tets\": %lld, \"inverted_elements\": %lld, \"iter_untangle\": %d, "
          "\"iter_local\": %d, \"iter_opt\": %d, \"time_untangle\": %.3f, \"time_total\": %.3f, "
          "\"phi_min\": ",
-         rep->valid && r->bad == 0 && rc != VM_EXIT_CHECK ? "true" : "false",
+         rep->valid && r->bad == 0 && rc == VM_EXIT_OK ? "true" : "false",
          r->st == VM_ERR_INTERRUPTED ? "true" : "false", rep->timed_out ? "true" : "false",
          vm_untangle_method_name(a->o.method), rules[a->o.rule], (long long)rep->nodes,
          (long long)rep->M_init, (long long)rep->M_max, (long long)rep->M_final,
@@ -239,8 +265,15 @@ static void print_json(const args *a, const outcome *r, int rc) {
     printf(", \"slip_max_distance\": ");
     vm_json_double(stdout, r->slip_dist);
   }
-  printf(", \"staged\": %s", a->o.staged ? "true" : "false");
-  if (a->o.staged)
+  printf(", \"corner_valid\": %s, \"certified_cells\": %lld, \"certified_invalid\": %lld, "
+         "\"certified_undecided\": %lld, \"repair_cells_init\": %lld, \"iter_repair\": %d, "
+         "\"time_certified\": %.3f",
+         r->q.all.inverted_nodes == 0 && rep->M_final == 0 ? "true" : "false",
+         (long long)r->cert.cells, (long long)r->cert.invalid, (long long)r->cert.undecided,
+         (long long)rep->cert_bad_init, rep->iter_repair, rep->valid ? rep->time_certified : -1.0);
+  printf(", \"staged\": %s, \"fallback\": %s", r->staged ? "true" : "false",
+         r->fell_back ? "true" : "false");
+  if (r->staged)
     printf(", \"split_M_init\": %lld, \"split_M_max\": %lld, \"split_valid\": %s, "
            "\"time_split\": %.3f",
            (long long)rep->split_M_init, (long long)rep->split_M_max,
@@ -306,9 +339,67 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
   qo.rule = VM_RULE_GEOMETRIC;
   vm_mesh_quality(s->m, &qo, &qg);
   r->bad = r->q.all.inverted_nodes + (a->o.rule == VM_RULE_GEOMETRIC ? qg.all.inverted_nodes : 0);
+  if (vm_mesh_jacobian_certify(s->m, &r->cert, NULL) < 0) return vm_cli_input_error(cli, NULL);
   if (s->slip && vm_volume_slip_distance(s->slip, s->m, &r->slip_dist) < 0)
     return vm_cli_input_error(cli, NULL);
   return VM_EXIT_OK;
+}
+
+/* The options of one schedule: staged (hexahedra) or direct; `fallback`:
+ * the one tried when the first stalls. What the user gave stays. */
+static vm_volume_opts schedule_opts(const args *a, int staged, int fallback) {
+  vm_volume_opts d = vm_volume_opts_default(), o = a->o;
+  /* staged, and any fallback: the setting measured on the rotated cube and
+   * its 6-tet split (docs/volume.md) */
+  int twisted = staged || fallback;
+  o.staged = staged;
+  o.method = a->method >= 0 ? (vm_untangle_method)a->method
+             : twisted      ? VM_UNTANGLE_FOLDOVER
+                            : d.method;
+  o.eps_inner = a->o.eps_inner ? a->o.eps_inner : twisted ? 3 : d.eps_inner;
+  o.theta_untangle = !isnan(a->o.theta_untangle) ? a->o.theta_untangle
+                     : twisted                   ? 0.999
+                                                 : d.theta_untangle;
+  return o;
+}
+
+static int has_type(const vm_mesh *m, int type) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (m->etype[e] == type) return 1;
+  return 0;
+}
+
+/* Volume elements certified inverted whose vertices are all fixed: nothing
+ * the stage may move can repair them. Their number; the first in *first. */
+static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
+  int64_t n = 0;
+  *first = -1;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int t = m->etype[e], nv = (int)(m->eoff[e + 1] - m->eoff[e]), fixed = 1;
+    if (vm_elem_dim(t) != 3) continue;
+    double x[3 * VM_MAX_ELEM_VERTS];
+    for (int k = 0; k < nv; k++) {
+      int32_t v = m->conn[m->eoff[e] + k];
+      fixed &= m->vflag[v] == VM_VERTEX_FIXED;
+      memcpy(x + 3 * k, m->xyz + 3 * (int64_t)v, sizeof(double) * 3);
+    }
+    if (!fixed || vm_jacobian_certify(t, x, 0, NULL) != VM_JAC_INVALID) continue;
+    if (!n++) *first = e;
+  }
+  return n;
+}
+
+/* Merge the report of a fallback run into the first one's. */
+static void merge_reports(vm_volume_report *r, const vm_volume_report *first) {
+  r->M_init = first->M_init;
+  if (first->M_max > r->M_max) r->M_max = first->M_max;
+  r->iter_untangle += first->iter_untangle;
+  r->iter_local += first->iter_local;
+  r->iter_opt += first->iter_opt;
+  r->iter_repair += first->iter_repair;
+  r->time_untangle += first->time_total;
+  r->time_certified += first->time_total;
+  r->time_total += first->time_total;
 }
 
 int main(int argc, char **argv) {
@@ -328,12 +419,10 @@ int main(int argc, char **argv) {
   outcome r = {0};
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
   if (rc != VM_CLI_RUN) goto done;
-  /* --staged: the schedule measured on the rotated cube (docs/volume.md) */
-  a.o.method = a.method >= 0 ? (vm_untangle_method)a.method
-               : a.o.staged  ? VM_UNTANGLE_FOLDOVER
-                             : d.method;
-  if (!a.o.eps_inner) a.o.eps_inner = a.o.staged ? 3 : d.eps_inner;
-  if (isnan(a.o.theta_untangle)) a.o.theta_untangle = a.o.staged ? 0.999 : d.theta_untangle;
+  if (a.o.staged && a.direct) {
+    rc = vm_cli_usage_error(&cli, "--staged and --direct exclude each other");
+    goto done;
+  }
   if (a.free_boundary && a.slip_boundary) {
     rc = vm_cli_usage_error(&cli, "--free-boundary and --slip-boundary exclude each other");
     goto done;
@@ -347,13 +436,65 @@ int main(int argc, char **argv) {
       (rc = boundary_conditions(&cli, &a, s.m, &s.slip)) != VM_EXIT_OK ||
       (a.report_dir && (rc = open_report(&cli, &a, &s)) != VM_EXIT_OK))
     goto done;
+  {
+    int64_t first, nimp = impossible_elements(s.m, &first);
+    if (nimp > 0) {
+      /* fixed vertices force the fold: say so at once, the input written */
+      vm_cli_error(&cli,
+                   "%s: element %lld (%s) is inverted and all its vertices are fixed (%lld "
+                   "such elements): no motion of the others can untangle it; --slip-boundary "
+                   "lets boundary vertices slide (--free-boundary move); %s written unchanged",
+                   a.in, (long long)first, vm_elem_name(s.m->etype[first]), (long long)nimp, a.out);
+      memcpy(s.m->vflag, s.vflag0, (size_t)s.m->nv);
+      memcpy(s.m->vsurf, s.vsurf0, (size_t)s.m->nv * sizeof *s.vsurf0);
+      rc = vm_mesh_write(cli.ctx, s.m, a.out, a.fout, &a.wo) < 0 ? vm_cli_input_error(&cli, NULL)
+                                                                 : VM_EXIT_CHECK;
+      goto done;
+    }
+  }
+  /* by default the schedule follows the mesh: staged where there are hexahedra */
+  a.auto_schedule = !a.o.staged && !a.direct;
+  r.staged = a.o.staged || (a.auto_schedule && has_type(s.m, VM_HEX));
+  vm_volume_opts o = schedule_opts(&a, r.staged, 0);
+  a.o.method = o.method;
+  /* the first schedule chosen for the user gets a quarter of the iterations,
+   * so that a stall (local rounds churning: the direct adaptive schedule on
+   * the n = 8 pi/2 cube's 6-tet split spent all 20,000 and left 4 inverted,
+   * which the foldover fallback untangles in 125) leaves the rest to the
+   * fallback */
+  if (a.auto_schedule && o.max_iter >= 4) o.max_iter /= 4;
   progress_state ps = {&cli, a.every, NULL, s.hist};
-  a.o.progress = progress;
-  a.o.user = &ps;
+  o.progress = progress;
+  o.user = &ps;
   vm_cli_catch_interrupts(&cli);
   vm_surface_ops sops;
   if (s.slip) sops = vm_volume_slip_ops(s.slip);
-  r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &a.o, &r.rep);
+  r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &o, &r.rep);
+  vm_volume_opts f = schedule_opts(&a, 0, 1);
+  int differs = r.staged || f.method != o.method || f.eps_inner != o.eps_inner ||
+                f.theta_untangle != o.theta_untangle;
+  if (r.st == VM_WARN_INVERTED && r.rep.M_final > 0 && a.auto_schedule && differs &&
+      !r.rep.timed_out) {
+    /* the first schedule stalled with inverted nodes left (not the repair:
+     * another untangling schedule would not help it): the other one, from
+     * the best state */
+    if (!cli.quiet)
+      fprintf(stderr,
+              "vm-volume: the %s schedule stalled with %lld inverted nodes left; going on "
+              "from its best state with the direct schedule (foldover)\n",
+              r.staged ? "staged" : "direct", (long long)r.rep.M_final);
+    vm_volume_report first = r.rep;
+    f.progress = progress;
+    f.user = &ps;
+    if (o.time_limit > 0) f.time_limit = fmax(o.time_limit - first.time_total, 1e-3);
+    f.max_iter = a.o.max_iter - first.iter_untangle - first.iter_local - first.iter_repair;
+    if (f.max_iter < 1) f.max_iter = 1;
+    r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &f, &r.rep);
+    merge_reports(&r.rep, &first);
+    r.staged = 0;
+    r.fell_back = 1;
+    a.o.method = f.method;
+  }
   if (r.st < 0 && r.st != VM_ERR_INTERRUPTED) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
@@ -373,7 +514,7 @@ int main(int argc, char **argv) {
     if (r.verified && !cli.quiet)
       fprintf(stderr,
               "vm-volume: %s: verify: every quadrature simplex (%s rule) positively "
-              "oriented (exact)\n",
+              "oriented (exact), every cell certified det J > 0\n",
               a.out, rules[a.o.rule]);
   }
   print_summary(&cli, &a, &r, rc);

@@ -577,6 +577,83 @@ static void test_subsets(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* Per-node weights: all 1 changes nothing; weights w and 1 - w add up to
+ * the whole; a node of weight 0 may be outside the domain (a barrier
+ * measure at an inverted node); gradient and Hessian pieces by finite
+ * differences on the hex's 70 nodes of VM_RULE_GEOMETRIC_SPLIT. */
+static void test_node_weights(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 11);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 2, 2, 2, 1.0);
+  mg_jitter(ctx, m, 0.15);
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  CHECK(vm_problem_set_rule(p, VM_RULE_GEOMETRIC_SPLIT) == 0, "rule");
+  vm_measure_params q = vm_measure_params_default();
+  q.eps = 0.3;
+  q.drop_chi2 = 0; /* the exact Hessian */
+  vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q);
+  size_t nv = (size_t)m->nv;
+  int64_t nn = vm_problem_num_nodes(p);
+  double F, Fa, Fb, Fall;
+  double *g = malloc(3 * nv * sizeof *g), *ga = malloc(3 * nv * sizeof *ga);
+  double *gb = malloc(3 * nv * sizeof *gb), *gall = malloc(3 * nv * sizeof *gall);
+  double *w = malloc(nn * sizeof *w), *w1 = malloc(nn * sizeof *w1);
+  vm_eval e0 = {&F, g, NULL, NULL}, ea = {&Fa, ga, NULL, NULL}, eb = {&Fb, gb, NULL, NULL},
+          eall = {&Fall, gall, NULL, NULL};
+  vm_problem_eval(p, m->xyz, &e0);
+  for (int64_t k = 0; k < nn; k++) w[k] = 1;
+  CHECK(vm_problem_set_node_weights(p, w) == 0, "weights");
+  vm_problem_eval(p, m->xyz, &eall);
+  CHECK(Fall == F && same_bits(g, gall, 3 * nv), "weights 1 differ");
+  for (int64_t k = 0; k < nn; k++) {
+    w[k] = k % 5 == 0 ? 0 : (double)(k % 7) / 7;
+    w1[k] = 1 - w[k];
+  }
+  vm_problem_set_node_weights(p, w);
+  vm_problem_eval(p, m->xyz, &ea);
+  double eg = 1, eh = 1;
+  CHECK(fd_errors(p, m->xyz, &eg, &eh) == 0, "weighted eval");
+  CHECK(eg < 1e-6 && eh < 1e-5, "weighted nodes: gradient error %.2e, Hessian %.2e", eg, eh);
+  vm_problem_set_node_weights(p, w1);
+  vm_problem_eval(p, m->xyz, &eb);
+  CHECK(fabs(Fa + Fb - F) <= 1e-13 * F, "weights: %.17g + %.17g vs %.17g", Fa, Fb, F);
+  double err = 0;
+  for (size_t k = 0; k < 3 * nv; k++) err = fmax(err, fabs(ga[k] + gb[k] - g[k]));
+  CHECK(err < 1e-12, "weighted gradients add up to within %g", err);
+  /* an inverted node of weight 0 under a barrier measure: left out */
+  double *x = dup(m->xyz, 3 * nv);
+  double *det = malloc(nn * sizeof *det);
+  vm_problem_set_node_weights(p, NULL);
+  CHECK(invert_some(p, x) < 0, "could not invert a node");
+  vm_problem_set_measure(p, VM_MEASURE_BALANCED, &q);
+  vm_problem_node_dets(p, x, det);
+  int64_t ninv = 0;
+  for (int64_t k = 0; k < nn; k++) {
+    w[k] = det[k] > 0;
+    ninv += det[k] <= 0;
+  }
+  CHECK(ninv > 0, "no node inverted");
+  CHECK(vm_problem_eval(p, x, &e0) == VM_WARN_INVERTED, "barrier at inverted nodes");
+  vm_problem_set_node_weights(p, w);
+  CHECK(vm_problem_eval(p, x, &e0) == 0 && isfinite(F), "inverted nodes left out");
+  vm_node_stats ns;
+  vm_problem_node_stats(p, x, &ns);
+  CHECK(ns.inverted == 0 && ns.min_det > 0, "stats count left-out nodes: %lld",
+        (long long)ns.inverted);
+  w[0] = -1;
+  CHECK(vm_problem_set_node_weights(p, w) == VM_ERR_ARG, "negative weight accepted");
+  free(det);
+  free(x);
+  free(w);
+  free(w1);
+  free(g);
+  free(ga);
+  free(gb);
+  free(gall);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
 /* Bad input is refused with the problem unchanged; every allocation
  * failure is reported and leaks nothing. */
 static void test_errors(vm_ctx *ctx) {
@@ -644,6 +721,7 @@ int main(void) {
   test_threads(ctx);
   test_node_stats(ctx);
   test_subsets(ctx);
+  test_node_weights(ctx);
   test_errors(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("assembly");

@@ -18,7 +18,7 @@ check '[ $? -eq 3 ]' "the input is tangled (vm-quality --require-valid exits 3)"
 rc=$?
 check '[ $rc -eq 0 ]' "vm-volume exits 0 on the pi/2 cube (got $rc)"
 check 'grep -q "\"valid\": true" "$dir/sum.json"' "JSON summary says valid"
-check 'grep -q "^untangle  it" "$dir/err.txt"' "progress lines on stderr"
+check 'grep -q "^[a-z]*  *it  *[0-9]" "$dir/err.txt"' "progress lines on stderr"
 check 'grep -q "\"verified\": true" "$dir/sum.json"' "the exact check (as vm-quality --verify) ran"
 check 'grep -q "verify: every quadrature simplex (corner rule) positively oriented (exact)" \
   "$dir/err.txt"' "and said so on stderr"
@@ -74,9 +74,15 @@ SCALARS fixed int 1
 LOOKUP_TABLE default
 1 1 1 1 1 1 1 1
 VTK
-"$vol" -q --time-limit 20 "$dir/bad.vtk" "$dir/bad_out.vtk"
+start=$(date +%s)
+"$vol" --time-limit 20 "$dir/bad.vtk" "$dir/bad_out.vtk" 2>"$dir/bad.err"
 rc=$?
+took=$(($(date +%s) - start))
 check '[ $rc -eq 3 ]' "an impossible problem exits 3 (got $rc)"
+check '[ $took -le 2 ]' "at once, not at the time limit (took $took s)"
+check 'grep -q "element 0 (hex) is inverted and all its vertices are fixed" "$dir/bad.err" &&
+  grep -q -- "--slip-boundary" "$dir/bad.err"' "naming the element and the option that helps"
+check '[ ! -s "$dir/bad.err" ] || ! grep -q "^untangle\|^split" "$dir/bad.err"' "without running the schedule"
 check '[ -s "$dir/bad_out.vtk" ]' "and still writes the best mesh"
 
 printf 'not a mesh\n' >"$dir/garbage.vtk"

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
 #include "varmesh/topology.h"
 
@@ -29,6 +30,10 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.local_threshold = 100;
   o.local_rings = 3;
   o.eps_restart = 1e-2;
+  o.repair = 1;
+  o.repair_rounds = 20;
+  o.repair_rings = 4;
+  o.repair_round_iter = 1000;
   return o;
 }
 
@@ -51,11 +56,14 @@ typedef struct {
   vm_volume_report *rep;
   const vm_surface_ops *surf;
   int64_t nnodes;
-  double *dets;     /* per node, at the last statistics */
-  double *node_eps; /* one-way penalty */
-  int split_stage;  /* staged: untangling the 6-tet split (M_max, best not kept) */
-  uint8_t *guard;   /* staged: nodes kept admissible (eps = delta0), or NULL */
-  double *best;     /* coordinates with the fewest inverted nodes */
+  double *dets;              /* per node, at the last statistics */
+  double *node_eps;          /* one-way penalty */
+  int split_stage;           /* staged: untangling the 6-tet split (M_max, best not kept) */
+  int repair_stage;          /* certifying repair (M_max, best not kept: the rule's M stays 0) */
+  uint8_t *guard;            /* staged: nodes kept admissible (eps = delta0), or NULL */
+  double *nw;                /* repair: node weights (0: left out, not counted), or NULL */
+  const uint8_t *outer_mask; /* repair: the active elements outside local rounds */
+  double *best;              /* coordinates with the fewest inverted nodes */
   int64_t best_M;
   int64_t M; /* at the last statistics */
   double min_det;
@@ -89,12 +97,14 @@ static int stats(ut_state *s, const double *x) {
   int64_t M = 0;
   double mn = INFINITY;
   for (int64_t q = 0; q < s->nnodes; q++) {
+    if (s->nw && s->nw[q] == 0) continue; /* left out of the functional */
     if (s->dets[q] <= 0) M++;
     /* a guard's small positive det is not what eps should follow */
     if (s->dets[q] < mn && (!s->guard || !s->guard[q] || s->dets[q] <= 0)) mn = s->dets[q];
   }
   s->M = M;
   s->min_det = mn;
+  if (s->repair_stage) return VM_OK;
   if (s->split_stage) {
     if (M > s->rep->split_M_max) s->rep->split_M_max = M;
   } else if (M > s->rep->M_max) {
@@ -265,15 +275,10 @@ static int out_of_time(const ut_state *s) {
   return s->o->time_limit > 0 && now() - s->t0 >= s->o->time_limit;
 }
 
-/* Elements within `rings` layers of the elements holding inverted nodes;
- * vertices of other elements are frozen (saved flags restored by caller). */
-static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t *vel,
+/* emask grown by `rings` layers of elements (sharing a vertex); vmark[v]
+ * then says whether every element around v is in it (v may move). */
+static void grow_mask(const vm_mesh *m, int rings, const int64_t *vrp, const int32_t *vel,
                       uint8_t *emask, uint8_t *vmark) {
-  const vm_mesh *m = s->m;
-  const int32_t *nel = vm_problem_node_elements(s->P);
-  memset(emask, 0, (size_t)m->ne);
-  for (int64_t q = 0; q < s->nnodes; q++)
-    if (s->dets[q] <= 0) emask[nel[q]] = 1;
   for (int r = 0; r < rings; r++) {
     memset(vmark, 0, (size_t)m->nv);
     for (int64_t e = 0; e < m->ne; e++)
@@ -290,6 +295,18 @@ static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t 
     for (int64_t k = vrp[v]; k < vrp[v + 1]; k++)
       if (!emask[vel[k]]) vmark[v] = 0;
   }
+}
+
+/* Elements within `rings` layers of the elements holding inverted nodes;
+ * vertices of other elements are frozen (saved flags restored by caller). */
+static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t *vel,
+                      uint8_t *emask, uint8_t *vmark) {
+  const vm_mesh *m = s->m;
+  const int32_t *nel = vm_problem_node_elements(s->P);
+  memset(emask, 0, (size_t)m->ne);
+  for (int64_t q = 0; q < s->nnodes; q++)
+    if (s->dets[q] <= 0 && !(s->nw && s->nw[q] == 0)) emask[nel[q]] = 1;
+  grow_mask(m, rings, vrp, vel, emask, vmark);
   return VM_OK;
 }
 
@@ -318,7 +335,7 @@ static int local_phase(ut_state *s, int *budget) {
     s->go_local = 0;
     st = run_phase(s, "local", VM_MINIMIZER_EXPLICIT, chunk, before_untangle, &res);
     memcpy(m->vflag, saved, (size_t)m->nv);
-    int st2 = vm_problem_set_active(s->P, NULL);
+    int st2 = vm_problem_set_active(s->P, s->outer_mask);
     if (st >= 0 && st2 < 0) st = st2;
     s->rep->iter_local += res.iterations;
     *budget -= res.iterations > 0 ? res.iterations : 1;
@@ -406,7 +423,9 @@ static int size_node_arrays(ut_state *s) {
   vm_free(s->ctx, s->dets);
   vm_free(s->ctx, s->node_eps);
   vm_free(s->ctx, s->guard);
+  vm_free(s->ctx, s->nw);
   s->guard = NULL;
+  s->nw = NULL;
   s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
   s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
   return s->dets && s->node_eps ? VM_OK : VM_ERR_NOMEM;
@@ -435,11 +454,199 @@ static int set_stage_rule(ut_state *s, vm_rule rule) {
   return VM_OK;
 }
 
+/* Certify every cell at the mesh's coordinates: verdicts into `verdict`,
+ * the counts into the report; returns the number of cells not valid. */
+static int64_t certify(ut_state *s, uint8_t *verdict) {
+  vm_jac_report jr;
+  if (vm_mesh_jacobian_certify(s->m, &jr, verdict) < 0) return -1;
+  s->rep->cert_cells = jr.cells;
+  s->rep->cert_invalid = jr.invalid;
+  s->rep->cert_undecided = jr.undecided;
+  return jr.invalid + jr.undecided;
+}
+
+/* Bernstein coefficient of det J that node n of the hex's geometric rule
+ * (24) belongs to: det J = sum over nodes of products of linear Bernstein
+ * polynomials times the node's determinant, and the node with columns at
+ * (j, k), (i2, k2), (i3, j3) lands on the triquadratic coefficient
+ * (i2 + i3, j + j3, k + k2); each coefficient is the mean of its nodes
+ * (1, 2, 4 or 8 of them: the 64 nodes partition the 27 coefficients). */
+static int hex_node_coef(int n) {
+  int j3 = n & 1, i3 = n >> 1 & 1, k2 = n >> 2 & 1, i2 = n >> 3 & 1, k = n >> 4 & 1, j = n >> 5 & 1;
+  return 9 * (i2 + i3) + 3 * (j + j3) + (k + k2);
+}
+
+/* The repair's roles of the nodes of VM_RULE_GEOMETRIC_SPLIT at the present
+ * coordinates. In a hex not certified, the nodes of its non-positive
+ * Bernstein coefficients (their means; of the least one if none is) are
+ * penalized: all of them positive make the coefficient positive; in other
+ * cells not certified every node of the rule is (for a prism the 12 of (24)
+ * imply det J > 0). Elsewhere a positive node is guarded (eps = delta0: it
+ * stays positive, so a certified cell keeps the determinants it has) and a
+ * non-positive one is left out (a certified cell may have some). In the
+ * cells marked `soft` (may be NULL) the positive nodes are penalized
+ * instead of guarded. */
+static int repair_roles(ut_state *s, const uint8_t *verdict, const uint8_t *soft) {
+  int st = vm_problem_node_dets(s->P, s->m->xyz, s->dets);
+  if (st < 0) return st;
+  const int32_t *nel = vm_problem_node_elements(s->P);
+  int ngeo = vm_qrule_get(VM_HEX, VM_RULE_GEOMETRIC)->nnodes;
+  for (int64_t q = 0, q1; q < s->nnodes; q = q1) {
+    int32_t e = nel[q];
+    for (q1 = q + 1; q1 < s->nnodes && nel[q1] == e; q1++) continue;
+    int bad = verdict[e] != VM_JAC_VALID, hex = s->m->etype[e] == VM_HEX && q1 - q > ngeo;
+    uint8_t pen_coef[27] = {0};
+    if (bad && hex) {
+      double b[27] = {0};
+      int cnt[27] = {0}, least = 0, any = 0;
+      for (int n = 0; n < ngeo; n++) {
+        b[hex_node_coef(n)] += s->dets[q + n];
+        cnt[hex_node_coef(n)]++;
+      }
+      for (int c = 0; c < 27; c++) {
+        b[c] /= cnt[c];
+        if (b[c] <= 0) pen_coef[c] = any = 1;
+        if (b[c] < b[least]) least = c;
+      }
+      if (!any) pen_coef[least] = 1;
+    }
+    for (int64_t r = q; r < q1; r++) {
+      int n = (int)(r - q), pos = s->dets[r] > 0;
+      int pen = bad && (hex ? n < ngeo && pen_coef[hex_node_coef(n)] : 1);
+      /* near the cells a guarded round could not repair, the certified
+       * cells' positive nodes are only penalized: no wall */
+      if (!bad && soft && soft[e] && pos) pen = 1;
+      s->guard[r] = pos && !pen;
+      s->nw[r] = s->guard[r] || pen ? 1 : 0;
+    }
+  }
+  return vm_problem_set_node_weights(s->P, s->nw);
+}
+
+/* Certifying repair: while some cells are not certified valid (the corner
+ * rule's nodes can all be positive with det J < 0 inside a hex), untangle
+ * the geometric rule's nodes of those cells only, locally first (rings
+ * around them), with every positive node elsewhere guarded, then certify
+ * again; stops when every cell is certified, after a round without fewer
+ * uncertified cells twice, or at the budget. Leaves the mesh with the
+ * fewest uncertified cells seen. */
+static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) {
+  vm_ctx *ctx = s->ctx;
+  vm_mesh *m = s->m;
+  const vm_volume_opts *o0 = s->o;
+  uint8_t *verdict = vm_malloc(ctx, (size_t)m->ne + 1);
+  uint8_t *emask = vm_malloc(ctx, (size_t)m->ne + 1);
+  uint8_t *soft = vm_malloc(ctx, (size_t)m->ne + 1);
+  uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
+  uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
+  double *best = vm_alloc_array(ctx, (size_t)m->nv * 3 + 1, sizeof *best);
+  int64_t *vrp = NULL;
+  int32_t *vel = NULL;
+  int st = verdict && best && emask && soft && vmark && saved
+               ? vm_mesh_vertex_elements(m, &vrp, &vel)
+               : VM_ERR_NOMEM;
+  int rings = s->o->repair_rings;
+  int64_t nbad = st < 0 ? -1 : certify(s, verdict), best_bad = nbad;
+  s->rep->cert_bad_init = nbad;
+  if (nbad < 0 && st >= 0) st = VM_ERR_NOMEM;
+  if (st >= 0) memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
+  int stalls = 0;
+  for (int round = 0; st >= 0 && nbad > 0 && round<o0->repair_rounds && * budget> 0 &&
+                      !out_of_time(s) && stalls < 3;
+       round++) {
+    if (round == 0) {
+      s->repair_stage = 1;
+      if ((st = set_stage_rule(s, VM_RULE_GEOMETRIC_SPLIT)) < 0) break;
+      if (!s->guard && !(s->guard = vm_alloc_array(ctx, (size_t)s->nnodes + 1, 1))) {
+        st = VM_ERR_NOMEM;
+        break;
+      }
+      if (!(s->nw = vm_alloc_array(ctx, (size_t)s->nnodes + 1, sizeof *s->nw))) {
+        st = VM_ERR_NOMEM;
+        break;
+      }
+      s->phase_name = "repair";
+    }
+    /* after a round without progress, the walls of the certified cells
+     * around the rest are lowered to penalties, one ring more each time */
+    if (stalls > 0) {
+      for (int64_t e = 0; e < m->ne; e++) soft[e] = verdict[e] != VM_JAC_VALID;
+      grow_mask(m, stalls, vrp, vel, soft, vmark);
+    }
+    if ((st = repair_roles(s, verdict, stalls > 0 ? soft : NULL)) < 0 ||
+        (st = stats(s, m->xyz)) < 0)
+      break;
+    /* only the cells within `rings` of those not certified are assembled and
+     * only their inner vertices move: the rest of the mesh keeps its
+     * certified cells and costs nothing */
+    for (int64_t e = 0; e < m->ne; e++) emask[e] = verdict[e] != VM_JAC_VALID;
+    grow_mask(m, rings, vrp, vel, emask, vmark);
+    memcpy(saved, m->vflag, (size_t)m->nv);
+    for (int64_t v = 0; v < m->nv; v++)
+      if (!vmark[v]) m->vflag[v] = VM_VERTEX_FIXED;
+    if ((st = vm_problem_set_active(s->P, emask)) < 0) break;
+    s->outer_mask = emask;
+    s->eps = 0;
+    s->eps_restart = 0;
+    /* the untangling counters keep the schedule's iterations */
+    int u0 = s->rep->iter_untangle, l0 = s->rep->iter_local;
+    /* a round ends at its own budget: a fold squeezed flat against a guard
+     * would otherwise keep the local rounds busy until the run's budget */
+    int round_budget = *budget < o0->repair_round_iter ? *budget : o0->repair_round_iter;
+    int used0 = round_budget;
+    st = untangle_rounds(s, prm, &round_budget);
+    *budget -= used0 - round_budget;
+    memcpy(m->vflag, saved, (size_t)m->nv);
+    s->outer_mask = NULL;
+    int st2 = vm_problem_set_active(s->P, NULL);
+    if (st >= 0 && st2 < 0) st = st2;
+    s->rep->iter_repair += s->rep->iter_untangle - u0 + s->rep->iter_local - l0;
+    s->rep->iter_untangle = u0;
+    s->rep->iter_local = l0;
+    s->rep->repair_rounds++;
+    if (st < 0) break;
+    int64_t nb = certify(s, verdict);
+    if (nb < 0) {
+      st = VM_ERR_NOMEM;
+      break;
+    }
+    stalls = nb < best_bad ? 0 : stalls + 1;
+    if (nb >= best_bad) rings += 3;
+    if (nb < best_bad) {
+      best_bad = nb;
+      memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
+    }
+    nbad = nb;
+  }
+  if ((st >= 0 || st == VM_ERR_INTERRUPTED) && nbad > best_bad) {
+    memcpy(m->xyz, best, (size_t)m->nv * 3 * sizeof *best);
+    certify(s, verdict);
+  }
+  if (nbad == 0) s->rep->time_certified = now() - s->t0;
+  if (s->repair_stage) {
+    s->repair_stage = 0;
+    int st2 = set_stage_rule(s, o0->rule);
+    if (st2 >= 0) st2 = stats(s, m->xyz);
+    if (st >= 0 && st2 < 0) st = st2;
+  }
+  s->phase_name = "untangle";
+  vm_free(ctx, verdict);
+  vm_free(ctx, emask);
+  vm_free(ctx, soft);
+  vm_free(ctx, vmark);
+  vm_free(ctx, saved);
+  vm_free(ctx, vrp);
+  vm_free(ctx, vel);
+  vm_free(ctx, best);
+  return st;
+}
+
 int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_volume_opts *opts,
                   vm_volume_report *report) {
   vm_volume_opts o = opts ? *opts : vm_volume_opts_default();
   vm_volume_report rep;
   memset(&rep, 0, sizeof rep);
+  rep.cert_bad_init = -1;
   ut_state s;
   memset(&s, 0, sizeof s);
   s.ctx = ctx;
@@ -521,6 +728,10 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
     }
     if (st > 0) st = VM_OK;
   }
+  if (st >= 0 && s.M == 0 && o.repair && !out_of_time(&s)) {
+    /* the corner rule's M = 0 is not det J > 0 inside every hex */
+    if ((st = repair_phase(&s, &prm, &budget)) < 0) goto done;
+  }
   if (st >= 0 && (st = stats(&s, m->xyz)) < 0) goto done;
   {
     vm_node_stats ns;
@@ -531,12 +742,21 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
     rep.min_det = ns.min_det;
     rep.M_final = ns.inverted;
   }
-  rep.valid = rep.M_final == 0;
+  {
+    /* valid as a solver means it: every cell certified det J > 0 */
+    int64_t nbad = certify(&s, NULL);
+    if (nbad < 0) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    rep.valid = rep.M_final == 0 && nbad == 0;
+    if (rep.valid && rep.cert_bad_init <= 0) rep.time_certified = rep.time_untangle;
+  }
   if (st >= 0) st = rep.valid ? VM_OK : VM_WARN_INVERTED;
 done:
   rep.time_total = now() - s.t0;
   rep.timed_out = out_of_time(&s);
-  if (st == VM_ERR_INTERRUPTED && (s.split_stage || s.guard)) {
+  if (st == VM_ERR_INTERRUPTED && (s.split_stage || s.guard || s.nw)) {
     /* interrupted while staged: count the rule's own nodes again */
     s.split_stage = 0;
     if (set_stage_rule(&s, o.rule) < 0 || stats(&s, m->xyz) < 0) s.M = INT64_MAX;
@@ -547,6 +767,7 @@ done:
   vm_free(ctx, s.node_eps);
   vm_free(ctx, s.best);
   vm_free(ctx, s.guard);
+  vm_free(ctx, s.nw);
   vm_problem_destroy(&s.P);
   if (report) *report = rep;
   return st;

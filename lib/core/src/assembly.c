@@ -30,6 +30,7 @@ typedef struct {
   int t, nv, diag;
   const vm_qrule *R;
   const double *S, *wb;
+  const double *nw; /* per-node weight factors or NULL */
   double w, g, dq;
   const double *G; /* tensor metric (6) or NULL */
   double n[3];     /* reference normal (2D elements) */
@@ -50,6 +51,7 @@ static void elem_setup(const vm_problem *p, int64_t i, const double *xyz, elem_c
   ec->S = p->Snode ? p->Snode + dd * ec->n0 : p->Sid[t];
   ec->diag = !p->Snode && p->sdiag[t];
   ec->wb = p->wnode ? p->wnode + ec->n0 : p->wid[t];
+  ec->nw = p->node_w ? p->node_w + ec->n0 : NULL;
   ec->w = p->wel[i];
   ec->g = p->metric == VM_METRIC_SCALAR ? p->mg[i] : 1.0;
   ec->dq = p->metric == VM_METRIC_IDENTITY ? 1.0 : p->mdq[i];
@@ -358,19 +360,21 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
   node3 nv[VM_QRULE_MAX_NODES];
   double fv[VM_QRULE_MAX_NODES][6];
   for (int j = 0; j < nn; j++) {
+    if (ec->nw && ec->nw[j] == 0) continue; /* left out */
     node3 *v = order ? &nv[j] : &nv[0];
     double *f = order ? fv[j] : fv[0];
     node3_eval(ec, &R->nodes[j], ec->S + 9 * j, diag, order > 0, v);
     vm_measure_params tmp;
     if (scalar(node_params(p, ec->n0 + j, &tmp), 3, v->s, v->det, order, f)) return 1;
-    F += ec->w * ec->wb[j] * f[0];
+    F += ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0) * f[0];
   }
   *Fe = F;
   if (!order) return 0;
   for (int j = 0; j < nn; j++) {
     const double *S = ec->S + 9 * j, *f = fv[j];
+    if (ec->nw && ec->nw[j] == 0) continue;
     const node3 *v = &nv[j];
-    double wq = ec->w * ec->wb[j];
+    double wq = ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0);
     /* dW/dM = 2 f_s G M + f_d det Q cof M; dW/dE = (dW/dM) S^T */
     const double *A = ec->G ? v->GM : v->M;
     double cs = 2 * wq * f[1] * (ec->G ? 1.0 : ec->g), cd = wq * f[2] * ec->dq;
@@ -457,6 +461,7 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd,
   const vm_nodepat *pats = p->pat[ec->t];
   double F = 0;
   for (int j = 0; j < R->nnodes; j++) {
+    if (ec->nw && ec->nw[j] == 0) continue; /* left out */
     const vm_qnode *q = &R->nodes[j];
     const double *S = ec->S + 4 * j;
     node2 v;
@@ -464,7 +469,7 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd,
     vm_measure_params tmp;
     double f[6];
     if (p->ops->scalar(node_params(p, ec->n0 + j, &tmp), 2, v.s, v.det, order, f)) return 1;
-    double wq = ec->w * ec->wb[j];
+    double wq = ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0);
     F += wq * f[0];
     if (!order) continue;
     double(*A)[3] = ec->G ? v.GM : v.m;
@@ -883,6 +888,7 @@ int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
     elem_sd(p, i, x, s, det);
     int nn = (int)(p->noff[i + 1] - p->noff[i]);
     for (int j = 0; j < nn; j++) {
+      if (p->node_w && p->node_w[p->noff[i] + j] == 0) continue; /* left out */
       double dt = det[j], sd = s[j] / d;
       if (dt <= 0) inv++;
       if (dt < mind) mind = dt;

@@ -446,8 +446,10 @@ int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
   }
   build_patterns(p);
   vm_free(p->ctx, p->eps_node);
+  vm_free(p->ctx, p->node_w);
   vm_free(p->ctx, p->ppos);
   p->eps_node = NULL;
+  p->node_w = NULL;
   p->ppos = NULL;
   p->ppos_stride = 0;
   return VM_OK;
@@ -879,6 +881,7 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->wel);
   vm_free(ctx, p->nrm);
   vm_free(ctx, p->eps_node);
+  vm_free(ctx, p->node_w);
   vm_free(ctx, p->Fe);
   vm_free(ctx, p->part);
   vm_free(ctx, p);
@@ -929,5 +932,24 @@ int vm_problem_set_node_eps(vm_problem *p, const double *eps_node) {
   memcpy(e, eps_node, (size_t)p->nn * sizeof *e);
   vm_free(p->ctx, p->eps_node);
   p->eps_node = e;
+  return VM_OK;
+}
+
+int vm_problem_set_node_weights(vm_problem *p, const double *w_node) {
+  if (!p) return VM_ERR_ARG;
+  if (!w_node) {
+    vm_free(p->ctx, p->node_w);
+    p->node_w = NULL;
+    return VM_OK;
+  }
+  for (int64_t q = 0; q < p->nn; q++)
+    if (!(w_node[q] >= 0) || !isfinite(w_node[q]))
+      return vm_error(p->ctx, VM_ERR_ARG, "weight of node %lld is %g, not finite and >= 0",
+                      (long long)q, w_node[q]);
+  double *w = vm_alloc_array(p->ctx, (size_t)(p->nn ? p->nn : 1), sizeof *w);
+  if (!w) return VM_ERR_NOMEM;
+  memcpy(w, w_node, (size_t)p->nn * sizeof *w);
+  vm_free(p->ctx, p->node_w);
+  p->node_w = w;
   return VM_OK;
 }

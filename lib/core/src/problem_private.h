@@ -109,6 +109,7 @@ struct vm_problem {
   uint8_t *amask; /* nae or NULL: the active subset */
 
   double *eps_node; /* nn or NULL */
+  double *node_w;   /* nn or NULL: per-node weight factor (0: node left out) */
 
   /* scratch for the fixed-order sum of F */
   double *Fe;   /* nae */

@@ -75,6 +75,19 @@ typedef struct vm_volume_opts {
   double eps_restart;        /* foldover: eps after a stalled local round is at
                                 least this (default 1e-2; det C is relative to
                                 the target) */
+  int repair;                /* after optimization, drive the cells that are not
+                                certified valid (det J > 0 everywhere, see
+                                varmesh/jacobian.h) to it: the geometric rule's
+                                nodes of those cells untangled locally, every
+                                positive node elsewhere guarded (default 1) */
+  int repair_rounds;         /* certify-and-repair rounds at most (default 20) */
+  int repair_round_iter;     /* iterations of one repair round at most (default
+                                1000: the n = 16 pi cube's rounds took 280-480) */
+  int repair_rings;          /* rings of elements around the uncertified ones
+                                that a repair round may move (default 4; 3 more
+                                after a round without progress, when the
+                                certified cells next to the others also lose
+                                their guards, one ring more each time) */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;
@@ -94,7 +107,15 @@ typedef struct vm_volume_report {
   int timed_out;                    /* the run was cut short by opts.time_limit */
   double phi_min, psi_min, min_det; /* final, over all nodes */
   double t_reached;                 /* quasi-iso: the largest t with a finite W_t (0 if off) */
-  int valid;                        /* M_final == 0 */
+  int valid;                        /* M_final == 0 and every cell certified valid */
+  int64_t cert_cells;               /* cells certified (vm_mesh_jacobian_certify) at the end */
+  int64_t cert_invalid;             /* of them certified det J <= 0 somewhere */
+  int64_t cert_undecided;           /* of them neither (not valid) */
+  int64_t cert_bad_init;            /* cells not certified valid when the repair began
+                                       (-1: no repair ran) */
+  int iter_repair;                  /* repair iterations (global + local) */
+  int repair_rounds;                /* certify-and-repair rounds run */
+  double time_certified;            /* seconds until every cell was certified valid */
   int64_t split_M_init;             /* staged: inverted split tets at the start */
   int64_t split_M_max;              /* staged: the most while untangling the split (M_max
                                        counts the rule's nodes, split stage excluded) */

@@ -164,6 +164,15 @@ int vm_problem_set_active(vm_problem *p, const uint8_t *mask);
  * (num_nodes values, copied), node q uses eps_node[q] instead of params.eps. */
 int vm_problem_set_node_eps(vm_problem *p, const double *eps_node);
 
+/* Per-node weight factors: if w_node != NULL (num_nodes values >= 0,
+ * copied), node q contributes w_node[q] times its term to F and its
+ * derivatives; a node of weight 0 is left out altogether (not evaluated,
+ * so it may lie outside the measure's domain, and not counted by
+ * vm_problem_node_stats). NULL restores 1 for every node; changing the rule
+ * resets it. Used by the certifying repair (only uncertified cells'
+ * nodes penalized, the others guarded or left out). */
+int vm_problem_set_node_weights(vm_problem *p, const double *w_node);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,182 @@
+/* test/volume/test_certified.c: the volume stage's result is valid to a
+ * solver: the rotated cube at pi (n = 12, inner half-size 0.3), untangled by the staged
+ * schedule and the certifying repair, has every hex certified det J > 0
+ * everywhere (varmesh/jacobian.h), not only its corner tets positive. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "varmesh/jacobian.h"
+#include "varmesh/quadrature.h"
+#include "varmesh/quality.h"
+#include "varmesh/rotcube.h"
+#include "varmesh/volume.h"
+#include "vmtest.h"
+
+static const double PI = 3.14159265358979323846;
+
+/* The schedule vm-volume chooses for hexahedra by default. */
+static vm_volume_opts staged_opts(void) {
+  vm_volume_opts o = vm_volume_opts_default();
+  o.staged = 1;
+  o.method = VM_UNTANGLE_FOLDOVER;
+  o.eps_inner = 3;
+  o.theta_untangle = 0.999;
+  /* a guard against hangs, not a speed test (sanitizer builds on a busy
+   * machine are many times slower) */
+  o.time_limit = 900;
+  return o;
+}
+
+static void pi_cube(vm_ctx *ctx, int n) {
+  vm_rotcube_opts ro = vm_rotcube_opts_default();
+  ro.n = n;
+  ro.alpha = PI;
+  ro.inner = 0.3; /* two free layers around it, as n = 16 has (golden volume-staged) */
+  vm_mesh *m = NULL;
+  double *ref = NULL;
+  CHECK(vm_gen_rotated_cube(ctx, &ro, &m, &ref) == VM_OK, "generate");
+  vm_mesh *before = NULL;
+  vm_mesh_clone(m, &before);
+  vm_jac_report jr0;
+  vm_mesh_jacobian_certify(m, &jr0, NULL);
+  CHECK(jr0.invalid > 0, "the input is tangled (%lld cells certified invalid)",
+        (long long)jr0.invalid);
+  vm_volume_opts o = staged_opts();
+  vm_volume_report r;
+  int st = vm_volume_run(ctx, m, NULL, &o, &r);
+  CHECK(st == VM_OK && r.valid,
+        "n = %d pi: status %d, M %lld, certified invalid %lld, undecided %lld", n, st,
+        (long long)r.M_final, (long long)r.cert_invalid, (long long)r.cert_undecided);
+  /* independently of the report */
+  vm_jac_report jr;
+  vm_mesh_jacobian_certify(m, &jr, NULL);
+  CHECK(jr.cells == m->ne && jr.invalid == 0 && jr.undecided == 0,
+        "certified: %lld invalid, %lld undecided of %lld", (long long)jr.invalid,
+        (long long)jr.undecided, (long long)jr.cells);
+  CHECK(r.cert_cells == jr.cells && r.cert_invalid == 0 && r.cert_undecided == 0,
+        "the report's counts");
+  vm_quality q;
+  vm_quality_opts qo = {VM_RULE_CORNER, 0};
+  vm_mesh_quality(m, &qo, &q);
+  CHECK(q.all.inverted_nodes == 0 && q.all.phi_min > 0, "corner tets: M %lld, phi_min %g",
+        (long long)q.all.inverted_nodes, q.all.phi_min);
+  int64_t moved_fixed = 0;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->vflag[v] == VM_VERTEX_FIXED)
+      moved_fixed += memcmp(m->xyz + 3 * v, before->xyz + 3 * v, 3 * sizeof(double)) != 0;
+  CHECK(moved_fixed == 0, "%lld fixed vertices moved", (long long)moved_fixed);
+  CHECK(r.time_certified > 0 && r.time_certified <= r.time_total, "time to certified %.2f of %.2f",
+        r.time_certified, r.time_total);
+  fprintf(stderr,
+          "hex n=%d pi: M %lld -> 0, %d + %d local + %d opt + %d repair iterations (%d rounds, "
+          "%lld cells not certified when the repair began), phi_min %.3e, certified after "
+          "%.2f s, %.2f s in all\n",
+          n, (long long)r.M_init, r.iter_untangle, r.iter_local, r.iter_opt, r.iter_repair,
+          r.repair_rounds, (long long)r.cert_bad_init, r.phi_min, r.time_certified, r.time_total);
+  vm_free(ctx, ref);
+  vm_mesh_destroy(&before);
+  vm_mesh_destroy(&m);
+}
+
+/* repair off: the corner rule's M = 0 is all the stage promises, and the
+ * report says whether the cells certify */
+static void no_repair(vm_ctx *ctx) {
+  vm_rotcube_opts ro = vm_rotcube_opts_default();
+  ro.n = 12;
+  ro.alpha = PI;
+  ro.inner = 0.3; /* two free layers around it, as n = 16 has (golden volume-staged) */
+  vm_mesh *m = NULL;
+  double *ref = NULL;
+  CHECK(vm_gen_rotated_cube(ctx, &ro, &m, &ref) == VM_OK, "generate");
+  vm_volume_opts o = staged_opts();
+  o.repair = 0;
+  vm_volume_report r;
+  int st = vm_volume_run(ctx, m, NULL, &o, &r);
+  vm_jac_report jr;
+  vm_mesh_jacobian_certify(m, &jr, NULL);
+  int64_t bad = jr.invalid + jr.undecided;
+  CHECK(r.M_final == 0 && r.cert_bad_init == -1, "no repair: M %lld, repair ran (%lld)",
+        (long long)r.M_final, (long long)r.cert_bad_init);
+  CHECK(r.cert_invalid == jr.invalid && r.cert_undecided == jr.undecided,
+        "no repair: the report's counts");
+  CHECK(r.valid == (bad == 0) && (st == VM_OK) == (bad == 0),
+        "no repair: valid %d, status %d, %lld cells not certified", r.valid, st, (long long)bad);
+  fprintf(stderr, "hex n=12 pi without repair: M 0, %lld cells not certified\n", (long long)bad);
+  vm_free(ctx, ref);
+  vm_mesh_destroy(&m);
+}
+
+/* The repair's map from the nodes of (24) to the Bernstein coefficients of
+ * det J (volume.c, hex_node_coef): with the node order of the rule table,
+ * the mean of each coefficient's nodes, as triquadratic Bernstein
+ * coefficients, gives det J of the trilinear map of a perturbed cube. */
+static int node_coef(int n) {
+  int j3 = n & 1, i3 = n >> 1 & 1, k2 = n >> 2 & 1, i2 = n >> 3 & 1, k = n >> 4 & 1, j = n >> 5 & 1;
+  return 9 * (i2 + i3) + 3 * (j + j3) + (k + k2);
+}
+
+static double det3(const double *E) {
+  return E[0] * (E[4] * E[8] - E[5] * E[7]) - E[1] * (E[3] * E[8] - E[5] * E[6]) +
+         E[2] * (E[3] * E[7] - E[4] * E[6]);
+}
+
+static void bernstein_map(void) {
+  /* VTK hex vertex -> unit cube corner */
+  static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  double x[24];
+  for (int v = 0; v < 8; v++)
+    for (int d = 0; d < 3; d++) x[3 * v + d] = corner[v][d] + 0.3 * sin(7.0 * v + 3.0 * d + 1);
+  const vm_qrule *R = vm_qrule_get(VM_HEX, VM_RULE_GEOMETRIC);
+  double b[27] = {0};
+  int cnt[27] = {0};
+  for (int n = 0; n < R->nnodes; n++) {
+    double E[9];
+    vm_qnode_edges(&R->nodes[n], 3, x, E);
+    b[node_coef(n)] += det3(E);
+    cnt[node_coef(n)]++;
+  }
+  double err = 0;
+  for (int c = 0; c < 27; c++) b[c] /= cnt[c];
+  for (int t = 0; t < 27; t++) {
+    double p[3] = {0.1 + 0.35 * (t % 3), 0.15 + 0.3 * (t / 3 % 3), 0.05 + 0.4 * (t / 9)};
+    /* J of the trilinear map: column d = sum over vertices of x_v dN_v/dp_d */
+    double J[9] = {0};
+    for (int v = 0; v < 8; v++)
+      for (int d = 0; d < 3; d++) {
+        double g = 1;
+        for (int e = 0; e < 3; e++) {
+          double f = corner[v][e] ? p[e] : 1 - p[e];
+          if (e == d) f = corner[v][e] ? 1 : -1;
+          g *= f;
+        }
+        for (int r = 0; r < 3; r++) J[3 * r + d] += g * x[3 * v + r];
+      }
+    double val = 0;
+    for (int a = 0; a < 3; a++)
+      for (int bb = 0; bb < 3; bb++)
+        for (int cc = 0; cc < 3; cc++) {
+          double B[3][3];
+          for (int e = 0; e < 3; e++) {
+            double u = p[e];
+            B[e][0] = (1 - u) * (1 - u);
+            B[e][1] = 2 * u * (1 - u);
+            B[e][2] = u * u;
+          }
+          val += b[9 * a + 3 * bb + cc] * B[0][a] * B[1][bb] * B[2][cc];
+        }
+    err = fmax(err, fabs(val - det3(J)));
+  }
+  CHECK(err < 1e-12, "Bernstein coefficients from the nodes of (24): det J off by %g", err);
+}
+
+int main(void) {
+  vm_ctx *ctx;
+  vm_ctx_create(&ctx);
+  bernstein_map();
+  pi_cube(ctx, 12);
+  no_repair(ctx);
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("certified");
+}

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# test/volume/test_volume_exit_cli.sh: vm-volume on input it cannot repair:
+# an inverted hex whose vertices are all fixed ends at once with exit 3,
+# naming the element and --slip-boundary, the input written; vm-quality
+# --require-valid and --verify refuse a mesh whose corner tets are all
+# positive but whose hex is not certified (det J < 0 inside).
+set -u
+vol=$1 qual=$2
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; else echo "ok: $2"; fi; }
+
+cat >"$dir/bad.vtk" <<'VTK'
+# vtk DataFile Version 3.0
+inverted hex, every vertex fixed
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 8 double
+0 0 0 1 0 0 1 1 0 0 1 0
+0 0 -1 1 0 -1 1 1 -1 0 1 -1
+CELLS 1 9
+8 0 1 2 3 4 5 6 7
+CELL_TYPES 1
+12
+POINT_DATA 8
+SCALARS fixed int 1
+LOOKUP_TABLE default
+1 1 1 1 1 1 1 1
+VTK
+start=$(date +%s)
+"$vol" --time-limit 60 "$dir/bad.vtk" "$dir/bad_out.vtk" 2>"$dir/bad.err"
+rc=$?
+took=$(($(date +%s) - start))
+check '[ $rc -eq 3 ]' "an inverted hex with only fixed vertices: exit 3 (got $rc)"
+check '[ $took -le 2 ]' "at once, not at the time limit (took $took s)"
+check 'grep -q "element 0 (hex) is inverted and all its vertices are fixed" "$dir/bad.err" &&
+  grep -q -- "--slip-boundary" "$dir/bad.err"' "naming the element and the option that helps"
+check '! grep -q "^[a-z]*  *it  *[0-9]" "$dir/bad.err"' "without running the schedule"
+check '[ -s "$dir/bad_out.vtk" ]' \
+  "the input is written to OUT"
+"$qual" -q "$dir/bad_out.vtk" >/dev/null
+check '[ $? -eq 0 ]' "and it is readable"
+
+# hex 283 of the n = 16 pi cube after the staged schedule without the
+# repair (scaled): all 8 corner tets positive, det J < 0 inside
+cat >"$dir/twist.vtk" <<'VTK'
+# vtk DataFile Version 3.0
+hex 283 of the staged pi cube
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 8 double
+0.702733597193 0.241228872106 0.468642832906
+0.801246873827 0.235344946219 0.475276787726
+0.808961367894 0.423207519118 0.452931594278
+0.693504234923 0.413552081061 0.466727544172
+0.283264592531 0.417974666146 0.484960760253
+0.212336243335 0.476328221958 0.512317124808
+0.195577585156 0.792363693392 0.564984447686
+0.302375505141 1 0.574158908171
+CELLS 1 9
+8 0 1 2 3 4 5 6 7
+CELL_TYPES 1
+12
+VTK
+"$qual" --json "$dir/twist.vtk" >"$dir/twist.json" 2>/dev/null
+corner_ok=$(grep -c '"all": {[^}]*"M": 0' "$dir/twist.json")
+"$qual" -q --require-valid "$dir/twist.vtk" >/dev/null 2>"$dir/twist.err"
+rc=$?
+if [ "$corner_ok" -eq 1 ]; then
+  check '[ $rc -eq 3 ] && grep -q "not certified valid" "$dir/twist.err"' \
+    "corner tets positive, det J < 0 inside: --require-valid exits 3 (got $rc)"
+  "$qual" -q --verify "$dir/twist.vtk" >/dev/null 2>"$dir/twist2.err"
+  rc=$?
+  check '[ $rc -eq 3 ] && grep -q "is not certified valid" "$dir/twist2.err"' \
+    "and --verify exits 3 naming the element (got $rc)"
+else
+  check 'false' "the hex has positive corner tets (test set-up)"
+fi
+exit $fail
