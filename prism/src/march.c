@@ -277,6 +277,80 @@ static int orthogonal_first_level(vm_prism *p) {
   return VM_OK;
 }
 
+/* Every column's levels 1..nlev-2 put back on the schedule: level k at the
+ * share (h_0 + ... + h_{k-1}) / T of the column's length, measured along
+ * the column's polyline (the levels move along it, so the column keeps its
+ * course). The marching's solves can leave a level far from the schedule
+ * (first levels of the fan columns at sharp edges 6-12 times the scheduled
+ * height on the coarse aircraft, the next ones on it): the layer above
+ * such a level is a wedge whose OpenFOAM cell centres jump sideways, and
+ * its heights break the growth law. One column at a time, in vertex order;
+ * a column whose prisms would fall below min(k.ortho_qmin, half their
+ * quality before) or lose a corner tet goes back bit for bit. Returns the
+ * count of columns moved in *count. */
+static int redistribute_columns(vm_prism *p, int64_t *count) {
+  int64_t nw = p->nw, moved = 0;
+  int nl = p->nlev - 1, n = p->rep.layers_requested;
+  size_t lsz = (size_t)(3 * nw);
+  double tot = 0;
+  double *frac = vm_alloc_array(p->ctx, (size_t)(5 * (nl + 1)), sizeof *frac);
+  if (!frac) return VM_ERR_NOMEM;
+  double *arc = frac + nl + 1, *old = arc + nl + 1;
+  for (int k = 0; k < n; k++) tot += p->sched[k];
+  frac[0] = 0;
+  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
+  for (int64_t v = 0; v < nw; v++) {
+    arc[0] = 0;
+    for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
+    for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
+    if (!(arc[nl] > 0)) continue;
+    /* the largest relative move: nothing to do where the column is on
+     * the schedule already */
+    double dev = 0;
+    for (int k = 1; k < nl; k++) {
+      double d = fabs(arc[k] / arc[nl] - frac[k]) / (frac[k] - frac[k - 1]);
+      dev = d > dev ? d : dev;
+    }
+    if (dev < p->k.redistribute_tol) continue;
+    double q0 = INFINITY;
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+      double q = layers_quality(p, p->vt[j], 0, nl - 1);
+      q0 = q < q0 ? q : q0;
+    }
+    for (int k = 1, s = 0; k < nl; k++) {
+      double a = frac[k] * arc[nl];
+      while (s + 1 < nl && arc[s + 1] < a) s++;
+      double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
+      u = u < 0 ? 0 : u > 1 ? 1 : u;
+      for (int c = 0; c < 3; c++)
+        p->lev[k * lsz + 3 * v + c] = old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
+    }
+    int ok = 1;
+    double floor = quality_floor(p, q0, p->k.ortho_round_share);
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
+      int64_t t = p->vt[j];
+      for (int k = 0; k < nl && ok; k++) {
+        double x[18];
+        int inv;
+        for (int i = 0; i < 3; i++) {
+          memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+          memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
+                 3 * sizeof *x);
+        }
+        pr_prism_corner_quality(x, &inv);
+        ok = !inv && pr_prism_quality(x) >= floor;
+      }
+    }
+    if (ok)
+      moved++;
+    else
+      for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
+  }
+  vm_free(p->ctx, frac);
+  *count = moved;
+  return VM_OK;
+}
+
 /* Tilt of column v's first side edge from its wall normal, in degrees. */
 static double first_tilt(const vm_prism *p, int64_t v) {
   return pr_tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
@@ -290,9 +364,13 @@ static double first_tilt(const vm_prism *p, int64_t v) {
  * column's present height above its tangent plane and weigh
  * k.solve_weight; the other layers' targets are their present shapes
  * where those are fair prisms (quality > k.dir.fair_quality), else
- * orthogonal ones on their base surface, as in marching. The result replaces the levels (*applied =
- * 1) only if every quadrature node and every corner tet of the patch is positive. */
-static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
+ * orthogonal ones on their base surface, as in marching. With stack > 0
+ * (the stack smoothing) every layer's target is the orthogonal one and the
+ * solve runs stack implicit iterations once; else it runs in chunks while
+ * the count of tilted smooth columns falls. The result replaces the levels
+ * (*applied = 1) only if every quadrature node and every corner tet of the
+ * patch is positive. */
+static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied) {
   vm_ctx *ctx = p->ctx;
   const pr_params *kp = &p->k;
   const pr_surf ws = pr_wall_surf(p);
@@ -370,7 +448,7 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
         memcpy(x + 3 * i, base + 3 * v, 3 * sizeof *x);
         memcpy(x + 9 + 3 * i, up + 3 * v, 3 * sizeof *x);
       }
-      int own = k > 0 && pr_prism_quality(x) > kp->dir.fair_quality;
+      int own = !stack && k > 0 && pr_prism_quality(x) > kp->dir.fair_quality;
       memcpy((double *)tf->data + 18 * e, own ? x : tg + 18 * t, sizeof x);
       w[e] = k == 0 ? kp->solve_weight : 1;
     }
@@ -388,7 +466,8 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
    * 300 iterations in one solve left 1 such column and took 13 s, chunks of
    * 50 left none in 4 s) */
   int64_t prev = INT64_MAX;
-  for (int chunk = 0; chunk < kp->solve_chunks; chunk++) {
+  if (stack) st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, stack, VM_PRISM_PHASE_MARCH, NULL);
+  for (int chunk = 0; chunk < kp->solve_chunks && !stack; chunk++) {
     int it = 0;
     st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, kp->solve_iter, VM_PRISM_PHASE_MARCH, &it);
     if (st < 0 || it < kp->solve_iter) break;
@@ -472,7 +551,7 @@ static int orthogonal_solve(vm_prism *p) {
   memcpy(keep, p->lev, nlsz * sizeof *keep);
   for (int attempt = 0; attempt < kp->solve_tries; attempt++) {
     int applied;
-    if ((st = solve_patch(p, ring, &applied)) < 0 || !applied) break;
+    if ((st = solve_patch(p, ring, 0, &applied)) < 0 || !applied) break;
     int64_t worse = 0;
     for (int64_t v = 0; v < nw; v++)
       if (ring[v] >= 0 && p->smooth[v] && tilt[v] <= kp->tilt_limit_deg &&
@@ -487,6 +566,67 @@ done:
   vm_free(ctx, ring);
   vm_free(ctx, tilt);
   vm_free(ctx, keep);
+  return st;
+}
+
+/* Angle in degrees between prism x's bottom normal and the line joining
+ * its bottom and top centroids: the OpenFOAM non-orthogonality of the face
+ * between it and the layer below, nearly. */
+static double prism_lean_deg(const double *x) {
+  double e1[3], e2[3], nb[3], d[3];
+  for (int c = 0; c < 3; c++) {
+    e1[c] = x[3 + c] - x[c];
+    e2[c] = x[6 + c] - x[c];
+    d[c] = (x[9 + c] + x[12 + c] + x[15 + c] - x[c] - x[3 + c] - x[6 + c]) / 3;
+  }
+  vm_cross3(e1, e2, nb);
+  double l = vm_norm3(nb) * vm_norm3(d), cs = l > 0 ? vm_dot3(nb, d) / l : -1;
+  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+}
+
+/* The final variational smoothing of the layer stack where it leans: the
+ * columns carrying a prism of layers 1..nlev-2 that leans beyond
+ * k.stack_lean_deg (prism_lean_deg) and their neighbours up to
+ * k.solve_rings rings move together in one implicit solve of (13) over all
+ * layers of their triangles (solve_patch, every layer's target orthogonal
+ * to its own base with the present side-edge lengths, the first layer's
+ * along the wall normal with weight k.solve_weight; the wall, the outer
+ * surface and every other column fixed; the barrier keeps every prism
+ * valid, and the result is kept only if every node and corner tet is
+ * positive). */
+static int stack_smooth(vm_prism *p) {
+  vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
+  int64_t nw = p->nw, nt = p->nt, nsel = 0;
+  size_t lsz = (size_t)(3 * nw);
+  if (kp->stack_iter <= 0 || pr_time_left(p) <= 0) return VM_OK;
+  int8_t *ring = vm_alloc_array(ctx, (size_t)nw, sizeof *ring);
+  if (!ring) return VM_ERR_NOMEM;
+  memset(ring, -1, (size_t)nw);
+  for (int64_t t = 0; t < nt; t++)
+    for (int k = 1; k + 1 < p->nlev - 1; k++) {
+      double x[18];
+      for (int i = 0; i < 3; i++) {
+        memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+        memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
+               3 * sizeof *x);
+      }
+      if (prism_lean_deg(x) > kp->stack_lean_deg) {
+        for (int i = 0; i < 3; i++) ring[p->tri[3 * t + i]] = 0;
+        break;
+      }
+    }
+  for (int64_t v = 0; v < nw; v++) nsel += ring[v] == 0;
+  for (int r = 0; r < kp->solve_rings; r++)
+    for (int64_t v = 0; v < nw; v++)
+      if (ring[v] == r)
+        for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)
+          if (ring[p->vv[j]] < 0) ring[p->vv[j]] = (int8_t)(r + 1);
+  int applied = 0, st = VM_OK;
+  if (nsel) st = solve_patch(p, ring, kp->stack_iter, &applied);
+  vm_log(ctx, VM_LOG_INFO, "prism: stack smoothing of %lld leaning columns%s", (long long)nsel,
+         nsel && !applied ? " not applied" : "");
+  vm_free(ctx, ring);
   return st;
 }
 
@@ -635,6 +775,12 @@ int vm_prism_march(vm_prism *p) {
   }
   memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
   p->nlev = made + 1;
+  if (p->nlev > 2 && (st = stack_smooth(p)) < 0) goto done;
+  if (p->nlev > 2) {
+    int64_t nr = 0;
+    if ((st = redistribute_columns(p, &nr)) < 0) goto done;
+    vm_log(ctx, VM_LOG_INFO, "prism: %lld columns put back on the schedule", (long long)nr);
+  }
   if (p->nlev > 2 && (st = orthogonal_first_level(p)) < 0) goto done;
   if (p->nlev > 2 && (st = orthogonal_solve(p)) < 0) goto done;
   /* the paper's option: drop a skewed outermost remainder */
