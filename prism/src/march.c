@@ -285,8 +285,8 @@ static int orthogonal_first_level(vm_prism *p) {
  * height on the coarse aircraft, the next ones on it): the layer above
  * such a level is a wedge whose OpenFOAM cell centres jump sideways, and
  * its heights break the growth law. One column at a time, in vertex order;
- * a column whose prisms would fall below min(k.ortho_qmin, half their
- * quality before) or lose a corner tet goes back bit for bit. Returns the
+ * a column whose prisms would fall below min(k.ortho_qmin, a tenth of
+ * their quality before) or lose a corner tet goes back bit for bit. Returns the
  * count of columns moved in *count. */
 static int redistribute_columns(vm_prism *p, int64_t *count) {
   int64_t nw = p->nw, moved = 0;
@@ -326,7 +326,7 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
         p->lev[k * lsz + 3 * v + c] = old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
     }
     int ok = 1;
-    double floor = quality_floor(p, q0, p->k.ortho_round_share);
+    double floor = quality_floor(p, q0, p->k.redistribute_qshare);
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
       int64_t t = p->vt[j];
       for (int k = 0; k < nl && ok; k++) {

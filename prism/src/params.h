@@ -180,6 +180,10 @@ typedef struct pr_params {
   double redistribute_tol;    /* 0.05: a column whose levels are all within 5 %
                                  of their layer's scheduled height of the
                                  schedule's place is left as it is */
+  double redistribute_qshare; /* 0.1: ... and whose prisms stay above a tenth
+                                 of their quality before (a fan's wedge prism
+                                 starts near 0.03 and loses more than half of
+                                 it as its long first level comes down) */
   double stack_lean_deg;      /* 45: a prism of layers 1..n-2 whose centroids'
                                  line leans beyond this from its base normal
                                  sends its columns to the stack smoothing */
@@ -257,6 +261,7 @@ static inline pr_params pr_params_default(void) {
       .ortho_lean_deg = 4.5,
       .ortho_high_ratio = 0.5,
       .redistribute_tol = 0.05,
+      .redistribute_qshare = 0.1,
       .stack_lean_deg = 45,
       .stack_iter = 20,
       .tilt_solve_deg = 4.5,
