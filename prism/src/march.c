@@ -585,7 +585,8 @@ static double prism_lean_deg(const double *x) {
 }
 
 /* The final variational smoothing of the layer stack where it leans: the
- * columns carrying a prism of layers 1..nlev-2 that leans beyond
+ * columns carrying a prism of layers 1..nlev-2 (every layer above the
+ * first, the outermost included) that leans beyond
  * k.stack_lean_deg (prism_lean_deg) and their neighbours up to
  * k.solve_rings rings move together in one implicit solve of (13) over all
  * layers of their triangles (solve_patch, every layer's target orthogonal
@@ -604,7 +605,7 @@ static int stack_smooth(vm_prism *p) {
   if (!ring) return VM_ERR_NOMEM;
   memset(ring, -1, (size_t)nw);
   for (int64_t t = 0; t < nt; t++)
-    for (int k = 1; k + 1 < p->nlev - 1; k++) {
+    for (int k = 1; k < p->nlev - 1; k++) {
       double x[18];
       for (int i = 0; i < 3; i++) {
         memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);

@@ -184,7 +184,7 @@ typedef struct pr_params {
                                  of their quality before (a fan's wedge prism
                                  starts near 0.03 and loses more than half of
                                  it as its long first level comes down) */
-  double stack_lean_deg;      /* 45: a prism of layers 1..n-2 whose centroids'
+  double stack_lean_deg;      /* 45: a prism of layers 1..n-1 whose centroids'
                                  line leans beyond this from its base normal
                                  sends its columns to the stack smoothing */
   int stack_iter;             /* 20: implicit iterations of the stack
