@@ -277,6 +277,130 @@ static int orthogonal_first_level(vm_prism *p) {
   return VM_OK;
 }
 
+/* OpenFOAM's face centre c and area vector s of polygon x (n vertices):
+ * the triangles fanned around the vertex mean, area-weighted. */
+static void foam_face(const double *x, int n, double *c, double *s) {
+  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int r = 0; r < 3; r++) pc[r] += x[3 * i + r] / n;
+  s[0] = s[1] = s[2] = 0;
+  for (int i = 0; i < n; i++) {
+    const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % n);
+    double u[3], w[3], nn[3];
+    for (int r = 0; r < 3; r++) {
+      u[r] = b[r] - a[r];
+      w[r] = pc[r] - a[r];
+    }
+    vm_cross3(u, w, nn);
+    double an = vm_norm3(nn);
+    for (int r = 0; r < 3; r++) {
+      s[r] += 0.5 * nn[r];
+      sc[r] += an * (a[r] + b[r] + pc[r]);
+    }
+    sa += an;
+  }
+  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
+}
+
+/* The prism's faces in its 18 coordinates: bottom, top, three quads. */
+static const int prism_faces[5][4] = {
+    {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
+
+/* OpenFOAM's cell centre of prism x: the pyramids on its faces around the
+ * face centres' mean, volume-weighted. */
+static void foam_cell(const double *x, double *cc) {
+  double fc[5][3], fs[5][3], est[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double y[12];
+    int n = prism_faces[f][3] < 0 ? 3 : 4;
+    for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * prism_faces[f][i], 3 * sizeof *y);
+    foam_face(y, n, fc[f], fs[f]);
+    for (int r = 0; r < 3; r++) est[r] += fc[f][r] / 5;
+  }
+  double sv = 0, sum[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double d[3] = {fc[f][0] - est[0], fc[f][1] - est[1], fc[f][2] - est[2]};
+    double v = fabs(vm_dot3(fs[f], d));
+    for (int r = 0; r < 3; r++) sum[r] += v * (0.75 * fc[f][r] + 0.25 * est[r]);
+    sv += v;
+  }
+  for (int r = 0; r < 3; r++) cc[r] = sv > 0 ? sum[r] / sv : est[r];
+}
+
+/* OpenFOAM's skewness of face x (n vertices) between the cells centred at
+ * cp and cn: the distance from the face centre to where the line joining
+ * the centres meets the face, over the face's extent that way (at least a
+ * fifth of the centres' distance). */
+static double foam_skew(const double *x, int n, const double *cp, const double *cn) {
+  double c[3], s[3], d[3], e[3], sv[3];
+  foam_face(x, n, c, s);
+  for (int r = 0; r < 3; r++) {
+    d[r] = cn[r] - cp[r];
+    e[r] = c[r] - cp[r];
+  }
+  double sd = vm_dot3(s, d);
+  if (!(fabs(sd) > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
+  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
+  for (int i = 0; i < n && l > 0; i++) {
+    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = a > fd ? a : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+/* Prism x of triangle t between levels k and k + 1. */
+static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int i = 0; i < 3; i++) {
+    memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+    memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+  }
+}
+
+/* The largest OpenFOAM skewness over the internal faces of the cells on
+ * column v (every layer of its triangles): faces between layers and side
+ * faces shared with the neighbouring triangles' cells. */
+static double column_skew(const vm_prism *p, int64_t v) {
+  int nl = p->nlev - 1;
+  double worst = 0;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t t = p->vt[j];
+    for (int k = 0; k < nl; k++) {
+      double x[18], y[18], cp[3], cn[3];
+      prism_at(p, t, k, x);
+      foam_cell(x, cp);
+      if (k + 1 < nl) {
+        prism_at(p, t, k + 1, y);
+        foam_cell(y, cn);
+        double q = foam_skew(x + 9, 3, cp, cn);
+        worst = q > worst ? q : worst;
+      }
+      for (int i = 0; i < 3; i++) {
+        int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
+        int64_t t2 = -1;
+        for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1] && t2 < 0; m++) {
+          int64_t u = p->vt[m];
+          if (u == t) continue;
+          const int32_t *c = p->tri + 3 * u;
+          if (c[0] == b || c[1] == b || c[2] == b) t2 = u;
+        }
+        if (t2 < 0) continue;
+        double f[12];
+        memcpy(f, x + 3 * i, 3 * sizeof *f);
+        memcpy(f + 3, x + 3 * ((i + 1) % 3), 3 * sizeof *f);
+        memcpy(f + 6, x + 9 + 3 * ((i + 1) % 3), 3 * sizeof *f);
+        memcpy(f + 9, x + 9 + 3 * i, 3 * sizeof *f);
+        prism_at(p, t2, k, y);
+        foam_cell(y, cn);
+        double q = foam_skew(f, 4, cp, cn);
+        worst = q > worst ? q : worst;
+      }
+    }
+  }
+  return worst;
+}
+
 /* Every column's levels 1..nlev-2 put back on the schedule: level k at the
  * share (h_0 + ... + h_{k-1}) / T of the column's length, measured along
  * the column's polyline (the levels move along it, so the column keeps its
@@ -339,6 +463,27 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
         }
         pr_prism_corner_quality(x, &inv);
         ok = !inv && pr_prism_quality(x) >= floor;
+      }
+    }
+    /* nor may the column raise the skewness of its cells' faces above
+     * k.skew_limit (what checkMesh fails at, with a margin) */
+    if (ok) {
+      double after = column_skew(p, v);
+      if (after > p->k.skew_limit) {
+        for (int k = 1; k < nl; k++) {
+          double tmp[3];
+          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+          memcpy(old + 3 * k, tmp, sizeof tmp);
+        }
+        double before = column_skew(p, v);
+        for (int k = 1; k < nl; k++) {
+          double tmp[3];
+          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+          memcpy(old + 3 * k, tmp, sizeof tmp);
+        }
+        ok = after <= before;
       }
     }
     if (ok)
@@ -624,9 +769,64 @@ static int stack_smooth(vm_prism *p) {
         for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)
           if (ring[p->vv[j]] < 0) ring[p->vv[j]] = (int8_t)(r + 1);
   int applied = 0, st = VM_OK;
-  if (nsel) st = solve_patch(p, ring, kp->stack_iter, &applied);
-  vm_log(ctx, VM_LOG_INFO, "prism: stack smoothing of %lld leaning columns%s", (long long)nsel,
-         nsel && !applied ? " not applied" : "");
+  int64_t nback = 0;
+  size_t nlsz = (size_t)p->nlev * lsz;
+  double *keep = nsel ? vm_alloc_array(ctx, nlsz, sizeof *keep) : NULL;
+  double *sk0 = nsel ? vm_alloc_array(ctx, (size_t)nw, sizeof *sk0) : NULL;
+  uint8_t *back = nsel ? vm_calloc(ctx, (size_t)nw, sizeof *back) : NULL;
+  if (nsel && (!keep || !sk0 || !back)) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  if (nsel) {
+    memcpy(keep, p->lev, nlsz * sizeof *keep);
+    for (int64_t v = 0; v < nw; v++) sk0[v] = ring[v] >= 0 ? column_skew(p, v) : 0;
+    st = solve_patch(p, ring, kp->stack_iter, &applied);
+  }
+  if (st < 0 || !applied) goto done;
+  /* the columns whose cells' faces the solve made skewed beyond
+   * k.skew_limit go back, then those sharing a prism that the mix of old
+   * and new levels leaves invalid, until none is */
+  for (int64_t v = 0; v < nw; v++)
+    if (ring[v] >= 0) {
+      double a = column_skew(p, v);
+      back[v] = a > kp->skew_limit && a > sk0[v];
+    }
+  for (int changed = 1; changed;) {
+    changed = 0;
+    for (int64_t v = 0; v < nw; v++)
+      if (back[v] == 1) {
+        for (int k = 1; k < p->nlev - 1; k++)
+          memcpy(p->lev + k * lsz + 3 * v, keep + k * lsz + 3 * v, 3 * sizeof *keep);
+        back[v] = 2;
+        nback++;
+      }
+    for (int64_t t = 0; t < nt; t++) {
+      const int32_t *c = p->tri + 3 * t;
+      if (!(back[c[0]] == 2 || back[c[1]] == 2 || back[c[2]] == 2)) continue;
+      if (back[c[0]] && back[c[1]] && back[c[2]]) continue;
+      int bad = 0;
+      for (int k = 0; k < p->nlev - 1 && !bad; k++) {
+        double x[18];
+        int inv;
+        prism_at(p, t, k, x);
+        pr_prism_corner_quality(x, &inv);
+        bad = inv || !(pr_prism_quality(x) > 0);
+      }
+      if (bad)
+        for (int i = 0; i < 3; i++)
+          if (!back[c[i]]) {
+            back[c[i]] = 1;
+            changed = 1;
+          }
+    }
+  }
+done:
+  vm_log(ctx, VM_LOG_INFO, "prism: stack smoothing of %lld leaning columns%s, %lld put back",
+         (long long)nsel, nsel && !applied ? " not applied" : "", (long long)nback);
+  vm_free(ctx, keep);
+  vm_free(ctx, sk0);
+  vm_free(ctx, back);
   vm_free(ctx, ring);
   return st;
 }

@@ -184,6 +184,10 @@ typedef struct pr_params {
                                  of their quality before (a fan's wedge prism
                                  starts near 0.03 and loses more than half of
                                  it as its long first level comes down) */
+  double skew_limit;          /* 3.6: the stack smoothing and the columns put
+                                 on the schedule may not raise OpenFOAM's
+                                 skewness of a face above this (checkMesh
+                                 fails at 4) */
   double stack_lean_deg;      /* 45: a prism of layers 1..n-1 whose centroids'
                                  line leans beyond this from its base normal
                                  sends its columns to the stack smoothing */
@@ -262,6 +266,7 @@ static inline pr_params pr_params_default(void) {
       .ortho_high_ratio = 0.5,
       .redistribute_tol = 0.05,
       .redistribute_qshare = 0.1,
+      .skew_limit = 3.6,
       .stack_lean_deg = 45,
       .stack_iter = 20,
       .tilt_solve_deg = 4.5,
