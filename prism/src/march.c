@@ -349,6 +349,26 @@ static double foam_skew(const double *x, int n, const double *cp, const double *
   return fd > 0 ? l / fd : INFINITY;
 }
 
+/* OpenFOAM's skewness of boundary face x (n vertices) of the cell centred
+ * at cp: the offset of the face centre from the cell centre along the
+ * face, over the face's extent that way (at least a fifth of the centre's
+ * distance from the face). */
+static double foam_boundary_skew(const double *x, int n, const double *cp) {
+  double c[3], s[3], e[3], sv[3];
+  foam_face(x, n, c, s);
+  double ls = vm_norm3(s);
+  if (!(ls > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) e[r] = c[r] - cp[r];
+  double a = vm_dot3(s, e) / ls;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - a * s[r] / ls;
+  double l = vm_norm3(sv), fd = 0.2 * fabs(a);
+  for (int i = 0; i < n && l > 0; i++) {
+    double b = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = b > fd ? b : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
 /* Prism x of triangle t between levels k and k + 1. */
 static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
   size_t lsz = (size_t)(3 * p->nw);
@@ -358,9 +378,9 @@ static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
   }
 }
 
-/* The largest OpenFOAM skewness over the internal faces of the cells on
- * column v (every layer of its triangles): faces between layers and side
- * faces shared with the neighbouring triangles' cells. */
+/* The largest OpenFOAM skewness over the faces of the cells on column v
+ * (every layer of its triangles): faces between layers, side faces shared
+ * with the neighbouring triangles' cells and the outer faces. */
 static double column_skew(const vm_prism *p, int64_t v) {
   int nl = p->nlev - 1;
   double worst = 0;
@@ -374,6 +394,9 @@ static double column_skew(const vm_prism *p, int64_t v) {
         prism_at(p, t, k + 1, y);
         foam_cell(y, cn);
         double q = foam_skew(x + 9, 3, cp, cn);
+        worst = q > worst ? q : worst;
+      } else {
+        double q = foam_boundary_skew(x + 9, 3, cp);
         worst = q > worst ? q : worst;
       }
       for (int i = 0; i < 3; i++) {
@@ -732,7 +755,8 @@ static double prism_lean_deg(const double *x) {
 /* The final variational smoothing of the layer stack where it leans: the
  * columns carrying a prism of layers 1..nlev-2 (every layer above the
  * first, the outermost included) that leans beyond
- * k.stack_lean_deg (prism_lean_deg) and their neighbours up to
+ * k.stack_lean_deg (prism_lean_deg), or of the outermost layer whose outer
+ * face is skewed beyond k.skew_limit, and their neighbours up to
  * k.solve_rings rings move together in one implicit solve of (13) over all
  * layers of their triangles (solve_patch, every layer's target orthogonal
  * to its own base with the present side-edge lengths, the first layer's
@@ -757,7 +781,10 @@ static int stack_smooth(vm_prism *p) {
         memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
                3 * sizeof *x);
       }
-      if (prism_lean_deg(x) > kp->stack_lean_deg) {
+      double cc[3];
+      if (k == p->nlev - 2) foam_cell(x, cc);
+      if (prism_lean_deg(x) > kp->stack_lean_deg ||
+          (k == p->nlev - 2 && foam_boundary_skew(x + 9, 3, cc) > kp->skew_limit)) {
         for (int i = 0; i < 3; i++) ring[p->tri[3 * t + i]] = 0;
         break;
       }
