@@ -2,9 +2,12 @@
  * split in two, the middle surface optimized by the explicit solver with
  * orthogonalizing targets and weights on the inner sublayer, the inner
  * sublayer kept; repeated until the schedule of layer heights is met. Then
- * the first layer is made orthogonal at the wall on smooth parts: columns
- * stood up geometrically where their prisms allow it, the rest solved for
- * with their neighbours. */
+ * the stack is made fit for a finite-volume solver (a variational
+ * smoothing where it leans, every column's levels put back on the
+ * schedule, both guarded by OpenFOAM's skewness), and the first layer is
+ * made orthogonal at the wall on smooth parts: columns stood up
+ * geometrically where their prisms allow it, the rest solved for with
+ * their neighbours. */
 #include <math.h>
 #include <omp.h>
 #include <string.h>
