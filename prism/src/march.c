@@ -2,9 +2,12 @@
  * split in two, the middle surface optimized by the explicit solver with
  * orthogonalizing targets and weights on the inner sublayer, the inner
  * sublayer kept; repeated until the schedule of layer heights is met. Then
- * the first layer is made orthogonal at the wall on smooth parts: columns
- * stood up geometrically where their prisms allow it, the rest solved for
- * with their neighbours. */
+ * the stack is made fit for a finite-volume solver (a variational
+ * smoothing where it leans, every column's levels put back on the
+ * schedule, both guarded by OpenFOAM's skewness), and the first layer is
+ * made orthogonal at the wall on smooth parts: columns stood up
+ * geometrically where their prisms allow it, the rest solved for with
+ * their neighbours. */
 #include <math.h>
 #include <omp.h>
 #include <string.h>
@@ -277,6 +280,248 @@ static int orthogonal_first_level(vm_prism *p) {
   return VM_OK;
 }
 
+/* OpenFOAM's face centre c and area vector s of polygon x (n vertices):
+ * the triangles fanned around the vertex mean, area-weighted. */
+static void foam_face(const double *x, int n, double *c, double *s) {
+  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int r = 0; r < 3; r++) pc[r] += x[3 * i + r] / n;
+  s[0] = s[1] = s[2] = 0;
+  for (int i = 0; i < n; i++) {
+    const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % n);
+    double u[3], w[3], nn[3];
+    for (int r = 0; r < 3; r++) {
+      u[r] = b[r] - a[r];
+      w[r] = pc[r] - a[r];
+    }
+    vm_cross3(u, w, nn);
+    double an = vm_norm3(nn);
+    for (int r = 0; r < 3; r++) {
+      s[r] += 0.5 * nn[r];
+      sc[r] += an * (a[r] + b[r] + pc[r]);
+    }
+    sa += an;
+  }
+  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
+}
+
+/* The prism's faces in its 18 coordinates: bottom, top, three quads. */
+static const int prism_faces[5][4] = {
+    {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
+
+/* OpenFOAM's cell centre of prism x: the pyramids on its faces around the
+ * face centres' mean, volume-weighted. */
+static void foam_cell(const double *x, double *cc) {
+  double fc[5][3], fs[5][3], est[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double y[12];
+    int n = prism_faces[f][3] < 0 ? 3 : 4;
+    for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * prism_faces[f][i], 3 * sizeof *y);
+    foam_face(y, n, fc[f], fs[f]);
+    for (int r = 0; r < 3; r++) est[r] += fc[f][r] / 5;
+  }
+  double sv = 0, sum[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double d[3] = {fc[f][0] - est[0], fc[f][1] - est[1], fc[f][2] - est[2]};
+    double v = fabs(vm_dot3(fs[f], d));
+    for (int r = 0; r < 3; r++) sum[r] += v * (0.75 * fc[f][r] + 0.25 * est[r]);
+    sv += v;
+  }
+  for (int r = 0; r < 3; r++) cc[r] = sv > 0 ? sum[r] / sv : est[r];
+}
+
+/* OpenFOAM's skewness of face x (n vertices) between the cells centred at
+ * cp and cn: the distance from the face centre to where the line joining
+ * the centres meets the face, over the face's extent that way (at least a
+ * fifth of the centres' distance). */
+static double foam_skew(const double *x, int n, const double *cp, const double *cn) {
+  double c[3], s[3], d[3], e[3], sv[3];
+  foam_face(x, n, c, s);
+  for (int r = 0; r < 3; r++) {
+    d[r] = cn[r] - cp[r];
+    e[r] = c[r] - cp[r];
+  }
+  double sd = vm_dot3(s, d);
+  if (!(fabs(sd) > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
+  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
+  for (int i = 0; i < n && l > 0; i++) {
+    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = a > fd ? a : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+/* OpenFOAM's skewness of boundary face x (n vertices) of the cell centred
+ * at cp: the offset of the face centre from the cell centre along the
+ * face, over the face's extent that way (at least a fifth of the centre's
+ * distance from the face). */
+static double foam_boundary_skew(const double *x, int n, const double *cp) {
+  double c[3], s[3], e[3], sv[3];
+  foam_face(x, n, c, s);
+  double ls = vm_norm3(s);
+  if (!(ls > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) e[r] = c[r] - cp[r];
+  double a = vm_dot3(s, e) / ls;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - a * s[r] / ls;
+  double l = vm_norm3(sv), fd = 0.2 * fabs(a);
+  for (int i = 0; i < n && l > 0; i++) {
+    double b = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = b > fd ? b : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+/* Prism x of triangle t between levels k and k + 1. */
+static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int i = 0; i < 3; i++) {
+    memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+    memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+  }
+}
+
+/* The largest OpenFOAM skewness over the faces of the cells on column v
+ * (every layer of its triangles): faces between layers, side faces shared
+ * with the neighbouring triangles' cells and the outer faces. */
+static double column_skew(const vm_prism *p, int64_t v) {
+  int nl = p->nlev - 1;
+  double worst = 0;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t t = p->vt[j];
+    for (int k = 0; k < nl; k++) {
+      double x[18], y[18], cp[3], cn[3];
+      prism_at(p, t, k, x);
+      foam_cell(x, cp);
+      if (k + 1 < nl) {
+        prism_at(p, t, k + 1, y);
+        foam_cell(y, cn);
+        double q = foam_skew(x + 9, 3, cp, cn);
+        worst = q > worst ? q : worst;
+      } else {
+        double q = foam_boundary_skew(x + 9, 3, cp);
+        worst = q > worst ? q : worst;
+      }
+      for (int i = 0; i < 3; i++) {
+        int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
+        int64_t t2 = -1;
+        for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1] && t2 < 0; m++) {
+          int64_t u = p->vt[m];
+          if (u == t) continue;
+          const int32_t *c = p->tri + 3 * u;
+          if (c[0] == b || c[1] == b || c[2] == b) t2 = u;
+        }
+        if (t2 < 0) continue;
+        double f[12];
+        memcpy(f, x + 3 * i, 3 * sizeof *f);
+        memcpy(f + 3, x + 3 * ((i + 1) % 3), 3 * sizeof *f);
+        memcpy(f + 6, x + 9 + 3 * ((i + 1) % 3), 3 * sizeof *f);
+        memcpy(f + 9, x + 9 + 3 * i, 3 * sizeof *f);
+        prism_at(p, t2, k, y);
+        foam_cell(y, cn);
+        double q = foam_skew(f, 4, cp, cn);
+        worst = q > worst ? q : worst;
+      }
+    }
+  }
+  return worst;
+}
+
+/* Every column's levels 1..nlev-2 put back on the schedule: level k at the
+ * share (h_0 + ... + h_{k-1}) / T of the column's length, measured along
+ * the column's polyline (the levels move along it, so the column keeps its
+ * course). The marching's solves can leave a level far from the schedule
+ * (first levels of the fan columns at sharp edges 6-12 times the scheduled
+ * height on the coarse aircraft, the next ones on it): the layer above
+ * such a level is a wedge whose OpenFOAM cell centres jump sideways, and
+ * its heights break the growth law. One column at a time, in vertex order;
+ * a column whose prisms would fall below min(k.ortho_qmin, a tenth of
+ * their quality before) or lose a corner tet goes back bit for bit. Returns the
+ * count of columns moved in *count. */
+static int redistribute_columns(vm_prism *p, int64_t *count) {
+  int64_t nw = p->nw, moved = 0;
+  int nl = p->nlev - 1, n = p->rep.layers_requested;
+  size_t lsz = (size_t)(3 * nw);
+  double tot = 0;
+  double *frac = vm_alloc_array(p->ctx, (size_t)(5 * (nl + 1)), sizeof *frac);
+  if (!frac) return VM_ERR_NOMEM;
+  double *arc = frac + nl + 1, *old = arc + nl + 1;
+  for (int k = 0; k < n; k++) tot += p->sched[k];
+  frac[0] = 0;
+  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
+  for (int64_t v = 0; v < nw; v++) {
+    arc[0] = 0;
+    for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
+    for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
+    if (!(arc[nl] > 0)) continue;
+    /* the largest relative move: nothing to do where the column is on
+     * the schedule already */
+    double dev = 0;
+    for (int k = 1; k < nl; k++) {
+      double d = fabs(arc[k] / arc[nl] - frac[k]) / (frac[k] - frac[k - 1]);
+      dev = d > dev ? d : dev;
+    }
+    if (dev < p->k.redistribute_tol) continue;
+    double q0 = INFINITY;
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+      double q = layers_quality(p, p->vt[j], 0, nl - 1);
+      q0 = q < q0 ? q : q0;
+    }
+    for (int k = 1, s = 0; k < nl; k++) {
+      double a = frac[k] * arc[nl];
+      while (s + 1 < nl && arc[s + 1] < a) s++;
+      double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
+      u = u < 0 ? 0 : u > 1 ? 1 : u;
+      for (int c = 0; c < 3; c++)
+        p->lev[k * lsz + 3 * v + c] = old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
+    }
+    int ok = 1;
+    double floor = quality_floor(p, q0, p->k.redistribute_qshare);
+    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
+      int64_t t = p->vt[j];
+      for (int k = 0; k < nl && ok; k++) {
+        double x[18];
+        int inv;
+        for (int i = 0; i < 3; i++) {
+          memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+          memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
+                 3 * sizeof *x);
+        }
+        pr_prism_corner_quality(x, &inv);
+        ok = !inv && pr_prism_quality(x) >= floor;
+      }
+    }
+    /* nor may the column raise the skewness of its cells' faces above
+     * k.skew_limit (what checkMesh fails at, with a margin) */
+    if (ok) {
+      double after = column_skew(p, v);
+      if (after > p->k.skew_limit) {
+        for (int k = 1; k < nl; k++) {
+          double tmp[3];
+          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+          memcpy(old + 3 * k, tmp, sizeof tmp);
+        }
+        double before = column_skew(p, v);
+        for (int k = 1; k < nl; k++) {
+          double tmp[3];
+          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+          memcpy(old + 3 * k, tmp, sizeof tmp);
+        }
+        ok = after <= before;
+      }
+    }
+    if (ok)
+      moved++;
+    else
+      for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
+  }
+  vm_free(p->ctx, frac);
+  *count = moved;
+  return VM_OK;
+}
+
 /* Tilt of column v's first side edge from its wall normal, in degrees. */
 static double first_tilt(const vm_prism *p, int64_t v) {
   return pr_tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
@@ -290,9 +535,13 @@ static double first_tilt(const vm_prism *p, int64_t v) {
  * column's present height above its tangent plane and weigh
  * k.solve_weight; the other layers' targets are their present shapes
  * where those are fair prisms (quality > k.dir.fair_quality), else
- * orthogonal ones on their base surface, as in marching. The result replaces the levels (*applied =
- * 1) only if every quadrature node and every corner tet of the patch is positive. */
-static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
+ * orthogonal ones on their base surface, as in marching. With stack > 0
+ * (the stack smoothing) every layer's target is the orthogonal one and the
+ * solve runs stack implicit iterations once; else it runs in chunks while
+ * the count of tilted smooth columns falls. The result replaces the levels
+ * (*applied = 1) only if every quadrature node and every corner tet of the
+ * patch is positive. */
+static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied) {
   vm_ctx *ctx = p->ctx;
   const pr_params *kp = &p->k;
   const pr_surf ws = pr_wall_surf(p);
@@ -370,7 +619,7 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
         memcpy(x + 3 * i, base + 3 * v, 3 * sizeof *x);
         memcpy(x + 9 + 3 * i, up + 3 * v, 3 * sizeof *x);
       }
-      int own = k > 0 && pr_prism_quality(x) > kp->dir.fair_quality;
+      int own = !stack && k > 0 && pr_prism_quality(x) > kp->dir.fair_quality;
       memcpy((double *)tf->data + 18 * e, own ? x : tg + 18 * t, sizeof x);
       w[e] = k == 0 ? kp->solve_weight : 1;
     }
@@ -388,7 +637,8 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int *applied) {
    * 300 iterations in one solve left 1 such column and took 13 s, chunks of
    * 50 left none in 4 s) */
   int64_t prev = INT64_MAX;
-  for (int chunk = 0; chunk < kp->solve_chunks; chunk++) {
+  if (stack) st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, stack, VM_PRISM_PHASE_MARCH, NULL);
+  for (int chunk = 0; chunk < kp->solve_chunks && !stack; chunk++) {
     int it = 0;
     st = pr_solve(p, pb, m, VM_MINIMIZER_IMPLICIT, kp->solve_iter, VM_PRISM_PHASE_MARCH, &it);
     if (st < 0 || it < kp->solve_iter) break;
@@ -472,7 +722,7 @@ static int orthogonal_solve(vm_prism *p) {
   memcpy(keep, p->lev, nlsz * sizeof *keep);
   for (int attempt = 0; attempt < kp->solve_tries; attempt++) {
     int applied;
-    if ((st = solve_patch(p, ring, &applied)) < 0 || !applied) break;
+    if ((st = solve_patch(p, ring, 0, &applied)) < 0 || !applied) break;
     int64_t worse = 0;
     for (int64_t v = 0; v < nw; v++)
       if (ring[v] >= 0 && p->smooth[v] && tilt[v] <= kp->tilt_limit_deg &&
@@ -487,6 +737,127 @@ done:
   vm_free(ctx, ring);
   vm_free(ctx, tilt);
   vm_free(ctx, keep);
+  return st;
+}
+
+/* Angle in degrees between prism x's bottom normal and the line joining
+ * its bottom and top centroids: the OpenFOAM non-orthogonality of the face
+ * between it and the layer below, nearly. */
+static double prism_lean_deg(const double *x) {
+  double e1[3], e2[3], nb[3], d[3];
+  for (int c = 0; c < 3; c++) {
+    e1[c] = x[3 + c] - x[c];
+    e2[c] = x[6 + c] - x[c];
+    d[c] = (x[9 + c] + x[12 + c] + x[15 + c] - x[c] - x[3 + c] - x[6 + c]) / 3;
+  }
+  vm_cross3(e1, e2, nb);
+  double l = vm_norm3(nb) * vm_norm3(d), cs = l > 0 ? vm_dot3(nb, d) / l : -1;
+  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
+}
+
+/* The final variational smoothing of the layer stack where it leans: the
+ * columns carrying a prism of layers 1..nlev-2 (every layer above the
+ * first, the outermost included) that leans beyond
+ * k.stack_lean_deg (prism_lean_deg), or of the outermost layer whose outer
+ * face is skewed beyond k.skew_limit, and their neighbours up to
+ * k.solve_rings rings move together in one implicit solve of (13) over all
+ * layers of their triangles (solve_patch, every layer's target orthogonal
+ * to its own base with the present side-edge lengths, the first layer's
+ * along the wall normal with weight k.solve_weight; the wall, the outer
+ * surface and every other column fixed; the barrier keeps every prism
+ * valid, and the result is kept only if every node and corner tet is
+ * positive). */
+static int stack_smooth(vm_prism *p) {
+  vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
+  int64_t nw = p->nw, nt = p->nt, nsel = 0;
+  size_t lsz = (size_t)(3 * nw);
+  if (kp->stack_iter <= 0 || pr_time_left(p) <= 0) return VM_OK;
+  int8_t *ring = vm_alloc_array(ctx, (size_t)nw, sizeof *ring);
+  if (!ring) return VM_ERR_NOMEM;
+  memset(ring, -1, (size_t)nw);
+  for (int64_t t = 0; t < nt; t++)
+    for (int k = 1; k < p->nlev - 1; k++) {
+      double x[18];
+      for (int i = 0; i < 3; i++) {
+        memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+        memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
+               3 * sizeof *x);
+      }
+      double cc[3];
+      if (k == p->nlev - 2) foam_cell(x, cc);
+      if (prism_lean_deg(x) > kp->stack_lean_deg ||
+          (k == p->nlev - 2 && foam_boundary_skew(x + 9, 3, cc) > kp->skew_limit)) {
+        for (int i = 0; i < 3; i++) ring[p->tri[3 * t + i]] = 0;
+        break;
+      }
+    }
+  for (int64_t v = 0; v < nw; v++) nsel += ring[v] == 0;
+  for (int r = 0; r < kp->solve_rings; r++)
+    for (int64_t v = 0; v < nw; v++)
+      if (ring[v] == r)
+        for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)
+          if (ring[p->vv[j]] < 0) ring[p->vv[j]] = (int8_t)(r + 1);
+  int applied = 0, st = VM_OK;
+  int64_t nback = 0;
+  size_t nlsz = (size_t)p->nlev * lsz;
+  double *keep = nsel ? vm_alloc_array(ctx, nlsz, sizeof *keep) : NULL;
+  double *sk0 = nsel ? vm_alloc_array(ctx, (size_t)nw, sizeof *sk0) : NULL;
+  uint8_t *back = nsel ? vm_calloc(ctx, (size_t)nw, sizeof *back) : NULL;
+  if (nsel && (!keep || !sk0 || !back)) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  if (nsel) {
+    memcpy(keep, p->lev, nlsz * sizeof *keep);
+    for (int64_t v = 0; v < nw; v++) sk0[v] = ring[v] >= 0 ? column_skew(p, v) : 0;
+    st = solve_patch(p, ring, kp->stack_iter, &applied);
+  }
+  if (st < 0 || !applied) goto done;
+  /* the columns whose cells' faces the solve made skewed beyond
+   * k.skew_limit go back, then those sharing a prism that the mix of old
+   * and new levels leaves invalid, until none is */
+  for (int64_t v = 0; v < nw; v++)
+    if (ring[v] >= 0) {
+      double a = column_skew(p, v);
+      back[v] = a > kp->skew_limit && a > sk0[v];
+    }
+  for (int changed = 1; changed;) {
+    changed = 0;
+    for (int64_t v = 0; v < nw; v++)
+      if (back[v] == 1) {
+        for (int k = 1; k < p->nlev - 1; k++)
+          memcpy(p->lev + k * lsz + 3 * v, keep + k * lsz + 3 * v, 3 * sizeof *keep);
+        back[v] = 2;
+        nback++;
+      }
+    for (int64_t t = 0; t < nt; t++) {
+      const int32_t *c = p->tri + 3 * t;
+      if (!(back[c[0]] == 2 || back[c[1]] == 2 || back[c[2]] == 2)) continue;
+      if (back[c[0]] && back[c[1]] && back[c[2]]) continue;
+      int bad = 0;
+      for (int k = 0; k < p->nlev - 1 && !bad; k++) {
+        double x[18];
+        int inv;
+        prism_at(p, t, k, x);
+        pr_prism_corner_quality(x, &inv);
+        bad = inv || !(pr_prism_quality(x) > 0);
+      }
+      if (bad)
+        for (int i = 0; i < 3; i++)
+          if (!back[c[i]]) {
+            back[c[i]] = 1;
+            changed = 1;
+          }
+    }
+  }
+done:
+  vm_log(ctx, VM_LOG_INFO, "prism: stack smoothing of %lld leaning columns%s, %lld put back",
+         (long long)nsel, nsel && !applied ? " not applied" : "", (long long)nback);
+  vm_free(ctx, keep);
+  vm_free(ctx, sk0);
+  vm_free(ctx, back);
+  vm_free(ctx, ring);
   return st;
 }
 
@@ -635,6 +1006,12 @@ int vm_prism_march(vm_prism *p) {
   }
   memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
   p->nlev = made + 1;
+  if (p->nlev > 2 && (st = stack_smooth(p)) < 0) goto done;
+  if (p->nlev > 2) {
+    int64_t nr = 0;
+    if ((st = redistribute_columns(p, &nr)) < 0) goto done;
+    vm_log(ctx, VM_LOG_INFO, "prism: %lld columns put back on the schedule", (long long)nr);
+  }
   if (p->nlev > 2 && (st = orthogonal_first_level(p)) < 0) goto done;
   if (p->nlev > 2 && (st = orthogonal_solve(p)) < 0) goto done;
   /* the paper's option: drop a skewed outermost remainder */

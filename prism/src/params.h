@@ -177,6 +177,22 @@ typedef struct pr_params {
                                  the 5 degree target */
   double ortho_high_ratio;    /* 0.5: a first level more than twice as high as
                                  its neighbours' mean is lowered to it */
+  double redistribute_tol;    /* 0.05: a column whose levels are all within 5 %
+                                 of their layer's scheduled height of the
+                                 schedule's place is left as it is */
+  double redistribute_qshare; /* 0.1: ... and whose prisms stay above a tenth
+                                 of their quality before (a fan's wedge prism
+                                 starts near 0.03 and loses more than half of
+                                 it as its long first level comes down) */
+  double skew_limit;          /* 3.6: the stack smoothing and the columns put
+                                 on the schedule may not raise OpenFOAM's
+                                 skewness of a face above this (checkMesh
+                                 fails at 4) */
+  double stack_lean_deg;      /* 45: a prism of layers 1..n-1 whose centroids'
+                                 line leans beyond this from its base normal
+                                 sends its columns to the stack smoothing */
+  int stack_iter;             /* 20: implicit iterations of the stack
+                                 smoothing */
   double tilt_solve_deg;      /* 4.5: smooth columns tilted beyond this go to the
                                  patch solve */
   int solve_rings;            /* 2: rings of neighbours moving with them */
@@ -248,6 +264,11 @@ static inline pr_params pr_params_default(void) {
       .ortho_passes = 4,
       .ortho_lean_deg = 4.5,
       .ortho_high_ratio = 0.5,
+      .redistribute_tol = 0.05,
+      .redistribute_qshare = 0.1,
+      .skew_limit = 3.6,
+      .stack_lean_deg = 45,
+      .stack_iter = 20,
       .tilt_solve_deg = 4.5,
       .solve_rings = 2,
       .solve_weight = 1e4,

@@ -1,0 +1,250 @@
+/* test/prism/test_prism_foam.c: the layer's cells as a finite-volume solver
+ * sees them, on the coarsest demo aircraft (resolution 1, T = 5 % of its
+ * length, 20 layers, growth 1.2: vm-prism's defaults). Face and cell
+ * centres are OpenFOAM's (face: area-weighted centroids of the triangles
+ * fanned around the vertex mean; cell: volume-weighted centroids of the
+ * pyramids on its faces around the face-centre mean), the
+ * non-orthogonality of an internal face the angle between its area vector
+ * and the line joining the two cell centres, as checkMesh prints it.
+ *
+ * The lateral faces of thin cells inherit the wall triangulation's own
+ * non-orthogonality (the angle between the line joining two adjacent
+ * triangles' centroids and the normal of their common edge in the
+ * surface): on this wall 274 edges are beyond 70 degrees, so no layer on
+ * it passes checkMesh's 70 degrees. What the prism stage answers for is
+ * counted (figures from the STL written by vm-gen): faces between layers
+ * beyond 70 degrees (690 before the stack smoothing and the columns put
+ * back on the schedule, 135 after) and lateral faces beyond 70 degrees
+ * over wall edges within 65 degrees (765 before, 275 after); the
+ * skewness of every internal face below checkMesh's 4 (3.58, which the
+ * wall's triangulation decides); the largest ratio of successive heights
+ * (19.4 before, 8.5 after); no inverted corner tet, the wall
+ * bit-identical. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "support/check_prism.h"
+#include "varmesh/aircraft.h"
+#include "varmesh/prism.h"
+#include "vmtest.h"
+
+static const double PI = 3.14159265358979323846;
+
+/* OpenFOAM's face centre c and area vector s of polygon x (n vertices). */
+static void face_geom(const double (*x)[3], int n, double *c, double *s) {
+  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) pc[k] += x[i][k] / n;
+  for (int k = 0; k < 3; k++) s[k] = 0;
+  for (int i = 0; i < n; i++) {
+    const double *a = x[i], *b = x[(i + 1) % n];
+    double u[3], w[3], nn[3];
+    chk_sub(b, a, u);
+    chk_sub(pc, a, w);
+    chk_cross(u, w, nn);
+    double an = sqrt(chk_dot(nn, nn));
+    for (int k = 0; k < 3; k++) {
+      s[k] += 0.5 * nn[k];
+      sc[k] += an * (a[k] + b[k] + pc[k]);
+    }
+    sa += an;
+  }
+  for (int k = 0; k < 3; k++) c[k] = sa > 0 ? sc[k] / (3 * sa) : pc[k];
+}
+
+/* The five faces of prism x (6 vertices): bottom, top, three quads. */
+static const int prism_face[5][4] = {
+    {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
+
+/* OpenFOAM's cell centre of prism x. */
+static void cell_centre(const double (*x)[3], double *cc) {
+  double fc[5][3], fs[5][3], est[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double p[4][3];
+    int n = prism_face[f][3] < 0 ? 3 : 4;
+    for (int i = 0; i < n; i++) memcpy(p[i], x[prism_face[f][i]], sizeof p[i]);
+    face_geom((const double(*)[3])p, n, fc[f], fs[f]);
+    for (int k = 0; k < 3; k++) est[k] += fc[f][k] / 5;
+  }
+  double sv = 0, s[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double d[3];
+    chk_sub(fc[f], est, d);
+    double v = fabs(chk_dot(fs[f], d));
+    for (int k = 0; k < 3; k++) s[k] += v * (0.75 * fc[f][k] + 0.25 * est[k]);
+    sv += v;
+  }
+  for (int k = 0; k < 3; k++) cc[k] = sv > 0 ? s[k] / sv : est[k];
+}
+
+/* OpenFOAM's skewness of face x (n vertices) between cells with centres
+ * cp and cn: the distance from the face centre to where the line joining
+ * the centres meets the face, over the face's extent that way (at least
+ * a fifth of the centres' distance). */
+static double skewness(const double (*x)[3], int n, const double *cp, const double *cn) {
+  double c[3], s[3], d[3], e[3], sv[3];
+  face_geom(x, n, c, s);
+  chk_sub(cn, cp, d);
+  chk_sub(c, cp, e);
+  double sd = chk_dot(s, d);
+  for (int k = 0; k < 3; k++) sv[k] = e[k] - chk_dot(s, e) / sd * d[k];
+  double l = sqrt(chk_dot(sv, sv)), fd = 0.2 * sqrt(chk_dot(d, d));
+  for (int i = 0; i < n && l > 0; i++) {
+    double u[3];
+    chk_sub(x[i], c, u);
+    double a = fabs(chk_dot(sv, u)) / l;
+    fd = a > fd ? a : fd;
+  }
+  return l / fd;
+}
+
+/* Non-orthogonality in degrees of face x (n vertices) between cells with
+ * centres cp and cn. */
+static double non_ortho(const double (*x)[3], int n, const double *cp, const double *cn) {
+  double c[3], s[3], d[3], e[3];
+  face_geom(x, n, c, s);
+  chk_sub(cn, cp, d);
+  chk_sub(c, cp, e);
+  double sg = chk_dot(s, e) < 0 ? -1 : 1;
+  double l = sqrt(chk_dot(s, s) * chk_dot(d, d));
+  double cs = l > 0 ? sg * chk_dot(s, d) / l : -1;
+  return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PI;
+}
+
+/* Edges (lower vertex, higher vertex, triangle) in lexicographic order. */
+static int edge_cmp(const void *p, const void *q) {
+  const int64_t *a = p, *b = q;
+  for (int i = 0; i < 3; i++)
+    if (a[i] != b[i]) return a[i] < b[i] ? -1 : 1;
+  return 0;
+}
+
+int main(void) {
+  vm_ctx *ctx = NULL;
+  CHECK(vm_ctx_create(&ctx) == 0, "context");
+  vm_aircraft_opts ao = vm_aircraft_opts_default();
+  ao.resolution = 1;
+  vm_mesh *w = NULL;
+  CHECK(vm_gen_aircraft(ctx, &ao, &w) == 0, "aircraft: %s", vm_ctx_error(ctx));
+  if (!w) return vmtest_end("prism_foam");
+  vm_prism_opts o = vm_prism_opts_default();
+  o.thickness = 0.05 * ao.length;
+  o.nlayers = 20;
+  o.growth = 1.2;
+  vm_prism_report r;
+  vm_mesh *m = NULL;
+  int st = vm_prism_run(ctx, w, &o, &m, &r);
+  CHECK(st == 0 && m, "run: %d %s", st, vm_ctx_error(ctx));
+  if (!m) {
+    vm_mesh_destroy(&w);
+    vm_ctx_destroy(&ctx);
+    return vmtest_end("prism_foam");
+  }
+  int64_t nw = w->nv, nt = r.wall_triangles, nl = r.layers;
+  CHECK(nl == 20, "%lld layers", (long long)nl);
+  CHECK(!memcmp(m->xyz, w->xyz, sizeof(double) * 3 * (size_t)nw), "the wall moved");
+  CHECK(chk_corner_inverted(m) == 0, "inverted corner tets");
+  /* wall triangles: the bottoms of layer 0's prisms */
+  int32_t *tri = malloc(sizeof *tri * 3 * (size_t)nt);
+  double(*cc)[3] = malloc(sizeof *cc * (size_t)(nt * nl));
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++) tri[3 * t + i] = m->conn[m->eoff[t] + i];
+  for (int64_t e = 0; e < nt * nl; e++) {
+    double x[6][3];
+    for (int i = 0; i < 6; i++)
+      memcpy(x[i], m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + i], sizeof x[i]);
+    cell_centre((const double(*)[3])x, cc[e]);
+  }
+  /* faces between layers */
+  int64_t between = 0, lateral = 0, lateral_wall = 0, wall_bad = 0;
+  double between_max = 0, skew_max = 0;
+  for (int64_t k = 0; k + 1 < nl; k++)
+    for (int64_t t = 0; t < nt; t++) {
+      double x[3][3];
+      for (int i = 0; i < 3; i++)
+        memcpy(x[i], m->xyz + 3 * ((k + 1) * nw + tri[3 * t + i]), sizeof x[i]);
+      double a = non_ortho((const double(*)[3])x, 3, cc[k * nt + t], cc[(k + 1) * nt + t]);
+      between += a > 70;
+      double q = skewness((const double(*)[3])x, 3, cc[k * nt + t], cc[(k + 1) * nt + t]);
+      skew_max = q > skew_max ? q : skew_max;
+      between_max = a > between_max ? a : between_max;
+    }
+  /* lateral faces: the wall's edges, each with its two triangles (found by
+   * a sort of the directed edges: a closed manifold wall) */
+  int64_t ne = 3 * nt;
+  int64_t(*ed)[3] = malloc(sizeof *ed * (size_t)ne);
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++) {
+      int64_t a = tri[3 * t + i], b = tri[3 * t + (i + 1) % 3];
+      ed[3 * t + i][0] = a < b ? a : b;
+      ed[3 * t + i][1] = a < b ? b : a;
+      ed[3 * t + i][2] = t;
+    }
+  qsort(ed, (size_t)ne, sizeof *ed, edge_cmp);
+  for (int64_t j = 0; j + 1 < ne; j++) {
+    if (ed[j][0] != ed[j + 1][0] || ed[j][1] != ed[j + 1][1]) continue;
+    int64_t a = ed[j][0], b = ed[j][1], t1 = ed[j][2], t2 = ed[j + 1][2];
+    /* the wall's own non-orthogonality at this edge */
+    double c1[3] = {0, 0, 0}, c2[3] = {0, 0, 0}, n1[3], n2[3], u[3], v[3], s[3], d[3], nn[3];
+    for (int i = 0; i < 3; i++)
+      for (int c = 0; c < 3; c++) {
+        c1[c] += w->xyz[3 * tri[3 * t1 + i] + c] / 3;
+        c2[c] += w->xyz[3 * tri[3 * t2 + i] + c] / 3;
+      }
+    chk_sub(w->xyz + 3 * tri[3 * t1 + 1], w->xyz + 3 * tri[3 * t1], u);
+    chk_sub(w->xyz + 3 * tri[3 * t1 + 2], w->xyz + 3 * tri[3 * t1], v);
+    chk_cross(u, v, n1);
+    chk_sub(w->xyz + 3 * tri[3 * t2 + 1], w->xyz + 3 * tri[3 * t2], u);
+    chk_sub(w->xyz + 3 * tri[3 * t2 + 2], w->xyz + 3 * tri[3 * t2], v);
+    chk_cross(u, v, n2);
+    double l1 = sqrt(chk_dot(n1, n1)), l2 = sqrt(chk_dot(n2, n2));
+    for (int c = 0; c < 3; c++) nn[c] = n1[c] / l1 + n2[c] / l2;
+    chk_sub(w->xyz + 3 * b, w->xyz + 3 * a, u);
+    chk_cross(u, nn, s);
+    chk_sub(c2, c1, d);
+    double cs = fabs(chk_dot(s, d)) / sqrt(chk_dot(s, s) * chk_dot(d, d));
+    double wall_angle = acos(cs > 1 ? 1 : cs) * 180 / PI;
+    wall_bad += wall_angle > 70;
+    for (int64_t k = 0; k < nl; k++) {
+      double x[4][3];
+      memcpy(x[0], m->xyz + 3 * (k * nw + a), sizeof x[0]);
+      memcpy(x[1], m->xyz + 3 * (k * nw + b), sizeof x[1]);
+      memcpy(x[2], m->xyz + 3 * ((k + 1) * nw + b), sizeof x[2]);
+      memcpy(x[3], m->xyz + 3 * ((k + 1) * nw + a), sizeof x[3]);
+      double ang = non_ortho((const double(*)[3])x, 4, cc[k * nt + t1], cc[k * nt + t2]);
+      double q = skewness((const double(*)[3])x, 4, cc[k * nt + t1], cc[k * nt + t2]);
+      skew_max = q > skew_max ? q : skew_max;
+      if (ang > 70) {
+        if (wall_angle <= 65)
+          lateral++;
+        else
+          lateral_wall++;
+      }
+    }
+  }
+  fprintf(stderr,
+          "coarse aircraft: faces between layers beyond 70 degrees %lld (max %.1f); lateral "
+          "faces beyond 70 degrees %lld over wall edges within 65, %lld over the %lld wall "
+          "edges beyond 70; max skewness %.2f; max growth %.2f; full %.3f; min SJ %.4f\n",
+          (long long)between, between_max, (long long)lateral, (long long)lateral_wall,
+          (long long)wall_bad, skew_max, r.growth_max, r.full_fraction, r.sj_min);
+  CHECK(between <= 200, "%lld faces between layers beyond 70 degrees (690 before)",
+        (long long)between);
+  CHECK(lateral <= 400, "%lld lateral faces beyond 70 degrees over fair wall edges (765 before)",
+        (long long)lateral);
+  CHECK(skew_max < 4, "max skewness %.2f (checkMesh fails at 4)", skew_max);
+  CHECK(r.growth_max <= 10, "max growth %.2f (19.4 before from its STL, 4.5 after)", r.growth_max);
+  CHECK(r.full_fraction >= 0.98, "%.3f of the columns at full thickness", r.full_fraction);
+  CHECK(r.normal_dev_over5 == 0, "%lld smooth columns beyond 5 degrees",
+        (long long)r.normal_dev_over5);
+  free(ed);
+  free(tri);
+  free(cc);
+  vm_mesh_destroy(&m);
+  vm_mesh_destroy(&w);
+  CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));
+  vm_ctx_destroy(&ctx);
+  return vmtest_end("prism_foam");
+}
