@@ -37,7 +37,7 @@ expect 0 "" "$quality" -q --verify "$tmp/hex.vmsh"
 expect 0 "" "$quality" -q --verify --rule geometric "$tmp/hex.vmsh"
 expect 0 "" "$quality" -q --verify "$tmp/hex.vtu"
 expect 0 "" "$quality" -q --verify --rule geometric "$tmp/mixed.msh"
-grep -q "^verify: every quadrature simplex (geometric rule) positively oriented; prism layer" \
+grep -q "^verify: every quadrature simplex (geometric rule) positively oriented (exact), every cell certified det J > 0; prism layer" \
   "$tmp/out" || { echo "FAIL: no verify line for mixed.msh" >&2; fail=1; }
 expect 0 "" "$quality" -q --verify --json "$tmp/tets.vmsh"
 python3 -m json.tool "$tmp/out" >/dev/null || { echo "FAIL: --verify --json: not JSON" >&2; fail=1; }
