@@ -91,6 +91,24 @@ static int same_face(const tface *a, const tface *b) {
   return a->v[0] == b->v[0] && a->v[1] == b->v[1] && a->v[2] == b->v[2];
 }
 
+/* Index of the triangle tri (any vertex order) in f[0..n) sorted by
+ * cmp_tface, or -1. */
+static int64_t find_face(const tface *f, int64_t n, const int32_t *tri) {
+  tface key;
+  memcpy(key.v, tri, sizeof key.v);
+  sort3(key.v);
+  key.cell = -1;
+  int64_t lo = 0, hi = n;
+  while (lo < hi) {
+    int64_t mid = (lo + hi) / 2;
+    if (cmp_tface(&f[mid], &key) < 0)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < n && same_face(&f[lo], &key) ? lo : -1;
+}
+
 /* ---------- cell volumes and tet angles ---------- */
 
 static double tet_vol(const double *a, const double *b, const double *c, const double *d) {
@@ -432,7 +450,8 @@ static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
   int32_t outer = ph && ph->type == VM_FIELD_I32 && ph->ncomp == 1 ? tag_named(m, "outer") : -1;
   uint8_t *pick = vm_calloc(ctx, (size_t)(nb + 1), 1);
   tface *bf = vm_alloc_array(ctx, (size_t)(nb + 1), sizeof *bf);
-  if (!pick || !bf) {
+  int32_t *fel = vm_alloc_array(ctx, (size_t)(nb + 1), sizeof *fel);
+  if (!pick || !bf || !fel) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -447,6 +466,7 @@ static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
     bf[f].cell = (int32_t)f;
   }
   qsort(bf, (size_t)nb, sizeof *bf, cmp_tface);
+  for (int64_t f = 0; f < nb; f++) fel[f] = -1;
   int64_t npick = 0;
   if (outer >= 0) {
     const int32_t *tag = ph->data;
@@ -456,22 +476,12 @@ static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
         nq++;
         continue;
       }
-      tface key;
-      memcpy(key.v, m->conn + m->eoff[e], sizeof key.v);
-      sort3(key.v);
-      key.cell = -1;
-      /* binary search for the vertex set */
-      int64_t lo = 0, hi = nb;
-      while (lo < hi) {
-        int64_t mid = (lo + hi) / 2;
-        if (cmp_tface(&bf[mid], &key) < 0)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      if (lo < nb && same_face(&bf[lo], &key)) {
-        if (!pick[bf[lo].cell]) npick++;
-        pick[bf[lo].cell] = 1;
+      int64_t i = find_face(bf, nb, m->conn + m->eoff[e]);
+      if (i >= 0) {
+        int32_t f = bf[i].cell;
+        if (!pick[f]) npick++;
+        pick[f] = 1;
+        fel[f] = (int32_t)e; /* the face's own element: interior after the fill */
       } else {
         st = vm_error(ctx, VM_ERR_FORMAT,
                       "element %lld: a triangle named 'outer' that is not a boundary face of "
@@ -547,42 +557,11 @@ static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
   for (int64_t f = 0; f < nb; f++) {
     if (!pick[f]) continue;
     memcpy(E->fv + 3 * k, bfv + 4 * f, 3 * sizeof(int32_t));
-    E->felem[k++] = -1;
-  }
-  /* the envelope's own triangle elements (they become interior) */
-  if (outer >= 0) {
-    const int32_t *tag = ph->data;
-    tface *ef = vm_alloc_array(ctx, (size_t)npick, sizeof *ef);
-    if (!ef) {
-      st = VM_ERR_NOMEM;
-      goto done;
-    }
-    for (int64_t i = 0; i < npick; i++) {
-      memcpy(ef[i].v, E->fv + 3 * i, sizeof ef[i].v);
-      sort3(ef[i].v);
-      ef[i].cell = (int32_t)i;
-    }
-    qsort(ef, (size_t)npick, sizeof *ef, cmp_tface);
-    for (int64_t e = 0; e < m->ne; e++) {
-      if (m->etype[e] != VM_TRI || tag[e] != outer) continue;
-      tface key;
-      memcpy(key.v, m->conn + m->eoff[e], sizeof key.v);
-      sort3(key.v);
-      key.cell = -1;
-      int64_t lo = 0, hi = npick;
-      while (lo < hi) {
-        int64_t mid = (lo + hi) / 2;
-        if (cmp_tface(&ef[mid], &key) < 0)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      if (lo < npick && same_face(&ef[lo], &key)) E->felem[ef[lo].cell] = (int32_t)e;
-    }
-    vm_free(ctx, ef);
+    E->felem[k++] = fel[f];
   }
 done:
   vm_free(ctx, pick);
+  vm_free(ctx, fel);
   vm_free(ctx, bf);
   vm_free(ctx, bfv);
   vm_free(ctx, bnv);
