@@ -522,6 +522,135 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
   return VM_OK;
 }
 
+/* Are the prisms of every layer around column v free of inverted corner
+ * tets and at or above quality `floor`? */
+static int column_valid(const vm_prism *p, int64_t v, double floor) {
+  int nl = p->nlev - 1;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+    for (int k = 0; k < nl; k++) {
+      double x[18];
+      int inv;
+      prism_at(p, p->vt[j], k, x);
+      pr_prism_corner_quality(x, &inv);
+      if (inv || !(pr_prism_quality(x) >= floor)) return 0;
+    }
+  return 1;
+}
+
+/* Skewness relief where a column's cells stay skewed beyond k.skew_limit:
+ * at a sharp trailing edge the side face between the last prisms of the
+ * upper and the lower surface is a strip as wide as the first layers are
+ * high, while the cells' centres sit a third of the wall triangle's chord
+ * upstream of it, so OpenFOAM's skewness of that face is about the
+ * triangle's size over the layer's height (16 on the demo aircraft). The
+ * column's levels 1..nlev-2 move along its own polyline (its course, the
+ * wall and the outer surface stay as they are) to the shares
+ * frac_k^gamma of its length, gamma < 1 thickening its first layers, which
+ * widens the strip and draws the cells' centres towards it (gamma > 1,
+ * thinning them, helps where a column stands in a concave corner). The gamma of
+ * k.relief_gamma giving the smallest skewness of the column's cells is
+ * kept if it lowers that skewness and every prism around the column stays
+ * valid above min(k.ortho_qmin, k.redistribute_qshare of its quality
+ * before); k.relief_sweeps sweeps over the columns, in vertex order (a
+ * trailing edge's two columns share the strip). Counts the columns moved
+ * and the largest column skewness before and after. */
+static int skew_relief(vm_prism *p, int64_t *count, double *before, double *after) {
+  int64_t nw = p->nw, moved = 0;
+  int nl = p->nlev - 1, n = p->rep.layers_requested;
+  size_t lsz = (size_t)(3 * nw);
+  double tot = 0;
+  *count = 0;
+  *before = *after = 0;
+  if (nl < 2) return VM_OK;
+  double *sk = vm_alloc_array(p->ctx, (size_t)nw, sizeof *sk);
+  double *frac = vm_alloc_array(p->ctx, (size_t)(5 * (nl + 1)), sizeof *frac);
+  if (!sk || !frac) {
+    vm_free(p->ctx, sk);
+    vm_free(p->ctx, frac);
+    return VM_ERR_NOMEM;
+  }
+  double *arc = frac + nl + 1, *old = arc + nl + 1;
+  for (int k = 0; k < n; k++) tot += p->sched[k];
+  frac[0] = 0;
+  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
+  for (int64_t v = 0; v < nw; v++) {
+    sk[v] = column_skew(p, v);
+    *before = sk[v] > *before ? sk[v] : *before;
+  }
+  const int ng = (int)(sizeof p->k.relief_gamma / sizeof *p->k.relief_gamma);
+  for (int sweep = 0; sweep < p->k.relief_sweeps; sweep++) {
+    int64_t moved_now = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (!(sk[v] > p->k.skew_limit)) continue;
+      if (pr_time_left(p) <= 0) break;
+      double s0 = column_skew(p, v), best = s0, q0 = INFINITY;
+      int bestg = -1;
+      if (!(s0 > p->k.skew_limit)) {
+        sk[v] = s0;
+        continue;
+      }
+      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+        double q = layers_quality(p, p->vt[j], 0, nl - 1);
+        q0 = q < q0 ? q : q0;
+      }
+      double floor = quality_floor(p, q0, p->k.redistribute_qshare);
+      arc[0] = 0;
+      for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
+      for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
+      if (!(arc[nl] > 0)) continue;
+      for (int g = 0; g < ng; g++) {
+        double gamma = p->k.relief_gamma[g];
+        if (!(gamma > 0)) continue;
+        for (int k = 1, s = 0; k < nl; k++) {
+          double a = pow(frac[k], gamma) * arc[nl];
+          while (s + 1 < nl && arc[s + 1] < a) s++;
+          double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
+          u = u < 0 ? 0 : u > 1 ? 1 : u;
+          for (int c = 0; c < 3; c++)
+            p->lev[k * lsz + 3 * v + c] =
+                old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
+        }
+        if (!column_valid(p, v, floor)) continue;
+        double s1 = column_skew(p, v);
+        if (s1 < best * (1 - 1e-3)) {
+          best = s1;
+          bestg = g;
+        }
+      }
+      if (bestg >= 0) {
+        double gamma = p->k.relief_gamma[bestg];
+        for (int k = 1, s = 0; k < nl; k++) {
+          double a = pow(frac[k], gamma) * arc[nl];
+          while (s + 1 < nl && arc[s + 1] < a) s++;
+          double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
+          u = u < 0 ? 0 : u > 1 ? 1 : u;
+          for (int c = 0; c < 3; c++)
+            p->lev[k * lsz + 3 * v + c] =
+                old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
+        }
+        moved_now++;
+        /* the neighbours' cells changed with this column's */
+        for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)
+          sk[p->vv[j]] = column_skew(p, p->vv[j]);
+        sk[v] = best;
+      } else {
+        for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
+        sk[v] = s0;
+      }
+    }
+    moved += moved_now;
+    if (!moved_now) break;
+  }
+  for (int64_t v = 0; v < nw; v++) {
+    double s = sk[v] > p->k.skew_limit ? column_skew(p, v) : sk[v];
+    *after = s > *after ? s : *after;
+  }
+  vm_free(p->ctx, sk);
+  vm_free(p->ctx, frac);
+  *count = moved;
+  return VM_OK;
+}
+
 /* Tilt of column v's first side edge from its wall normal, in degrees. */
 static double first_tilt(const vm_prism *p, int64_t v) {
   return pr_tilt_deg(p->wall + 3 * v, p->lev + 3 * (p->nw + v), p->vnrm + 3 * v);
@@ -1014,6 +1143,14 @@ int vm_prism_march(vm_prism *p) {
   }
   if (p->nlev > 2 && (st = orthogonal_first_level(p)) < 0) goto done;
   if (p->nlev > 2 && (st = orthogonal_solve(p)) < 0) goto done;
+  if (p->nlev > 2) {
+    int64_t nr = 0;
+    double s0 = 0, s1 = 0;
+    if ((st = skew_relief(p, &nr, &s0, &s1)) < 0) goto done;
+    vm_log(ctx, VM_LOG_INFO,
+           "prism: skewness relief: %lld columns re-spaced; largest OpenFOAM skewness %.3g -> %.3g",
+           (long long)nr, s0, s1);
+  }
   /* the paper's option: drop a skewed outermost remainder */
   if (p->o.drop_quality > 0 && p->nlev > 2 &&
       level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz, p->lev + (size_t)(p->nlev - 1) * lsz) <

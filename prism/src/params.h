@@ -188,6 +188,12 @@ typedef struct pr_params {
                                  on the schedule may not raise OpenFOAM's
                                  skewness of a face above this (checkMesh
                                  fails at 4) */
+  double relief_gamma[10];    /* {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1,
+                                1.25, 1.6}: exponents
+                                tried by the skewness relief (level k of a
+                                skewed column at the share frac_k^gamma of
+                                its length) */
+  int relief_sweeps;          /* 3: sweeps of the skewness relief */
   double stack_lean_deg;      /* 45: a prism of layers 1..n-1 whose centroids'
                                  line leans beyond this from its base normal
                                  sends its columns to the stack smoothing */
@@ -267,6 +273,8 @@ static inline pr_params pr_params_default(void) {
       .redistribute_tol = 0.05,
       .redistribute_qshare = 0.1,
       .skew_limit = 3.6,
+      .relief_gamma = {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1, 1.25, 1.6},
+      .relief_sweeps = 3,
       .stack_lean_deg = 45,
       .stack_iter = 20,
       .tilt_solve_deg = 4.5,
