@@ -116,7 +116,8 @@ static const vm_cli_spec spec = {
     "'mean_curvature' and 'mean_curvature_filtered').\n",
     opts,
     "exit: 0 done; 1 bad input (what is wrong and where is printed) or I/O; 2 usage;\n"
-    "3 the adapted mesh has flipped elements; 4 interrupted (last iterate written)\n",
+    "3 the result has flipped elements or intersects itself (checked exactly; written);\n"
+    "4 interrupted (last iterate written)\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
@@ -194,6 +195,10 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     vm_json_double(stdout, ar->elapsed);
     printf("}");
   }
+  printf(", \"self_intersections\": %lld, \"remesh_refused_pairs\": %lld, "
+         "\"folds_found\": %lld, \"backed_off_vertices\": %lld",
+         (long long)s->self_intersections, (long long)s->remesh_refused, (long long)s->folds_found,
+         (long long)s->adapt_backed_off);
   printf(", \"min_angle\": ");
   vm_json_double(stdout, vm_surface_min_angle(m));
   printf(", \"time\": ");
@@ -229,6 +234,14 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        "max distance to the input %g; %.2f s",
                        ar->iterations, ar->rounds, ar->stop, ar->F_initial, ar->F, ar->c,
                        (long long)ar->flipped, ar->max_distance, ar->elapsed);
+  if (st >= 0)
+    st = vm_report_row(*report, "exact check of the result",
+                       "%lld intersecting triangle pairs%s; remeshing given up: %s; folds of "
+                       "the adaptation taken back: %lld pairs, %lld vertices",
+                       (long long)s->self_intersections,
+                       s->self_intersections < 0 ? " (not checked: quads)" : "",
+                       s->remesh_refused ? "yes" : "no", (long long)s->folds_found,
+                       (long long)s->adapt_backed_off);
   if (st >= 0)
     st = vm_report_row(*report, "smallest angle: input, output", "%.2f, %.2f deg",
                        s->min_angle_input, vm_surface_min_angle(m));
@@ -300,9 +313,9 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INPUT;
     goto done;
   }
-  rc = s.adapted && s.adapt.flipped > 0 ? VM_EXIT_CHECK
-       : st == VM_ERR_INTERRUPTED       ? VM_EXIT_INTERRUPTED
-                                        : VM_EXIT_OK;
+  rc = (s.adapted && s.adapt.flipped > 0) || s.self_intersections > 0 ? VM_EXIT_CHECK
+       : st == VM_ERR_INTERRUPTED                                     ? VM_EXIT_INTERRUPTED
+                                                                      : VM_EXIT_OK;
   if (vm_mesh_write(cli.ctx, m, a.out, a.fout, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;

@@ -7,6 +7,7 @@
 
 #include "varmesh/features.h"
 #include "varmesh/project.h"
+#include "vec3.h"
 
 vm_surface_opts vm_surface_opts_default(void) {
   vm_surface_opts o;
@@ -159,6 +160,145 @@ static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
   return st < 0 ? st : ar->flipped > 0 ? VM_WARN_INVERTED : VM_OK;
 }
 
+/* Is m made of triangles only (what the exact self-intersection test takes)? */
+static int all_triangles(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (m->etype[e] != VM_TRI) return 0;
+  return m->ne > 0;
+}
+
+/* Exact count of m's intersecting triangle pairs (vm_surface_self_intersections)
+ * and, if where != NULL, a point of the first pair (the first triangle's
+ * centroid). */
+static int count_pairs(vm_mesh *m, int64_t *count, int32_t **pairs, double *where) {
+  int32_t *pp = NULL;
+  int st = vm_surface_self_intersections(m, count, &pp);
+  if (st < 0) return st;
+  if (where && *count > 0) {
+    const int32_t *c = m->conn + m->eoff[pp[0]];
+    for (int r = 0; r < 3; r++)
+      where[r] = (m->xyz[3 * (int64_t)c[0] + r] + m->xyz[3 * (int64_t)c[1] + r] +
+                  m->xyz[3 * (int64_t)c[2] + r]) /
+                 3;
+  }
+  if (pairs)
+    *pairs = pp;
+  else
+    vm_free(m->ctx, pp);
+  return VM_OK;
+}
+
+/* Signed doubled-area normal of 2D element e at x. */
+static void elem_normal(const vm_mesh *m, const double *x, int64_t e, double n[3]) {
+  int k = vm_elem_nverts(m->etype[e]);
+  const int32_t *c = m->conn + m->eoff[e];
+  n[0] = n[1] = n[2] = 0;
+  for (int a = 0; a < k; a++) {
+    double cr[3];
+    vm_cross3(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k], cr);
+    for (int r = 0; r < 3; r++) n[r] += cr[r];
+  }
+}
+
+/* vm_surface_unfold (surface.h): rounds of 1, 2, 4 and 8 rings. */
+int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
+  if (!m || !x0 || !s) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  s->self_intersections = -1;
+  if (!all_triangles(m)) return VM_OK;
+  int64_t n = 0, nv = m->nv;
+  int32_t *pairs = NULL;
+  int st = count_pairs(m, &n, &pairs, s->fold_at);
+  if (st < 0) return st;
+  int64_t flipped = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    double a[3], b[3];
+    elem_normal(m, m->xyz, e, a);
+    elem_normal(m, x0, e, b);
+    flipped += vm_dot3(a, b) <= 0;
+  }
+  s->self_intersections = n;
+  if (n == 0 && flipped == 0) {
+    vm_free(ctx, pairs);
+    return VM_OK;
+  }
+  s->folds_found = n;
+  /* the surface before: is it free of pairs itself? */
+  vm_mesh *before = NULL;
+  int64_t n0 = 0;
+  st = vm_mesh_clone(m, &before);
+  if (!st) memcpy(before->xyz, x0, 3 * (size_t)nv * sizeof *x0);
+  if (!st) st = count_pairs(before, &n0, NULL, NULL);
+  vm_mesh_destroy(&before);
+  if (st < 0 || n0 > 0) {
+    vm_free(ctx, pairs);
+    return st;
+  }
+  uint8_t *mark = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *mark);
+  uint8_t *next = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *next);
+  if (!mark || !next) {
+    vm_free(ctx, mark);
+    vm_free(ctx, next);
+    vm_free(ctx, pairs);
+    return VM_ERR_NOMEM;
+  }
+  static const int rings[] = {1, 2, 4, 8};
+  for (int round = 0; round < 4 && (n > 0 || flipped > 0); round++) {
+    /* seeds: the offending elements' vertices */
+    for (int64_t i = 0; i < 2 * n; i++) {
+      const int32_t *c = m->conn + m->eoff[pairs[i]];
+      for (int a = 0; a < 3; a++) mark[c[a]] = 1;
+    }
+    for (int64_t e = 0; e < m->ne; e++) {
+      double a[3], b[3];
+      elem_normal(m, m->xyz, e, a);
+      elem_normal(m, x0, e, b);
+      if (vm_dot3(a, b) > 0) continue;
+      const int32_t *c = m->conn + m->eoff[e];
+      for (int k = 0; k < vm_elem_nverts(m->etype[e]); k++) mark[c[k]] = 1;
+    }
+    /* rings of neighbours, through the elements */
+    for (int r = 0; r < rings[round]; r++) {
+      memcpy(next, mark, (size_t)nv);
+      for (int64_t e = 0; e < m->ne; e++) {
+        const int32_t *c = m->conn + m->eoff[e];
+        int k = vm_elem_nverts(m->etype[e]), any = 0;
+        for (int a = 0; a < k; a++) any |= mark[c[a]];
+        if (any)
+          for (int a = 0; a < k; a++) next[c[a]] = 1;
+      }
+      memcpy(mark, next, (size_t)nv);
+    }
+    for (int64_t v = 0; v < nv; v++)
+      if (mark[v]) memcpy(m->xyz + 3 * v, x0 + 3 * v, 3 * sizeof *x0);
+    vm_free(ctx, pairs);
+    pairs = NULL;
+    if ((st = count_pairs(m, &n, &pairs, s->fold_at)) < 0) break;
+    flipped = 0;
+    for (int64_t e = 0; e < m->ne; e++) {
+      double a[3], b[3];
+      elem_normal(m, m->xyz, e, a);
+      elem_normal(m, x0, e, b);
+      flipped += vm_dot3(a, b) <= 0;
+    }
+  }
+  s->adapt_backed_off = 0;
+  for (int64_t v = 0; v < nv; v++) s->adapt_backed_off += mark[v];
+  s->self_intersections = n;
+  s->adapt.flipped = flipped;
+  vm_free(ctx, mark);
+  vm_free(ctx, next);
+  vm_free(ctx, pairs);
+  if (st < 0) return st;
+  vm_log(ctx, n > 0 || flipped > 0 ? VM_LOG_WARN : VM_LOG_INFO,
+         "adapt: the adapted surface folded (%lld intersecting triangle pairs, e.g. near "
+         "(%g, %g, %g)); %lld vertices put back where they were before the adaptation: %lld "
+         "pairs and %lld reversed elements left",
+         (long long)s->folds_found, s->fold_at[0], s->fold_at[1], s->fold_at[2],
+         (long long)s->adapt_backed_off, (long long)n, (long long)flipped);
+  return VM_OK;
+}
+
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    vm_surface_summary *summary) {
   vm_surface_summary local;
@@ -181,14 +321,51 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
 
   s->min_angle_input = vm_surface_min_angle(m);
   vm_mesh *input = NULL; /* before remeshing */
+  s->self_intersections = -1;
   if (o.step == VM_SURFACE_REMESH ||
       (o.step == VM_SURFACE_ALL &&
        (o.remesh == VM_SURFACE_YES ||
         (o.remesh == VM_SURFACE_AUTO && s->min_angle_input < o.sliver_angle))))
     st = remesh(ctx, m, &o, s, &input);
+  /* the remeshed surface checked exactly: one that intersects itself is
+   * given up for the repaired input, as the remeshing found it */
+  if (st >= 0 && s->remeshed && all_triangles(m) && all_triangles(input)) {
+    int64_t n = 0, n0 = 0;
+    double at[3] = {0, 0, 0};
+    st = count_pairs(m, &n, NULL, at);
+    if (st >= 0 && n > 0) st = count_pairs(input, &n0, NULL, NULL);
+    if (st >= 0 && n > n0) {
+      vm_log(ctx, VM_LOG_WARN,
+             "remesh: the remeshed surface intersects itself (%lld triangle pairs, e.g. near "
+             "(%g, %g, %g)); going on with the repaired input instead",
+             (long long)n, at[0], at[1], at[2]);
+      vm_mesh tmp = *m;
+      *m = *input;
+      *input = tmp;
+      vm_mesh_destroy(&input);
+      s->remeshed = 0;
+      s->remesh_refused = n;
+    }
+    if (st >= 0) s->self_intersections = s->remesh_refused ? n0 : n;
+  }
+  double *x0 = NULL;
+  if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT)) {
+    x0 = vm_alloc_array(ctx, 3 * (size_t)(m->nv > 0 ? m->nv : 1), sizeof *x0);
+    if (!x0) st = VM_ERR_NOMEM;
+    if (x0) memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof *x0);
+  }
   if (st >= 0 && o.step == VM_SURFACE_CURVATURE) st = curvature(ctx, m, &o, s);
   if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT))
     st = adapt(ctx, m, input ? input : m, &o, s);
+  /* the adapted surface checked exactly, folds taken back locally */
+  if ((st >= 0 || st == VM_ERR_INTERRUPTED) && s->adapted && x0) {
+    int keep = st, b = vm_surface_unfold(m, x0, s);
+    if (b < 0)
+      st = b;
+    else if (keep >= 0)
+      st = s->self_intersections > 0 || s->adapt.flipped > 0 ? VM_WARN_INVERTED : VM_OK;
+  }
+  vm_free(ctx, x0);
   vm_mesh_destroy(&input);
   return st;
 }

@@ -59,6 +59,14 @@ typedef struct vm_surface_summary {
   vm_adapt_result adapt;
   int open; /* refused: an open surface that nothing repaired
                and opts did not accept (see the error text) */
+  /* the result checked exactly (CGAL): intersecting triangle pairs left
+   * (-1: not checked, the mesh has quads) */
+  int64_t self_intersections;
+  int64_t remesh_refused;   /* pairs of a remeshed surface given up for the
+                               repaired input (0: kept or not remeshed) */
+  int64_t folds_found;      /* pairs the adaptation made, before backing off */
+  int64_t adapt_backed_off; /* vertices put back where the adaptation folded */
+  double fold_at[3];        /* a point of the first pair found */
 } vm_surface_summary;
 
 /* Run opts->step on the surface m (dim 3, triangles and/or quads) in
@@ -66,8 +74,14 @@ typedef struct vm_surface_summary {
  * step ("repair: ...", "remesh: ...", "curvature: ...", "adapt: ..."),
  * and per iteration to opts->adapt.monitor. The adaptation's reference
  * surface is the repaired input before any remeshing.
+ * The result is checked exactly: a remeshed surface that intersects
+ * itself is given up for the repaired input (a warning); where the
+ * adapted surface intersects itself or an element reversed, the vertices
+ * there go back to where they were before the adaptation, with growing
+ * rings of neighbours, until none is left (a warning).
  * Returns VM_OK; VM_WARN_INVERTED if an element's orientation reversed
- * during the adaptation (summary->adapt.flipped); VM_ERR_INTERRUPTED (the
+ * or triangles intersect after that (summary->adapt.flipped,
+ * summary->self_intersections); VM_ERR_INTERRUPTED (the
  * context's interrupt flag; m holds the last iterate); VM_ERR_ARG (not a
  * surface mesh, bad options), VM_ERR_FORMAT (what the repair refused, an
  * open surface the repair did not see: summary->open), VM_ERR_NOMEM,
@@ -75,6 +89,21 @@ typedef struct vm_surface_summary {
  * NULL. */
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    vm_surface_summary *summary);
+
+/* The exact check of a moved surface and its local back-off: m's
+ * vertices moved from x0 (3 * m->nv coordinates; the same connectivity).
+ * Where triangles of m intersect (CGAL's exact predicates) or an element's
+ * orientation reversed against x0, the vertices of those elements go back
+ * to x0 together with 1, then 2, 4 and 8 rings of neighbours, until no
+ * pair and no reversed element is left; every other vertex keeps its
+ * position bit for bit. Nothing is taken back if x0 itself has an
+ * intersecting pair (the input's own intersections are the repair's to
+ * report). Sets s->self_intersections (pairs left; -1 and nothing done if
+ * m has quads), s->adapt.flipped (reversed elements left),
+ * s->folds_found (pairs before), s->adapt_backed_off (vertices put back)
+ * and s->fold_at, and logs a warning when something is left. Returns
+ * VM_OK, VM_ERR_ARG, VM_ERR_NOMEM, VM_ERR_BACKEND. */
+int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s);
 
 const char *vm_surface_step_name(vm_surface_step step);
 
