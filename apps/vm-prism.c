@@ -157,6 +157,10 @@ static const vm_opt opts[] = {
     {"--drop-quality", NULL, VM_OPT_DOUBLE, A(o.drop_quality), "Q",
      "drop the outermost layer if its minimum scaled Jacobian is below Q (default 0: keep)",
      .lo = 0, .hi = 0.999},
+    {"--no-orient", NULL, VM_OPT_FLAG, A(o.orient), NULL,
+     "refuse a wall oriented inwards (default: its triangles are turned, with a warning, so "
+     "the layer grows outside)",
+     .ival = 0},
     {"--time-limit", NULL, VM_OPT_DOUBLE, A(o.time_limit), "S", "seconds for the whole run",
      .lo = 1e-300, .hi = 1e300},
     VM_CLI_OPT_THREADS,
@@ -178,8 +182,9 @@ static const vm_opt opts[] = {
 
 static const vm_cli_spec spec = {
     "usage: vm-prism [options] IN OUT\n"
-    "Build a thick multi-layer prism mesh on the closed, outward-oriented triangulated\n"
-    "wall IN (.vmsh, .stl, .obj, .off, .ply, ...): thin layer, elastic springback,\n"
+    "Build a thick multi-layer prism mesh outside the closed triangulated wall IN\n"
+    "(.vmsh, .stl, .obj, .off, .ply, ...; one oriented inwards is turned, with a\n"
+    "warning): thin layer, elastic springback,\n"
     "cutting of self-intersections (Embree), thickness restoration with smoothing,\n"
     "marching split into layers. OUT by extension: .vmsh .msh (Gmsh 4.1) .vtu .vtk\n"
     ".cgns .su2 .foam (wall and outer boundary as separate families / markers /\n"
@@ -252,6 +257,7 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.first_height);
   printf(", \"growth\": ");
   vm_json_double(stdout, r.growth);
+  printf(", \"reoriented\": %s", r.reoriented ? "true" : "false");
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
   printf(", \"thickness_min\": ");

@@ -32,6 +32,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.full_tol = 0.01;
   o.time_limit = 0;
   o.check_incremental = 0;
+  o.orient = 1;
   return o;
 }
 
@@ -345,7 +346,20 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     vm_cross3(b, c, x);
     vol += vm_dot3(a, x);
   }
-  if (!(vol > 0)) {
+  if (vol < 0 && o.orient) {
+    /* the layer grows outside: every triangle turned (the consistency of
+     * neighbours' orientations, checked above, is kept) */
+    for (int64_t t = 0; t < nt; t++) {
+      int32_t c1 = p->tri[3 * t + 1];
+      p->tri[3 * t + 1] = p->tri[3 * t + 2];
+      p->tri[3 * t + 2] = c1;
+    }
+    p->rep.reoriented = 1;
+    vm_log(ctx, VM_LOG_WARN,
+           "prism: the wall is oriented inwards (enclosed volume %g): its %lld triangles are "
+           "turned so that the layer grows outside",
+           vol / 6, (long long)nt);
+  } else if (!(vol > 0)) {
     vm_prism_destroy(&p);
     return vm_error(ctx, VM_ERR_ARG, "prism: the wall is oriented inwards (enclosed volume %g)",
                     vol / 6);

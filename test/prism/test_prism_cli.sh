@@ -96,6 +96,18 @@ check '[ $rc -ne 0 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && [ ! -e "$dir/one.msh
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "negative thickness: exit 2"
 "${prism[@]}" -n 0 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "zero layers: exit 2"
+# a wall oriented inwards (every facet's vertices in reverse order) is
+# turned with a warning and the layer grows outside; --no-orient refuses it
+"$gen" sphere --level 2 "$dir/s.stl" >/dev/null
+awk '/^ *vertex/ { v[++n] = $0; if (n == 3) { print v[1]; print v[3]; print v[2]; n = 0 }; next } { print }' "$dir/s.stl" >"$dir/inv.stl"
+"${prism[@]}" -n 3 --json "$dir/inv.stl" "$dir/inv.vmsh" >"$dir/inv.json" 2>"$dir/inv.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"reoriented\": true" "$dir/inv.json" && grep -q "\"valid\": true" "$dir/inv.json" && awk -F"\"thickness_min\": " "{ split(\$2, a, \",\"); exit !(a[1] > 0.99) }" "$dir/inv.json" && grep -q "oriented inwards.*turned" "$dir/inv.err"' "inward wall: turned with a warning, the layer outside at full thickness (exit $rc)"
+"${prism[@]}" -n 3 --json "$dir/s.stl" "$dir/out.vmsh" >"$dir/out.json" 2>/dev/null
+check 'grep -q "\"reoriented\": false" "$dir/out.json"' "outward wall: not turned"
+"${prism[@]}" -q -n 3 --no-orient "$dir/inv.stl" "$dir/inv2.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && grep -q "oriented inwards" "$dir/err" && [ ! -e "$dir/inv2.vmsh" ]' "--no-orient: an inward wall is refused, exit 1, one line, no output"
 "${prism[@]}" "$dir/a.stl" "$dir/u.xyz" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.xyz" ]' "unknown output format: exit 2"
 "${prism[@]}" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null

@@ -85,6 +85,10 @@ typedef struct vm_prism_opts {
                             with a full one, an error (VM_ERR_NUMERIC) if
                             they differ; for tests (default 0: the
                             incremental answer is trusted, twice as fast) */
+  int orient;            /* 1 (default): a wall oriented inwards (negative
+                            enclosed volume) has its triangles turned, with a
+                            warning on the log, so the layer grows outside;
+                            0: such a wall is refused */
   vm_prism_progress_fn progress;
   void *user;
 } vm_prism_opts;
@@ -118,6 +122,7 @@ typedef struct vm_prism_report {
   double growth_max;             /* max h_{k+1}/h_k over columns */
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
+  int reoriented; /* the wall was oriented inwards and its triangles were turned */
 } vm_prism_report;
 
 /* The stage in one call: the layers on the wall `wall` (see
@@ -146,8 +151,10 @@ typedef struct vm_prism vm_prism;
  * grows on the side the normals point to. Other element types are ignored.
  * The wall is copied. Vertices not used by a triangle are dropped (the
  * output wall keeps the used ones in their original order).
+ * A wall oriented inwards is turned (opts->orient, the default; the
+ * output's wall faces are then the input's reversed) or refused.
  * Errors: VM_ERR_ARG (no triangles, bad options, a degenerate triangle, an
- * open, non-manifold, inconsistently or inwards oriented wall, a vertex
+ * open, non-manifold, inconsistently or (without orient) inwards oriented wall, a vertex
  * where no direction sees every incident face), VM_ERR_NOMEM. */
 int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_prism **out);
 void vm_prism_destroy(vm_prism **p);
