@@ -522,6 +522,8 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
   return VM_OK;
 }
 
+static double first_tilt(const vm_prism *p, int64_t v);
+
 /* Are the prisms of every layer around column v free of inverted corner
  * tets and at or above quality `floor`? */
 static int column_valid(const vm_prism *p, int64_t v, double floor) {
@@ -549,11 +551,13 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
  * widens the strip and draws the cells' centres towards it (gamma > 1,
  * thinning them, helps where a column stands in a concave corner). The gamma of
  * k.relief_gamma giving the smallest skewness of the column's cells is
- * kept if it lowers that skewness and every prism around the column stays
+ * kept if it lowers that skewness, every prism around the column stays
  * valid above min(k.ortho_qmin, k.redistribute_qshare of its quality
- * before); k.relief_sweeps sweeps over the columns, in vertex order (a
- * trailing edge's two columns share the strip). Counts the columns moved
- * and the largest column skewness before and after. */
+ * before) and a smooth column's first side edge stays within
+ * k.tilt_limit_deg of its normal (or within its tilt before: level 1
+ * moving up along a bent polyline turns it); k.relief_sweeps sweeps over the columns, in vertex
+ * order (a trailing edge's two columns share the strip). Counts the columns moved and the largest
+ * column skewness before and after. */
 static int skew_relief(vm_prism *p, int64_t *count, double *before, double *after) {
   int64_t nw = p->nw, moved = 0;
   int nl = p->nlev - 1, n = p->rep.layers_requested;
@@ -594,6 +598,11 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
         q0 = q < q0 ? q : q0;
       }
       double floor = quality_floor(p, q0, p->k.redistribute_qshare);
+      /* a smooth column's first side edge may not tilt beyond the 5
+       * degrees it is held to (its level 1 moving up along a bent
+       * polyline turns it) */
+      double tilt0 = p->smooth[v] ? first_tilt(p, v) : 0;
+      double tilt_max = tilt0 > p->k.tilt_limit_deg ? tilt0 : p->k.tilt_limit_deg;
       arc[0] = 0;
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
@@ -610,7 +619,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
             p->lev[k * lsz + 3 * v + c] =
                 old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
         }
-        if (!column_valid(p, v, floor)) continue;
+        if (!column_valid(p, v, floor) || (p->smooth[v] && first_tilt(p, v) > tilt_max)) continue;
         double s1 = column_skew(p, v);
         if (s1 < best * (1 - 1e-3)) {
           best = s1;
