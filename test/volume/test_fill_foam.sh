@@ -12,7 +12,8 @@
 #    a floating-point exception, the initial residuals of Ux and p fall by
 #    at least 100 times, and the drag coefficient is within 20 % of the
 #    standard drag curve's 0.806 (Schiller-Naumann: 24/Re (1 + 0.15 Re^0.687);
-#    the steady axisymmetric wake holds up to Re of about 210).
+#    the steady axisymmetric wake holds up to Re of about 210); the wall's
+#    pressure coefficient (examples/foam_wall_cp.py) peaks at about 1.
 # Skipped (77) when OpenFOAM is not installed.
 # usage: test_fill_foam.sh VM_GEN VM_PRISM VM_FILL VM_CONVERT SOURCE_ROOT
 set -u
@@ -77,4 +78,11 @@ for f in Ux p; do
 done
 cd=$(tail -1 "$c/postProcessing/forces/0/coefficient.dat" 2>/dev/null | awk '{print $2}')
 check 'awk -v x="$cd" "BEGIN { exit !(x + 0 > 0.806 * 0.8 && x + 0 < 0.806 * 1.2) }"' "sphere at Re 200: Cd ${cd:-?} within 20 % of 0.806"
+# the wall's pressure coefficient as the demo pictures it
+# (examples/foam_wall_cp.py): stagnation at the front (Cp about 1, a little
+# more at this Re), suction at the sides
+cpl=$(python3 "$root/examples/foam_wall_cp.py" "$c" 200 "$dir/cp.vtk" 2>&1)
+cmin=$(echo "$cpl" | sed -n 's/.*Cp from \([-0-9.]*\) to \([-0-9.]*\).*/\1/p')
+cmax=$(echo "$cpl" | sed -n 's/.*Cp from \([-0-9.]*\) to \([-0-9.]*\).*/\2/p')
+check '[ -s "$dir/cp.vtk" ] && grep -q "^SCALARS Cp double 1" "$dir/cp.vtk" && awk -v a="$cmin" -v b="$cmax" "BEGIN { exit !(b + 0 > 0.95 && b + 0 < 1.4 && a + 0 < -0.2) }"' "wall Cp from ${cmin:-?} to ${cmax:-?}: stagnation about 1, suction below -0.2 ($cpl)"
 exit $fail
