@@ -54,6 +54,10 @@ int vm_write_foam(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
  * exists so that vm_io_remove_temporaries finds it. path stays valid until
  * unregistered. */
 void vm_io_tmp_register(char *path);
+/* A temporary name beside path, "<dir>/<pre><base><tag><pid>.<n>", short
+ * ("<dir>/.vm<tag><pid>.<n>") where that would exceed the folder's
+ * NAME_MAX; vm_malloc'd, NULL if out of memory. */
+char *vm_io_temp_name(vm_ctx *ctx, const char *path, const char *pre, const char *tag);
 void vm_io_tmp_unregister(const char *path);
 
 #endif
