@@ -496,7 +496,7 @@ int main(int argc, char **argv) {
     a.o.method = f.method;
   }
   if (r.st < 0 && r.st != VM_ERR_INTERRUPTED) {
-    rc = vm_cli_input_error(&cli, NULL);
+    rc = vm_cli_input_error(&cli, a.in);
     goto done;
   }
   if ((rc = check_result(&cli, &a, &s, &r)) != VM_EXIT_OK) goto done;
