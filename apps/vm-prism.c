@@ -286,8 +286,9 @@ static const vm_cli_spec spec = {
     ".cgns .su2 .foam (wall and outer boundary as separate families / markers /\n"
     "patches; .foam is an OpenFOAM case directory).\n",
     opts,
-    "exit: 0 valid layers; 1 bad input or I/O; 2 usage; 3 inverted prisms or\n"
-    "intersections remain (the mesh is still written); 4 interrupted\n",
+    "exit: 0 valid layers; 1 bad input (a self-intersecting wall, ...) or I/O;\n"
+    "2 usage; 3 inverted prisms or intersections remain (the mesh is still\n"
+    "written); 4 interrupted or stopped by --time-limit (the mesh so far written)\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
