@@ -4,7 +4,8 @@
 # cube at pi it stalled past 120 s where the default took 1.6 s (its full
 # coupled Hessian crawls while elements are inverted; the untangling now runs
 # with the implicit solver). Both runs here, so a busy machine slows both:
-# newton must be valid and within 3 times the default's CPU time (+ 5 s).
+# newton must be valid and within 2 times the default's CPU time (+ 5 s): here
+# newton 71 s against the default's 57 s; before the fix 154 s.
 # usage: test_volume_newton.sh VM_GEN VM_VOLUME
 set -u
 gen=$1 vol=$2
@@ -27,5 +28,5 @@ cpu timeout 900 "$vol" -q --solver newton "$dir/c.vmsh" "$dir/n.vmsh"
 tnew=$ticks
 hz=$(getconf CLK_TCK)
 check '[ $rcdef -eq 0 ] && [ $rc -eq 0 ]' "default and newton both valid (exit $rcdef, $rc)"
-check '[ $tnew -le $((3 * tdef + 5 * hz)) ]' "newton within 3 times the default's CPU time: $((tnew / hz)) s against $((tdef / hz)) s"
+check '[ $tnew -le $((2 * tdef + 5 * hz)) ]' "newton within 2 times the default's CPU time: $((tnew / hz)) s against $((tdef / hz)) s"
 exit $fail
