@@ -46,7 +46,7 @@ typedef struct {
 } args;
 
 static int opt_angle(vm_cli *cli, const vm_opt *opt, const char *val, void *a) {
-  if (!val || parse_angle(val, &((args *)a)->o.alpha))
+  if (!val || parse_angle(val, &((args *)a)->o.alpha) || !isfinite(((args *)a)->o.alpha))
     return vm_cli_usage_error(cli, "%s expects radians or a multiple of pi", opt->name);
   return VM_EXIT_OK;
 }

@@ -14,6 +14,7 @@
 #include "varmesh/io.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/prism.h"
+#include "varmesh/repair.h"
 
 typedef struct {
   vm_cli *cli;
@@ -74,7 +75,7 @@ static void progress(void *user, const vm_prism_progress *p) {
  * a triangle or quad of w (in w's order, as vm_prism_create numbers them):
  * the column takes its wall vertex's value; a 'fixed' field only on the
  * wall itself. Fields the prism stage writes itself win. */
-static int pass_wall_fields(const vm_mesh *w, vm_mesh *r, int64_t nw) {
+static int pass_wall_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t nw) {
   if (nw <= 0 || r->nv % nw) return VM_OK;
   int64_t nlev = r->nv / nw, n = 0;
   int32_t *src = vm_alloc_array(w->ctx, (size_t)nw, sizeof *src);
@@ -91,7 +92,15 @@ static int pass_wall_fields(const vm_mesh *w, vm_mesh *r, int64_t nw) {
   if (n != nw) st = VM_OK; /* not the numbering expected: pass nothing */
   for (int i = 0; st == VM_OK && n == nw && i < w->nfield; i++) {
     const vm_field *f = &w->fields[i];
-    if (f->location != VM_FIELD_VERTEX || vm_mesh_find_field(r, f->name, VM_FIELD_VERTEX)) continue;
+    if (f->location != VM_FIELD_VERTEX) continue;
+    if (vm_mesh_find_field(r, f->name, VM_FIELD_VERTEX)) {
+      if (!cli->quiet)
+        fprintf(stderr,
+                "vm-prism: warning: the wall's vertex field '%s' is not carried up the "
+                "columns: the prism stage writes its own\n",
+                f->name);
+      continue;
+    }
     vm_field *g;
     if ((st = vm_mesh_add_field(r, f->name, VM_FIELD_VERTEX, f->type, f->ncomp, &g)) < 0) break;
     size_t sz = f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t), row = sz * f->ncomp;
@@ -104,6 +113,98 @@ static int pass_wall_fields(const vm_mesh *w, vm_mesh *r, int64_t nw) {
   vm_free(w->ctx, src);
   vm_free(w->ctx, used);
   return st;
+}
+
+/* Copy the element fields of the wall w onto the prism mesh r: the wall's
+ * triangles (quads as two, in w's element order, as vm_prism_create splits
+ * them) are r's nt columns; every prism of column t, and its wall and outer
+ * faces, take the value of the wall element t came from. Fields the prism
+ * stage writes itself win (said on stderr). */
+static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t nt) {
+  int nel = 0;
+  for (int i = 0; i < w->nfield; i++) nel += w->fields[i].location == VM_FIELD_ELEMENT;
+  if (!nel || nt <= 0 || r->ne % nt || r->ne / nt < 3) return VM_OK;
+  int32_t *src = vm_alloc_array(w->ctx, (size_t)nt, sizeof *src);
+  if (!src) return vm_error(cli->ctx, VM_ERR_NOMEM, "out of memory");
+  int64_t n = 0;
+  for (int64_t e = 0; e < w->ne && n <= nt; e++) {
+    int k = w->etype[e] == VM_TRI ? 1 : w->etype[e] == VM_QUAD ? 2 : 0;
+    for (int i = 0; i < k && n < nt; i++) src[n++] = (int32_t)e;
+  }
+  int st = VM_OK;
+  for (int i = 0; st == VM_OK && n == nt && i < w->nfield; i++) {
+    const vm_field *f = &w->fields[i];
+    if (f->location != VM_FIELD_ELEMENT) continue;
+    if (vm_mesh_find_field(r, f->name, VM_FIELD_ELEMENT)) {
+      if (!cli->quiet)
+        fprintf(stderr,
+                "vm-prism: warning: the wall's element field '%s' is not carried up the "
+                "columns: the prism stage writes its own\n",
+                f->name);
+      continue;
+    }
+    vm_field *g;
+    if ((st = vm_mesh_add_field(r, f->name, VM_FIELD_ELEMENT, f->type, f->ncomp, &g)) < 0) break;
+    size_t sz = f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t), row = sz * f->ncomp;
+    for (int64_t e = 0; e < r->ne; e++)
+      memcpy((char *)g->data + (size_t)e * row, (const char *)f->data + (size_t)src[e % nt] * row,
+             row);
+  }
+  vm_free(w->ctx, src);
+  return st;
+}
+
+/* vm-surface's check of the wall for self-intersections (CGAL, exact
+ * predicates), before anything is built: a wall crossing itself cannot
+ * carry valid layers, and the cutting would spend minutes finding that
+ * out. The wall's triangles (quads split as vm_prism_create splits them);
+ * a wall that is not a manifold triangle surface is left to the stage's
+ * own checks. Returns the exit code. */
+static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *w) {
+  vm_mesh *t = NULL;
+  int64_t nt = 0, count = 0;
+  int32_t *pairs = NULL;
+  for (int64_t e = 0; e < w->ne; e++)
+    nt += w->etype[e] == VM_TRI ? 1 : w->etype[e] == VM_QUAD ? 2 : 0;
+  int64_t *from = vm_alloc_array(cli->ctx, (size_t)(nt ? nt : 1), sizeof *from);
+  int st = from ? vm_mesh_create(cli->ctx, &t) : VM_ERR_NOMEM;
+  if (st == VM_OK && !(st = vm_mesh_set_vertices(t, w->nv)) &&
+      !(st = vm_mesh_set_elements(t, nt, 3 * nt))) {
+    t->dim = 3;
+    memcpy(t->xyz, w->xyz, (size_t)(3 * w->nv) * sizeof *t->xyz);
+    int64_t k = 0;
+    for (int64_t e = 0; e < w->ne; e++) {
+      const int32_t *c = w->conn + w->eoff[e];
+      static const int sp[2][3] = {{0, 1, 2}, {0, 2, 3}};
+      int ns = w->etype[e] == VM_TRI ? 1 : w->etype[e] == VM_QUAD ? 2 : 0;
+      for (int s = 0; s < ns; s++, k++) {
+        t->etype[k] = VM_TRI;
+        t->eoff[k + 1] = 3 * (k + 1);
+        for (int i = 0; i < 3; i++) t->conn[3 * k + i] = c[sp[s][i]];
+        from[k] = e;
+      }
+    }
+    st = vm_surface_self_intersections(t, &count, &pairs);
+  }
+  int rc = VM_EXIT_OK;
+  if (st == VM_ERR_NOMEM) {
+    rc = vm_cli_input_error(cli, NULL);
+  } else if (st == VM_OK && count > 0) {
+    double c[3] = {0, 0, 0};
+    const int32_t *tri = t->conn + 3 * (int64_t)pairs[0];
+    for (int i = 0; i < 3; i++)
+      for (int d = 0; d < 3; d++) c[d] += t->xyz[3 * (int64_t)tri[i] + d] / 3;
+    vm_cli_error(cli,
+                 "%s: the wall intersects itself: %lld pairs of triangles intersect, e.g. "
+                 "elements %lld and %lld near (%g, %g, %g); repair it first (vm-surface)",
+                 in, (long long)count, (long long)from[pairs[0]], (long long)from[pairs[1]], c[0],
+                 c[1], c[2]);
+    rc = VM_EXIT_INPUT;
+  }
+  vm_free(cli->ctx, pairs);
+  vm_free(cli->ctx, from);
+  vm_mesh_destroy(&t);
+  return rc;
 }
 
 typedef struct {
@@ -190,8 +291,9 @@ static const vm_cli_spec spec = {
     ".cgns .su2 .foam (wall and outer boundary as separate families / markers /\n"
     "patches; .foam is an OpenFOAM case directory).\n",
     opts,
-    "exit: 0 valid layers; 1 bad input or I/O; 2 usage; 3 inverted prisms or\n"
-    "intersections remain (the mesh is still written); 4 interrupted\n",
+    "exit: 0 valid layers; 1 bad input (a self-intersecting wall, ...) or I/O;\n"
+    "2 usage; 3 inverted prisms or intersections remain (the mesh is still\n"
+    "written); 4 interrupted or stopped by --time-limit (the mesh so far written)\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
@@ -221,7 +323,9 @@ static int count_pairs(vm_cli *cli, const vm_mesh *res, int64_t wall_vertices, i
   return st;
 }
 
-static void print_summary(const char *out, const vm_prism_report *r, int64_t npairs, int rc) {
+static void print_summary(const char *out, const vm_prism_report *r, int64_t npairs, int rc,
+                          int interrupted, int timed_out) {
+  int bad = r->inverted > 0 || npairs > 0;
   fprintf(stderr,
           "vm-prism: %s: %lld prisms in %d layers (first %g, growth %g), %.1f%% of columns at "
           "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, min "
@@ -232,24 +336,28 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
           r->thick_min, r->thick_mean, (long long)r->inverted, r->sj_min, r->normal_dev_max,
           (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
           r->growth_max, r->time_total,
-          rc == VM_EXIT_CHECK         ? "  -- NOT VALID"
-          : rc == VM_EXIT_INTERRUPTED ? "  -- interrupted"
-                                      : "");
+          rc == VM_EXIT_CHECK ? "  -- NOT VALID"
+          : (interrupted || timed_out) && bad
+              ? (timed_out ? "  -- time limit reached, NOT VALID" : "  -- interrupted, NOT VALID")
+          : timed_out   ? "  -- time limit reached"
+          : interrupted ? "  -- interrupted"
+                        : "");
 }
 
 static void print_json(const char *in, const char *out, const vm_prism_report *rp, double L,
-                       int64_t npairs, int rc, int verified, int interrupted) {
+                       int64_t npairs, int rc, int verified, int interrupted, int timed_out) {
   const vm_prism_report r = *rp;
   printf("{\"input\": ");
   vm_json_string(stdout, in);
   printf(", \"output\": ");
   vm_json_string(stdout, out);
-  printf(", \"valid\": %s, \"verified\": %s, \"interrupted\": %s, \"wall_vertices\": %lld, "
+  printf(", \"valid\": %s, \"verified\": %s, \"interrupted\": %s, \"timed_out\": %s, "
+         "\"wall_vertices\": %lld, "
          "\"wall_triangles\": %lld, \"prisms\": %lld, \"layers_requested\": %d, \"layers\": %d, "
          "\"thickness\": ",
          rc == VM_EXIT_OK ? "true" : "false", verified ? "true" : "false",
-         interrupted ? "true" : "false", (long long)r.wall_vertices, (long long)r.wall_triangles,
-         (long long)r.prisms, r.layers_requested, r.layers);
+         interrupted ? "true" : "false", timed_out ? "true" : "false", (long long)r.wall_vertices,
+         (long long)r.wall_triangles, (long long)r.prisms, r.layers_requested, r.layers);
   vm_json_double(stdout, r.thickness);
   printf(", \"model_length\": ");
   vm_json_double(stdout, L);
@@ -373,11 +481,21 @@ int main(int argc, char **argv) {
   }
   vm_prism_opts *o = &a.o;
   o->thickness = a.T_abs > 0 ? a.T_abs : a.T_rel * L;
+  /* a thickness lost in rounding against the model's coordinates is a
+   * usage error, not a bad wall */
+  if (!(o->thickness >= 1e-9 * L) || !isfinite(o->thickness)) {
+    rc = vm_cli_usage_error(&cli,
+                            "the thickness %g is below 1e-9 of the model's length %g: the layers "
+                            "would vanish in rounding (give a larger -T or -t)",
+                            o->thickness, L);
+    goto done;
+  }
   if (o->first_height > 0 && !(o->first_height < o->thickness)) {
     rc = vm_cli_usage_error(&cli, "--first-height %g is not below the thickness %g",
                             o->first_height, o->thickness);
     goto done;
   }
+  if ((rc = check_wall_intersections(&cli, a.in, m)) != VM_EXIT_OK) goto done;
   /* the report is made (or refused) before the run */
   if (a.report) {
     char title[512];
@@ -406,13 +524,17 @@ int main(int argc, char **argv) {
    * curvature, ...) go up every column; then the final check, on the mesh
    * that is written */
   int64_t npairs = 0;
-  if (pass_wall_fields(m, res, r.wall_vertices) < 0 ||
+  if (pass_wall_fields(&cli, m, res, r.wall_vertices) < 0 ||
+      pass_wall_element_fields(&cli, m, res, r.wall_triangles) < 0 ||
       count_pairs(&cli, res, r.wall_vertices, &npairs) < 0 ||
       vm_mesh_write(cli.ctx, res, a.out, a.fout, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
-  if (st == VM_ERR_INTERRUPTED)
+  /* the time limit is an interruption too (as in vm-volume): the layers
+   * are not what was asked for */
+  int timed_out = st != VM_ERR_INTERRUPTED && r.timed_out;
+  if (st == VM_ERR_INTERRUPTED || timed_out)
     rc = VM_EXIT_INTERRUPTED;
   else if (r.inverted > 0 || npairs > 0)
     rc = VM_EXIT_CHECK;
@@ -430,8 +552,17 @@ int main(int argc, char **argv) {
               "each other or the wall (exact)\n",
               a.out);
   }
-  if (!cli.quiet) print_summary(a.out, &r, npairs, rc);
-  if (a.json) print_json(a.in, a.out, &r, L, npairs, rc, verified, st == VM_ERR_INTERRUPTED);
+  if (!cli.quiet) print_summary(a.out, &r, npairs, rc, st == VM_ERR_INTERRUPTED, timed_out);
+  if (rc == VM_EXIT_INTERRUPTED) /* said even with -q: the mesh written is not the one asked for */
+    fprintf(stderr,
+            "vm-prism: %s: %s after %.2f s: %d of %d layers, %.1f%% of columns at full "
+            "thickness; %s: %lld inverted corner tets, %lld pairs of outer/wall faces crossing\n",
+            a.out, timed_out ? "stopped at the time limit" : "interrupted", r.time_total, r.layers,
+            r.layers_requested, 100 * r.full_fraction,
+            r.inverted > 0 || npairs > 0 ? "NOT VALID" : "not verified", (long long)r.inverted,
+            (long long)npairs);
+  if (a.json)
+    print_json(a.in, a.out, &r, L, npairs, rc, verified, st == VM_ERR_INTERRUPTED, timed_out);
   if (report) {
     int rrc =
         write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res, hist);

@@ -305,7 +305,9 @@ int main(int argc, char **argv) {
   progress_state ps = {&cli, a.every, hist};
   a.so.adapt.monitor = progress;
   a.so.adapt.user = &ps;
-  if (a.so.step == VM_SURFACE_ALL || a.so.step == VM_SURFACE_ADAPT) vm_cli_catch_interrupts(&cli);
+  /* every step: an interrupt during the repair or the remeshing ends the
+   * run after it (exit 4, the mesh so far written) */
+  vm_cli_catch_interrupts(&cli);
   int st = vm_surface_run(cli.ctx, m, &a.so, &s);
   if (st < 0 && st != VM_ERR_INTERRUPTED) {
     vm_cli_error(&cli, "%s: %s%s", a.in, vm_ctx_error(cli.ctx),

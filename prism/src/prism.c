@@ -179,26 +179,37 @@ static int build_adjacency(vm_prism *p) {
     vm_free(ctx, fill);
     return VM_ERR_NOMEM;
   }
-  int64_t nonman = 0;
+  /* non-manifold edges counted once each, as vm-surface's repair counts
+   * them: the first one, and how many triangles share it, for the message */
+  int64_t nonman = 0, nm_first = -1, nm_count = 0, run = 0;
   for (int64_t k = 0, e = -1; k < 3 * nt; k++) {
     if (k == 0 || he[k].a != he[k - 1].a || he[k].b != he[k - 1].b) {
+      run = 1;
       e++;
       p->edge[2 * e] = he[k].a;
       p->edge[2 * e + 1] = he[k].b;
       p->etri[2 * e] = he[k].t;
       p->etri[2 * e + 1] = -1;
     } else if (p->etri[2 * e + 1] < 0) {
+      run++;
       p->etri[2 * e + 1] = he[k].t;
     } else {
-      nonman++;
+      if (++run == 3) nonman++;
+      if (nonman == 1) {
+        nm_first = e;
+        nm_count = run;
+      }
     }
   }
   vm_free(ctx, he);
   if (nonman) {
     vm_free(ctx, fill);
+    const double *a = p->wall + 3 * (int64_t)p->edge[2 * nm_first],
+                 *b = p->wall + 3 * (int64_t)p->edge[2 * nm_first + 1];
     return vm_error(ctx, VM_ERR_ARG,
-                    "prism: the wall has %lld non-manifold edges (more than two triangles)",
-                    (long long)nonman);
+                    "prism: non-manifold wall: %lld edges are shared by more than two "
+                    "triangles; the first, (%g, %g, %g)-(%g, %g, %g), by %lld",
+                    (long long)nonman, a[0], a[1], a[2], b[0], b[1], b[2], (long long)nm_count);
   }
   /* a closed, consistently oriented wall: every edge has two triangles
    * that run through it in opposite directions */
@@ -425,8 +436,10 @@ static int run_phases(vm_prism *p) {
   for (int k = p->done; k < VM_PRISM_NPHASES; k++) {
     st = phase[k](p);
     if (st < 0) return st;
+    if (st == VM_WARN_TIME) p->rep.timed_out = 1;
     if (st > 0 && !warn) warn = st;
   }
+  if (p->rep.timed_out) warn = VM_WARN_TIME;
   if (vm_ctx_interrupted(p->ctx)) return VM_ERR_INTERRUPTED;
   return warn;
 }

@@ -167,8 +167,11 @@ static void element_normals(const vm_mesh *m, const double *x, double *n) {
 
 /* First element with a corner triangle of zero area to working precision
  * (doubled area below 1e-12 of its squared longest edge, as the repair
- * judges it), or -1. The barrier measure is infinite on such an element. */
-static int64_t first_degenerate(const vm_mesh *m) {
+ * judges it), or -1. The barrier measure is infinite on such an element.
+ * *overflow: the products overflowed there (coordinates too large for
+ * double precision areas), which is not a zero area. */
+static int64_t first_degenerate(const vm_mesh *m, int *overflow) {
+  *overflow = 0;
   for (int64_t e = 0; e < m->ne; e++) {
     int k = vm_elem_nverts(m->etype[e]);
     const int32_t *c = m->conn + m->eoff[e];
@@ -182,7 +185,12 @@ static int64_t first_degenerate(const vm_mesh *m) {
       vm_sub3(r, q, w);
       vm_cross3(u, v, n);
       double l2 = fmax(vm_dot3(u, u), fmax(vm_dot3(v, v), vm_dot3(w, w)));
-      if (!(vm_norm3(n) > 1e-12 * l2)) return e;
+      double a2 = vm_norm3(n);
+      if (!isfinite(a2) || !isfinite(l2)) {
+        *overflow = 1;
+        return e;
+      }
+      if (!(a2 > 1e-12 * l2)) return e;
     }
   }
   return -1;
@@ -206,9 +214,15 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
       !(o.feature_angle > 0 && o.feature_angle <= 180) || !(o.corner_angle > 0) || !isfinite(o.c) ||
       !isfinite(o.filter.threshold) || isnan(o.filter.cap) || o.filter.smooth < 0)
     return vm_error(ctx, VM_ERR_ARG, "adapt: invalid options");
-  int64_t bad = first_degenerate(m);
+  int overflow;
+  int64_t bad = first_degenerate(m, &overflow);
   if (bad >= 0) {
     const double *p = m->xyz + 3 * (int64_t)m->conn[m->eoff[bad]];
+    if (overflow)
+      return vm_error(ctx, VM_ERR_ARG,
+                      "adapt: element %lld at (%g, %g, %g): its area overflows double precision "
+                      "(coordinates too large); scale the surface down",
+                      (long long)bad, p[0], p[1], p[2]);
     return vm_error(ctx, VM_ERR_ARG,
                     "adapt: zero-area element %lld at (%g, %g, %g); repair the surface first",
                     (long long)bad, p[0], p[1], p[2]);

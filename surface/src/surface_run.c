@@ -318,6 +318,9 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    (o.soup || o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_REMESH));
   int st = do_repair ? repair(ctx, m, &o, s) : VM_OK;
   if (st < 0) return st;
+  /* the repair and the remeshing (CGAL) cannot stop half-way: an interrupt
+   * during them ends the run after them, with the mesh they made */
+  if (vm_ctx_interrupted(ctx)) return VM_ERR_INTERRUPTED;
 
   s->min_angle_input = vm_surface_min_angle(m);
   vm_mesh *input = NULL; /* before remeshing */
@@ -327,6 +330,7 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
        (o.remesh == VM_SURFACE_YES ||
         (o.remesh == VM_SURFACE_AUTO && s->min_angle_input < o.sliver_angle))))
     st = remesh(ctx, m, &o, s, &input);
+  if (st >= 0 && vm_ctx_interrupted(ctx)) st = VM_ERR_INTERRUPTED;
   /* the remeshed surface checked exactly: one that intersects itself is
    * given up for the repaired input, as the remeshing found it */
   if (st >= 0 && s->remeshed && all_triangles(m) && all_triangles(input)) {

@@ -357,7 +357,8 @@ int main(int argc, char **argv) {
   CHECK(vm_report_create(ctx, dir2, "again", &r) == VM_OK, "second report");
   if (r) {
     CHECK(fig_slice(r, cube, air, h) == VM_OK && fig_surf(r, cube, air, h) == VM_OK &&
-              fig_hist(r, cube, air, h) == VM_OK && fig_conv(r, cube, air, h) == VM_OK,
+              fig_hist(r, cube, air, h) == VM_OK && fig_conv(r, cube, air, h) == VM_OK &&
+              vm_report_write(r) == VM_OK,
           "second run");
     vm_report_destroy(&r);
   }

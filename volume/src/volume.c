@@ -18,6 +18,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   memset(&o, 0, sizeof o);
   o.method = VM_UNTANGLE_ADAPTIVE;
   o.solver = VM_MINIMIZER_IMPLICIT;
+  o.untangle_solver = -1;
   o.rule = VM_RULE_CORNER;
   o.measure = VM_MEASURE_BALANCED;
   o.theta = 0.8;
@@ -395,7 +396,9 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
     if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
     s->go_local = o->local_threshold > 0;
     int64_t M0 = s->M;
-    st = run_phase(s, s->phase_name, o->solver, *budget, before_untangle, &res);
+    vm_minimizer_kind ks =
+        o->untangle_solver >= 0 ? (vm_minimizer_kind)o->untangle_solver : o->solver;
+    st = run_phase(s, s->phase_name, ks, *budget, before_untangle, &res);
     s->rep->iter_untangle += res.iterations;
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) return st;

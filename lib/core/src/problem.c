@@ -335,8 +335,15 @@ static int auto_size(vm_problem *p, double *size) {
   for (int64_t b = 0; b < p->nblock; b++) vm += p->part[b];
   for (int64_t i = 0; i < p->nae; i++) vi += unit[elem_type(p, i)];
   double r = fabs(vm) / vi;
-  if (!(r > 0) || !isfinite(r))
-    return vm_error(p->ctx, VM_ERR_ARG, "mesh volume %g: cannot size ideal targets", vm);
+  if (!isfinite(vm) || !isfinite(r))
+    return vm_error(p->ctx, VM_ERR_ARG,
+                    "the mesh volume overflows (the coordinates are too large for double "
+                    "precision volumes): cannot size ideal targets; scale the mesh down or "
+                    "give a target size");
+  if (!(r > 0))
+    return vm_error(p->ctx, VM_ERR_ARG,
+                    "the mesh volume is %s: cannot size ideal targets (give a target size)",
+                    vm == 0 ? "zero" : "below the smallest double");
   *size = d == 3 ? cbrt(r) : sqrt(r);
   return VM_OK;
 }
@@ -830,8 +837,10 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
       }
       for (int b = 0; b < a; b++)
         if (cv[a] == cv[b]) {
-          st = vm_error(ctx, VM_ERR_ARG, "element %lld: %s lists vertex %d twice", (long long)e,
-                        vm_elem_name(t), cv[a]);
+          st = vm_error(ctx, VM_ERR_ARG,
+                        "element %lld (%s) uses vertex %d at two of its corners: a collapsed "
+                        "element, which has no valid shape to optimize towards",
+                        (long long)e, vm_elem_name(t), cv[a]);
           goto fail;
         }
     }

@@ -20,6 +20,8 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <set>
 #include <cmath>
 #include <cstring>
@@ -108,9 +110,117 @@ std::size_t remove_invalid(std::vector<Polygon> &polys) {
   return removed;
 }
 
+// Where the items of the repaired mesh n came from in m: a vertex of n is
+// the first vertex of m at exactly its coordinates (repair merges, stitches
+// and collapses, but never moves a vertex it keeps); a triangle of n is the
+// first element of m whose vertices (up to coincident copies) include its
+// three. -1: new (the repair made it).
+struct Origin {
+  std::vector<int64_t> vertex, face;
+  int64_t new_vertices = 0, new_faces = 0;
+};
+
+void find_origin(const vm_mesh *m, const vm_mesh *n, Origin &o) {
+  typedef std::pair<std::array<double, 3>, int64_t> PointId;
+  std::vector<PointId> pts;
+  pts.reserve(static_cast<size_t>(m->nv));
+  for (int64_t v = 0; v < m->nv; v++)
+    pts.push_back(PointId({m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]}, v));
+  std::sort(pts.begin(), pts.end());
+  // canon[v]: the first vertex of m at v's coordinates
+  std::vector<int64_t> canon(static_cast<size_t>(m->nv));
+  for (size_t i = 0; i < pts.size(); i++)
+    canon[static_cast<size_t>(pts[i].second)] = i > 0 && pts[i].first == pts[i - 1].first
+                                                    ? canon[static_cast<size_t>(pts[i - 1].second)]
+                                                    : pts[i].second;
+  o.vertex.assign(static_cast<size_t>(n->nv), -1);
+  for (int64_t v = 0; v < n->nv; v++) {
+    std::array<double, 3> x = {n->xyz[3 * v], n->xyz[3 * v + 1], n->xyz[3 * v + 2]};
+    auto it = std::lower_bound(pts.begin(), pts.end(), PointId(x, INT64_MIN));
+    if (it != pts.end() && it->first == x)
+      o.vertex[static_cast<size_t>(v)] = canon[static_cast<size_t>(it->second)];
+    else
+      o.new_vertices++;
+  }
+  // every triangle an element of m can be cut into (quads: four), by its
+  // sorted canonical vertices
+  typedef std::pair<std::array<int64_t, 3>, int64_t> TriId;
+  std::vector<TriId> tris;
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    int k = static_cast<int>(m->eoff[e + 1] - m->eoff[e]);
+    if (k != 3 && k != 4) continue;
+    for (int skip = k == 3 ? 3 : 0; skip < 4; skip++) {
+      std::array<int64_t, 3> t;
+      int j = 0;
+      for (int i = 0; i < k; i++)
+        if (i != skip) t[static_cast<size_t>(j++)] = canon[static_cast<size_t>(c[i])];
+      std::sort(t.begin(), t.end());
+      tris.push_back(TriId(t, e));
+    }
+  }
+  std::sort(tris.begin(), tris.end());
+  o.face.assign(static_cast<size_t>(n->ne), -1);
+  for (int64_t e = 0; e < n->ne; e++) {
+    std::array<int64_t, 3> t;
+    bool ok = true;
+    for (int i = 0; i < 3; i++) {
+      t[static_cast<size_t>(i)] = o.vertex[static_cast<size_t>(n->conn[3 * e + i])];
+      ok = ok && t[static_cast<size_t>(i)] >= 0;
+    }
+    std::sort(t.begin(), t.end());
+    auto it = std::lower_bound(tris.begin(), tris.end(), TriId(t, INT64_MIN));
+    if (ok && it != tris.end() && it->first == t)
+      o.face[static_cast<size_t>(e)] = it->second;
+    else
+      o.new_faces++;
+  }
+}
+
+// m's fields, vertex flags and slip surfaces onto the repaired mesh n where
+// every item of the field's location has an origin in m; a field with new
+// items is dropped, said once (flags of new vertices stay free).
+int map_fields(const vm_mesh *m, vm_mesh *n, const Origin &o) {
+  vm_ctx *ctx = m->ctx;
+  for (int64_t v = 0; v < n->nv; v++) {
+    int64_t s = o.vertex[static_cast<size_t>(v)];
+    if (s < 0) continue;
+    n->vflag[v] = m->vflag[s];
+    n->vsurf[v] = m->vsurf[s];
+  }
+  int dropped = 0;
+  for (int i = 0; i < m->nfield; i++) {
+    const vm_field *f = &m->fields[i];
+    bool vert = f->location == VM_FIELD_VERTEX;
+    if (vert ? o.new_vertices : o.new_faces) {
+      if (!dropped++)
+        vm_log(ctx, VM_LOG_WARN,
+               "repair: field '%s' dropped: %lld of its %lld %s are new (made by the repair); "
+               "fields are kept where every %s came through the repair",
+               f->name, static_cast<long long>(vert ? o.new_vertices : o.new_faces),
+               static_cast<long long>(vert ? n->nv : n->ne), vert ? "vertices" : "faces",
+               vert ? "vertex" : "face");
+      else
+        vm_log(ctx, VM_LOG_WARN, "repair: field '%s' dropped too", f->name);
+      continue;
+    }
+    vm_field *g;
+    int st = vm_mesh_add_field(n, f->name, f->location, f->type, f->ncomp, &g);
+    if (st) return st;
+    const std::vector<int64_t> &from = vert ? o.vertex : o.face;
+    size_t row = (f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t)) *
+                 static_cast<size_t>(f->ncomp);
+    for (size_t k = 0; k < from.size(); k++)
+      std::memcpy(static_cast<char *>(g->data) + k * row,
+                  static_cast<const char *>(f->data) + static_cast<size_t>(from[k]) * row, row);
+  }
+  return VM_OK;
+}
+
 // m's arrays replaced by sm's (compact: garbage collected) triangles;
-// attributes kept, fields and flags dropped.
-int replace_mesh(vm_mesh *m, const SMesh &sm) {
+// attributes kept; fields and flags mapped (map_fields) if `map`, else
+// dropped.
+int replace_mesh(vm_mesh *m, const SMesh &sm, bool map) {
   vm_ctx *ctx = m->ctx;
   vm_mesh *n = NULL;
   int st = vm_mesh_create(ctx, &n);
@@ -142,6 +252,11 @@ int replace_mesh(vm_mesh *m, const SMesh &sm) {
   }
   for (int i = 0; i < m->nattr; i++)
     if ((st = vm_mesh_set_attr(n, m->attrs[i].key, m->attrs[i].value))) goto fail;
+  if (map) {
+    Origin o;
+    find_origin(m, n, o);
+    if ((st = map_fields(m, n, o))) goto fail;
+  }
   {
     vm_mesh tmp = *m;
     *m = *n;
@@ -170,6 +285,20 @@ bool to_surface_mesh(const vm_mesh *m, SMesh &sm, int64_t *bad_elem) {
     }
   }
   return true;
+}
+
+// A face whose area or squared edge lengths overflow double precision
+// (coordinates too large: not a zero area), or null.
+face_descriptor overflowing_face(const SMesh &sm) {
+  for (face_descriptor f : sm.faces()) {
+    halfedge_descriptor h = sm.halfedge(f);
+    const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)),
+                &c = sm.point(sm.target(sm.next(h)));
+    K::Vector_3 u = b - a, v = c - a, w = c - b;
+    double l2 = std::max({u.squared_length(), v.squared_length(), w.squared_length()});
+    if (!std::isfinite(l2) || !std::isfinite(CGAL::cross_product(u, v).squared_length())) return f;
+  }
+  return SMesh::null_face();
 }
 
 // Faces whose doubled area is below 1e-12 times the squared longest edge.
@@ -270,6 +399,16 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   PMP::triangulate_faces(sm);
   r.stitched = static_cast<int64_t>(PMP::stitch_borders(sm));
   {
+    face_descriptor big = overflowing_face(sm);
+    if (big != SMesh::null_face()) {
+      Point c = face_centroid(sm, big);
+      return vm_error(ctx, VM_ERR_FORMAT,
+                      "repair: the area of the face near (%g, %g, %g) overflows double "
+                      "precision (coordinates too large); scale the surface down",
+                      c.x(), c.y(), c.z());
+    }
+  }
+  {
     std::vector<face_descriptor> deg;
     PMP::degenerate_faces(sm, std::back_inserter(deg));
     r.removed_degenerate = static_cast<int64_t>(deg.size());
@@ -362,11 +501,9 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   }
   sm.remove_property_map(fcc);
 
-  if (m->nfield > 0)
-    vm_log(ctx, VM_LOG_WARN, "repair: %d fields dropped (the vertex numbering changes)", m->nfield);
   r.nv = static_cast<int64_t>(sm.number_of_vertices());
   r.nf = static_cast<int64_t>(sm.number_of_faces());
-  int st = replace_mesh(m, sm);
+  int st = replace_mesh(m, sm, true);
   if (st) return st;
   if (rep) *rep = r;
   return VM_OK;
@@ -486,7 +623,9 @@ extern "C" int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_re
     }
   for (vertex_descriptor v : sm.vertices())
     if (vcorner[v]) corner[v.idx()] = 1;
-  int st = replace_mesh(m, sm);
+  if (m->nfield > 0)
+    vm_log(ctx, VM_LOG_WARN, "remesh: %d fields dropped (the vertices are new)", m->nfield);
+  int st = replace_mesh(m, sm, false);
   if (st) return st;
   if (f) {
     vm_surface_features_free(ctx, f);

@@ -178,10 +178,14 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
     return st < 0 ? st : VM_ERR_ARG;
   }
   char tmp[4096];
-  if ((size_t)snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid()) >= sizeof tmp) {
+  char *tn = vm_io_temp_name(ctx, path, "", ".tmp.");
+  if (!tn || strlen(tn) >= sizeof tmp) {
+    vm_free(ctx, tn);
     ex_groups_free(ctx, &g);
-    return vm_error(ctx, VM_ERR_ARG, "%s: path too long", path);
+    return tn ? vm_error(ctx, VM_ERR_ARG, "%s: path too long", path) : VM_ERR_NOMEM;
   }
+  memcpy(tmp, tn, strlen(tn) + 1);
+  vm_free(ctx, tn);
   vm_io_tmp_register(tmp);
   st = write_file(ctx, m, &g, tmp, path);
   ex_groups_free(ctx, &g);
@@ -191,9 +195,10 @@ int vm_write_cgns(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
     return st;
   }
   if (rename(tmp, path)) {
+    int e = errno;
     vm_io_tmp_unregister(tmp);
     remove(tmp);
-    return vm_error(ctx, VM_ERR_IO, "%s: cannot rename the temporary file", path);
+    return vm_error(ctx, VM_ERR_IO, "%s: cannot rename the temporary file: %s", path, strerror(e));
   }
   vm_io_tmp_unregister(tmp);
   return ex_groups_lossy(ctx, m, path, "CGNS", 1) ? VM_WARN_LOSSY : VM_OK;
@@ -662,10 +667,12 @@ int vm_read_cgns(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, 
     if (w <= 0) break;
     done += (size_t)w;
   }
-  int bad = close(fd) != 0 || done != len;
-  if (bad) {
+  int e = done != len ? (errno ? errno : EIO) : 0;
+  if (close(fd) != 0 && !e) e = errno ? errno : EIO;
+  if (e) {
     remove(tmp);
-    return vm_error(ctx, VM_ERR_IO, "%s: cannot write the temporary file %s", name, tmp);
+    return vm_error(ctx, VM_ERR_IO, "%s: cannot write the temporary file %s: %s", name, tmp,
+                    strerror(e));
   }
   cg_rd r;
   memset(&r, 0, sizeof r);

@@ -709,8 +709,12 @@ static int write_new_case(const foam_mesh *fm, const char *out, int bin) {
       FILE *fp = fopen(f, "wb");
       vm_free(ctx, f);
       if (fp) sys_files[i].put(fp, bin);
-      if (!fp || fflush(fp) != 0 || ferror(fp) || fclose(fp) != 0)
-        st = vm_error(ctx, VM_ERR_IO, "%s: cannot write system/%s", out, sys_files[i].name);
+      int bad = !fp || fflush(fp) != 0 || ferror(fp);
+      int e = bad ? (errno ? errno : EIO) : 0;
+      if (fp && fclose(fp) != 0 && !bad) bad = 1, e = errno;
+      if (bad)
+        st = vm_error(ctx, VM_ERR_IO, "%s: cannot write system/%s: %s", out, sys_files[i].name,
+                      strerror(e));
     }
   }
   vm_free(ctx, con);

@@ -54,6 +54,13 @@ int vm_write_foam(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
  * exists so that vm_io_remove_temporaries finds it. path stays valid until
  * unregistered. */
 void vm_io_tmp_register(char *path);
+/* The most data arrays a reader stores as fields (each one costs a search
+ * of the others, so many small ones would take quadratic time). */
+#define VM_IO_MAX_ARRAYS 1024
+/* A temporary name beside path, "<dir>/<pre><base><tag><pid>.<n>", short
+ * ("<dir>/.vm<tag><pid>.<n>") where that would exceed the folder's
+ * NAME_MAX; vm_malloc'd, NULL if out of memory. */
+char *vm_io_temp_name(vm_ctx *ctx, const char *path, const char *pre, const char *tag);
 void vm_io_tmp_unregister(const char *path);
 
 #endif

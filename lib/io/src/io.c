@@ -194,6 +194,36 @@ int vm_mesh_write(vm_ctx *ctx, const vm_mesh *m, const char *path, int format,
   return wr(ctx, m, path, opts ? opts : &def);
 }
 
+/* A temporary name in path's folder: "<dir>/<pre><base><tag><pid>.<n>"
+ * (pid + a counter keep concurrent writers of the same path apart), or,
+ * where that last component would be longer than the folder allows (a
+ * legal 245-byte name plus the tag is not), the short "<dir>/.vm<tag><pid>.<n>". */
+char *vm_io_temp_name(vm_ctx *ctx, const char *path, const char *pre, const char *tag) {
+  static _Thread_local unsigned long counter;
+  size_t n = strlen(path) + strlen(pre) + strlen(tag) + 48;
+  char *s = vm_malloc(ctx, n);
+  if (!s) return NULL;
+  const char *slash = strrchr(path, '/');
+  int dl = slash ? (int)(slash - path + 1) : 0;
+  long name_max = pathconf(".", _PC_NAME_MAX);
+  if (dl) {
+    char *dir = vm_malloc(ctx, (size_t)dl + 1);
+    if (!dir) {
+      vm_free(ctx, s);
+      return NULL;
+    }
+    memcpy(dir, path, (size_t)dl);
+    dir[dl] = 0;
+    name_max = pathconf(dir, _PC_NAME_MAX);
+    vm_free(ctx, dir);
+  }
+  if (name_max <= 0) name_max = 255;
+  unsigned long k = ++counter;
+  int len = snprintf(s, n, "%.*s%s%s%s%ld.%lu", dl, path, pre, path + dl, tag, (long)getpid(), k);
+  if (len - dl > name_max) snprintf(s, n, "%.*s.vm%s%ld.%lu", dl, path, tag, (long)getpid(), k);
+  return s;
+}
+
 struct vm_outfile {
   vm_ctx *ctx;
   FILE *fp;
@@ -282,16 +312,12 @@ int vm_outfile_open(vm_ctx *ctx, const char *path, vm_outfile **out) {
     }
     f->mode = (int)(st.st_mode & 07777);
   }
-  size_t n = strlen(p) + sizeof suffix + 48;
-  char *tmp = vm_malloc(ctx, n);
+  char *tmp = vm_io_temp_name(ctx, p, "", suffix);
   if (!tmp) {
     vm_free(ctx, p);
     vm_free(ctx, f);
     return VM_ERR_NOMEM;
   }
-  /* pid + a counter keep concurrent writers of the same path apart */
-  static _Thread_local unsigned long counter;
-  snprintf(tmp, n, "%s%s%ld.%lu", p, suffix, (long)getpid(), ++counter);
   f->fp = fopen(tmp, "wb");
   if (!f->fp) {
     int e = errno;
@@ -391,14 +417,7 @@ struct vm_outdir {
 
 /* "<dir>/.<base><tag><pid>.<n>" beside path (path without trailing '/') */
 static char *beside(vm_ctx *ctx, const char *path, const char *tag) {
-  static _Thread_local unsigned long counter;
-  size_t n = strlen(path) + strlen(tag) + 48;
-  char *s = vm_malloc(ctx, n);
-  if (!s) return NULL;
-  const char *slash = strrchr(path, '/');
-  int dl = slash ? (int)(slash - path + 1) : 0;
-  snprintf(s, n, "%.*s.%s%s%ld.%lu", dl, path, path + dl, tag, (long)getpid(), ++counter);
-  return s;
+  return vm_io_temp_name(ctx, path, ".", tag);
 }
 
 /* Remove `name` in the directory dfd, descending through directories

@@ -63,6 +63,10 @@ typedef struct {
   int dim, have_verts;
   int32_t *eref;
   int64_t ecap;
+  /* entries of the ignored keywords, said once each at the end (a file of
+   * many small sections would otherwise print a line per section) */
+  int64_t skipped[sizeof skip_kw / sizeof skip_kw[0]];
+  int64_t ignored_lines; /* Identifier, Geometry */
 } medit_rd;
 
 /* Nonzero if only blanks (or a comment) remain on the current line. */
@@ -181,7 +185,9 @@ static int read_required(medit_rd *r) {
   return st;
 }
 
-static int read_skipped(medit_rd *r, const char *kw, int nint, int nreal) {
+static int read_skipped(medit_rd *r, size_t which) {
+  const char *kw = skip_kw[which].kw;
+  int nint = skip_kw[which].nint, nreal = skip_kw[which].nreal;
   if (nreal < 0) nreal = r->dim ? r->dim : 3;
   int64_t n;
   int st = read_count(r, &n, nint + nreal, kw);
@@ -195,7 +201,7 @@ static int read_skipped(medit_rd *r, const char *kw, int nint, int nreal) {
       st = vm_lex_double(&r->lx, &x, kw);
     }
   }
-  if (!st && n) vm_log(r->ctx, VM_LOG_WARN, "%s: ignored %lld %s", r->name, (long long)n, kw);
+  if (!st) r->skipped[which] += n;
   return st;
 }
 
@@ -212,7 +218,16 @@ static int read_keywords(medit_rd *r) {
     size_t n;
     if (vm_lex_eof(lx)) return vm_lex_fail(lx, "no End keyword (truncated file?)");
     vm_lex_word(lx, &s, &n, "keyword");
-    if (vm_tok_is(s, n, "End")) return VM_OK;
+    if (vm_tok_is(s, n, "End")) {
+      for (size_t i = 0; i < sizeof skip_kw / sizeof skip_kw[0]; i++)
+        if (r->skipped[i])
+          vm_log(r->ctx, VM_LOG_WARN, "%s: ignored %lld %s", r->name, (long long)r->skipped[i],
+                 skip_kw[i].kw);
+      if (r->ignored_lines)
+        vm_log(r->ctx, VM_LOG_WARN, "%s: ignored Identifier / Geometry (%lld lines)", r->name,
+               (long long)r->ignored_lines);
+      return VM_OK;
+    }
     if (vm_tok_is(s, n, "Dimension")) {
       if ((st = vm_lex_int(lx, &x, "Dimension"))) return st;
       if (x != 2 && x != 3) return vm_lex_fail(lx, "Dimension %lld is not 2 or 3", (long long)x);
@@ -233,7 +248,7 @@ static int read_keywords(medit_rd *r) {
       size_t rn;
       if (vm_lex_eof(lx)) return vm_lex_fail(lx, "%.*s without a value", (int)n, s);
       vm_lex_line(lx, &rest, &rn);
-      vm_log(r->ctx, VM_LOG_WARN, "%s: ignored %.*s", r->name, (int)n, s);
+      r->ignored_lines++;
       continue;
     }
     int done = 0;
@@ -248,7 +263,7 @@ static int read_keywords(medit_rd *r) {
     }
     for (size_t i = 0; i < sizeof skip_kw / sizeof skip_kw[0] && !done; i++)
       if (vm_tok_is(s, n, skip_kw[i].kw)) {
-        if ((st = read_skipped(r, skip_kw[i].kw, skip_kw[i].nint, skip_kw[i].nreal))) return st;
+        if ((st = read_skipped(r, i))) return st;
         done = 1;
       }
     if (!done) return vm_lex_fail(lx, "unknown keyword '%.*s'", (int)(n > 40 ? 40 : n), s);

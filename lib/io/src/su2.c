@@ -54,8 +54,9 @@ int vm_write_su2(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
   }
   ex_groups_free(ctx, &g);
   if (ferror(f)) {
+    int e = errno ? errno : EIO;
     vm_outfile_abort(&of);
-    return vm_error(ctx, VM_ERR_IO, "%s: write failed", path);
+    return vm_error(ctx, VM_ERR_IO, "%s: write failed: %s", path, strerror(e));
   }
   if ((st = vm_outfile_commit(&of))) return st;
   if (ex_groups_surface(m))

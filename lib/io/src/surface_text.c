@@ -433,8 +433,9 @@ int vm_surf_write_prepare(vm_ctx *ctx, const vm_mesh *m, const char *path, const
 
 int vm_surf_write_finish(vm_ctx *ctx, vm_outfile **f, const char *path, int lossy) {
   if (ferror(vm_outfile_fp(*f))) {
+    int e = errno ? errno : EIO;
     vm_outfile_abort(f);
-    return vm_error(ctx, VM_ERR_IO, "%s: write failed", path);
+    return vm_error(ctx, VM_ERR_IO, "%s: write failed: %s", path, strerror(e));
   }
   int st = vm_outfile_commit(f);
   if (st < 0) return st;

@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <errno.h>
 #include <string.h>
 
 #include "formats_private.h"
@@ -901,7 +902,7 @@ typedef struct {
 
 static void bw_flush(bin_writer *w) {
   crc_update(&w->crc, w->buf, w->n);
-  if (w->n && fwrite(w->buf, 1, w->n, w->fp) != w->n) w->failed = 1;
+  if (w->n && fwrite(w->buf, 1, w->n, w->fp) != w->n && !w->failed) w->failed = errno ? errno : EIO;
   w->count += w->n;
   w->n = 0;
 }
@@ -1049,11 +1050,11 @@ int vm_write_vmsh(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_writ
   uint32_t crc = crc_final(&w->crc);
   bw_u32(w, crc);
   bw_flush(w);
-  int failed = w->failed || w->count != size;
+  int failed = w->failed ? w->failed : w->count != size ? EIO : 0;
   vm_free(ctx, w);
   if (failed) {
     vm_outfile_abort(&of);
-    return vm_error(ctx, VM_ERR_IO, "%s: write failed", path);
+    return vm_error(ctx, VM_ERR_IO, "%s: write failed: %s", path, strerror(failed));
   }
   return vm_outfile_commit(&of);
 }

@@ -291,6 +291,7 @@ typedef struct {
   darr *arr;
   int narr, carr;
   uint64_t inflated; /* bytes the compressed arrays have inflated to so far */
+  int nstored;       /* DataArrays stored as fields so far (at most VM_IO_MAX_ARRAYS) */
 } vturd;
 
 /* What compressed arrays may inflate to in all: this many times the file's
@@ -1078,6 +1079,9 @@ static int read_data(vturd *r, vm_mesh *m, int parent, int64_t n, const int64_t 
     if (ncomp == -1) ncomp = 1;
     if (ncomp < 1 || ncomp > (1 << 20)) return afail(&c, "bad NumberOfComponents");
     if (n > INT64_MAX / ncomp) return afail(&c, "too many values");
+    if (r->nstored == VM_IO_MAX_ARRAYS)
+      return afail(&c, "more than %d data arrays (the reader's ceiling)", VM_IO_MAX_ARRAYS);
+    r->nstored++;
     int isint = t->kind != 'f';
     void *v;
     int st = array_values(&c, n * ncomp, isint, INT32_MIN, INT32_MAX, &v);

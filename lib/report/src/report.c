@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -49,6 +50,9 @@ typedef struct {
 struct vm_report {
   vm_ctx *ctx;
   char *dir;
+  char *tmp; /* where the files are written until vm_report_write publishes
+                them: beside dir if it is missing, else inside it; NULL
+                once published (made again by the next figure) */
   char *title;
   report_row *rows;
   int nrows, caprows;
@@ -175,6 +179,84 @@ int64_t vm_report_history_count(const vm_report_history *h) { return h ? h->n : 
 
 /* ---- the report and its page --------------------------------------------- */
 
+#if VM_HAVE_CAIRO
+/* Remove the flat temporary directory d and what is in it. */
+static void remove_tmp(const char *d) {
+  DIR *dd = opendir(d);
+  struct dirent *e;
+  while (dd && (e = readdir(dd)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) unlinkat(dirfd(dd), e->d_name, 0);
+  if (dd) closedir(dd);
+  rmdir(d);
+}
+
+/* r->tmp: a fresh temporary directory, inside r->dir if it exists (its
+ * files are moved into it), else beside it (renamed to it); a short name,
+ * whatever the length of r->dir's. */
+static int make_tmp(vm_report *r) {
+  vm_ctx *ctx = r->ctx;
+  static unsigned long counter;
+  struct stat st;
+  int inside = stat(r->dir, &st) == 0;
+  const char *slash = strrchr(r->dir, '/');
+  int dl = slash ? (int)(slash - r->dir + 1) : 0;
+  char *t = inside
+                ? format(ctx, "%s/.vmreport.tmp.%ld.%lu", r->dir, (long)getpid(), ++counter)
+                : format(ctx, "%.*s.vmreport.tmp.%ld.%lu", dl, r->dir, (long)getpid(), ++counter);
+  if (!t) return VM_ERR_NOMEM;
+  if (mkdir(t, 0777) != 0) {
+    int e = errno;
+    vm_free(ctx, t);
+    return vm_error(ctx, VM_ERR_IO, "%s: cannot create: %s", r->dir, strerror(e));
+  }
+  r->tmp = t;
+  return VM_OK;
+}
+
+/* Put the files of r->tmp in place: the whole directory renamed to r->dir
+ * if that is still missing, else file by file into it (index.html last),
+ * so that a failure before this (a full disk) leaves no partial report. */
+static int publish(vm_report *r) {
+  vm_ctx *ctx = r->ctx;
+  int st = VM_OK;
+  if (rename(r->tmp, r->dir) != 0) {
+    DIR *dd = opendir(r->tmp);
+    if (!dd) return vm_error(ctx, VM_ERR_IO, "%s: %s", r->tmp, strerror(errno));
+    struct dirent *e;
+    int index = 0;
+    while (st == VM_OK && (e = readdir(dd))) {
+      if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+      if (!strcmp(e->d_name, "index.html")) {
+        index = 1;
+        continue;
+      }
+      char *a = format(ctx, "%s/%s", r->tmp, e->d_name),
+           *b = format(ctx, "%s/%s", r->dir, e->d_name);
+      if (!a || !b)
+        st = VM_ERR_NOMEM;
+      else if (rename(a, b) != 0)
+        st = vm_error(ctx, VM_ERR_IO, "%s: cannot move into place: %s", b, strerror(errno));
+      vm_free(ctx, a);
+      vm_free(ctx, b);
+    }
+    closedir(dd);
+    if (st == VM_OK && index) {
+      char *a = format(ctx, "%s/index.html", r->tmp), *b = format(ctx, "%s/index.html", r->dir);
+      if (!a || !b)
+        st = VM_ERR_NOMEM;
+      else if (rename(a, b) != 0)
+        st = vm_error(ctx, VM_ERR_IO, "%s: cannot move into place: %s", b, strerror(errno));
+      vm_free(ctx, a);
+      vm_free(ctx, b);
+    }
+    remove_tmp(r->tmp);
+  }
+  vm_free(ctx, r->tmp);
+  r->tmp = NULL;
+  return st;
+}
+#endif
+
 int vm_report_create(vm_ctx *ctx, const char *dir, const char *title, vm_report **out) {
   *out = NULL;
 #if !VM_HAVE_CAIRO
@@ -185,15 +267,13 @@ int vm_report_create(vm_ctx *ctx, const char *dir, const char *title, vm_report 
                   "libcairo2-dev and reconfigure)");
 #else
   if (!dir || !*dir) return vm_error(ctx, VM_ERR_ARG, "report: empty directory name");
-  if (mkdir(dir, 0777) != 0) {
-    int e = errno;
-    struct stat st;
-    if (e != EEXIST) return vm_error(ctx, VM_ERR_IO, "%s: cannot create: %s", dir, strerror(e));
-    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+  struct stat st;
+  if (stat(dir, &st) == 0) {
+    if (!S_ISDIR(st.st_mode))
       return vm_error(ctx, VM_ERR_IO, "%s: exists and is not a directory", dir);
+    if (access(dir, W_OK | X_OK) != 0)
+      return vm_error(ctx, VM_ERR_IO, "%s: not writable: %s", dir, strerror(errno));
   }
-  if (access(dir, W_OK | X_OK) != 0)
-    return vm_error(ctx, VM_ERR_IO, "%s: not writable: %s", dir, strerror(errno));
   vm_report *r = vm_calloc(ctx, 1, sizeof *r);
   if (!r) return VM_ERR_NOMEM;
   r->ctx = ctx;
@@ -202,6 +282,12 @@ int vm_report_create(vm_ctx *ctx, const char *dir, const char *title, vm_report 
   if (!r->dir || !r->title) {
     vm_report_destroy(&r);
     return VM_ERR_NOMEM;
+  }
+  /* the temporary directory now: a bad --report fails before the run */
+  int s2 = make_tmp(r);
+  if (s2 < 0) {
+    vm_report_destroy(&r);
+    return s2;
   }
   *out = r;
   return VM_OK;
@@ -222,6 +308,10 @@ void vm_report_destroy(vm_report **p) {
   }
   vm_free(ctx, r->rows);
   vm_free(ctx, r->figs);
+#if VM_HAVE_CAIRO
+  if (r->tmp) remove_tmp(r->tmp); /* never published: nothing of it stays */
+#endif
+  vm_free(ctx, r->tmp);
   vm_free(ctx, r->dir);
   vm_free(ctx, r->title);
   vm_free(ctx, r);
@@ -416,7 +506,15 @@ int vm_report_mesh(vm_report *r, const char *prefix, const char *label, const vm
 
 int vm_report_write(vm_report *r) {
   vm_ctx *ctx = r->ctx;
+#if VM_HAVE_CAIRO
+  if (!r->tmp) {
+    int s0 = make_tmp(r);
+    if (s0 < 0) return s0;
+  }
+  char *path = format(ctx, "%s/index.html", r->tmp);
+#else
   char *path = format(ctx, "%s/index.html", r->dir);
+#endif
   if (!path) return VM_ERR_NOMEM;
   vm_outfile *of;
   int st = vm_outfile_open(ctx, path, &of);
@@ -474,7 +572,11 @@ int vm_report_write(vm_report *r) {
     fputs("</figure>\n", f);
   }
   fputs("</body>\n</html>\n", f);
-  return vm_outfile_commit(&of);
+  st = vm_outfile_commit(&of);
+#if VM_HAVE_CAIRO
+  if (st >= 0) st = publish(r);
+#endif
+  return st;
 }
 
 #if VM_HAVE_CAIRO
@@ -566,7 +668,8 @@ static int canvas_finish(vm_report *r, canvas *c, const char *name, const char *
     st = vm_error(ctx, VM_ERR_NOMEM, "report: %s: drawing failed: %s", name,
                   cairo_status_to_string(cairo_status(c->cr)));
   char *file = format(ctx, "%s.png", name);
-  char *path = format(ctx, "%s/%s.png", r->dir, name);
+  if (st >= 0 && !r->tmp) st = make_tmp(r);
+  char *path = st >= 0 ? format(ctx, "%s/%s.png", r->tmp, name) : NULL;
   if (st >= 0 && (!file || !path)) st = VM_ERR_NOMEM;
   vm_outfile *of = NULL;
   if (st >= 0) st = vm_outfile_open(ctx, path, &of);
@@ -574,8 +677,11 @@ static int canvas_finish(vm_report *r, canvas *c, const char *name, const char *
     cairo_surface_flush(c->s);
     cairo_status_t cs = cairo_surface_write_to_png_stream(c->s, png_write, vm_outfile_fp(of));
     if (cs != CAIRO_STATUS_SUCCESS) {
+      int e = errno;
       vm_outfile_abort(&of);
-      st = vm_error(ctx, VM_ERR_IO, "%s: cannot write: %s", path, cairo_status_to_string(cs));
+      /* named as it would have been: the temporary folder is gone */
+      st = vm_error(ctx, VM_ERR_IO, "%s/%s: cannot write: %s", r->dir, file,
+                    cs == CAIRO_STATUS_WRITE_ERROR && e ? strerror(e) : cairo_status_to_string(cs));
     } else {
       st = vm_outfile_commit(&of);
     }

@@ -123,6 +123,7 @@ typedef struct vm_prism_report {
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
   int reoriented; /* the wall was oriented inwards and its triangles were turned */
+  int timed_out;  /* 1: the time limit stopped a phase (vm_prism_run returns VM_WARN_TIME) */
 } vm_prism_report;
 
 /* The stage in one call: the layers on the wall `wall` (see
@@ -133,7 +134,8 @@ typedef struct vm_prism_report {
  * NULL).
  * Returns VM_OK; a warning (VM_WARN_MAXITER: a limit stopped a phase with
  * valid layers, e.g. cutting out of rounds or marching ending early;
- * VM_WARN_TIME), with *out and *report filled; VM_ERR_INTERRUPTED (the
+ * VM_WARN_TIME, which wins over VM_WARN_MAXITER: the time limit stopped a
+ * phase, report->timed_out set), with *out and *report filled; VM_ERR_INTERRUPTED (the
  * context was interrupted), also with *out and *report filled as far as
  * the run came; or an error, with *out NULL: the wall or the options
  * refused (VM_ERR_ARG, *report all zero) or a phase failed

@@ -82,7 +82,9 @@ typedef struct vm_surface_summary {
  * Returns VM_OK; VM_WARN_INVERTED if an element's orientation reversed
  * or triangles intersect after that (summary->adapt.flipped,
  * summary->self_intersections); VM_ERR_INTERRUPTED (the
- * context's interrupt flag; m holds the last iterate); VM_ERR_ARG (not a
+ * context's interrupt flag; m holds the last iterate, or, interrupted
+ * during the repair or the remeshing, which cannot stop half-way, the mesh
+ * they made: the run ends after them); VM_ERR_ARG (not a
  * surface mesh, bad options), VM_ERR_FORMAT (what the repair refused, an
  * open surface the repair did not see: summary->open), VM_ERR_NOMEM,
  * VM_ERR_BACKEND, with the error text on the context. summary may be

@@ -51,6 +51,8 @@ typedef struct vm_volume_opts {
   vm_minimizer_kind solver;  /* global untangling and optimization (default implicit;
                                 newton runs with block Jacobi, at most 200 CG
                                 iterations per step) */
+  int untangle_solver;       /* a vm_minimizer_kind for the global untangling
+                                phases alone, < 0 (default -1): solver */
   vm_rule rule;              /* quadrature rule (default corner) */
   vm_measure_kind measure;   /* optimization measure: balanced (default), shape,
                                 shape-alt or barrier-free quasi-iso */

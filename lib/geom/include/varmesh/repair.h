@@ -44,8 +44,13 @@ typedef struct vm_repair_report {
  * coincident borders, remove degenerate (zero-area) faces, remove isolated
  * vertices, triangulate quads, check for self-intersections, and orient
  * every closed component outward (orient_to_bound_a_volume). The result is
- * a triangle mesh with new vertex numbering: fields and vertex flags of m
- * are dropped (one VM_LOG_WARN if there were any), attributes kept.
+ * a triangle mesh with new vertex numbering. Attributes are kept; fields,
+ * vertex flags and slip surfaces are carried over where the items came
+ * through: a kept vertex is one of m's at exactly its coordinates (merged
+ * copies take the first one's values), a kept triangle one of m's
+ * triangles, or a triangle of one of m's quads, on kept vertices. A field
+ * with any new item (made by the repair) is dropped, said with a
+ * VM_LOG_WARN; a repair that changes nothing keeps every field.
  * Refused (negative status, m unchanged, one line naming what and where):
  *  - VM_ERR_FORMAT: a non-manifold edge or vertex, or a surface that cannot
  *    be oriented consistently (it would have to be cut); an open surface
@@ -78,9 +83,10 @@ vm_remesh_opts vm_remesh_opts_default(void);
  * never flipped; their vertices never move off the line) and corners, and
  * line vertices where the line turns by more than o->keep_angle, are kept
  * in place (so a line loses only vertices where it is nearly straight). On success m holds the new
- * mesh (fields and flags dropped) and f, if given, the features of the new mesh (same corners, the
- * constrained edges, lines renumbered). Returns VM_OK, VM_ERR_ARG (not a closed-or-open manifold
- * triangle mesh, bad options), VM_ERR_NOMEM, VM_ERR_BACKEND. */
+ * mesh (fields and flags dropped, one VM_LOG_WARN if there were fields) and f, if given, the
+ * features of the new mesh (same corners, the constrained edges, lines renumbered). Returns VM_OK,
+ * VM_ERR_ARG (not a closed-or-open manifold triangle mesh, bad options), VM_ERR_NOMEM,
+ * VM_ERR_BACKEND. */
 int vm_surface_remesh(vm_mesh *m, vm_surface_features *f, const vm_remesh_opts *o,
                       double corner_deg);
 

@@ -21,8 +21,12 @@ typedef struct vm_report vm_report;
 int vm_report_available(void);
 
 /* Start a report in directory `dir` (created if missing; its parent must
- * exist). Figures are written as they are added; index.html by
- * vm_report_write. title: the page heading.
+ * exist). Figures are written as they are added, into a temporary
+ * directory (beside `dir` if it is missing, else inside it), made here;
+ * vm_report_write writes index.html there and puts everything in place
+ * (renames), so a report that fails half-way (a full disk) leaves nothing
+ * at `dir`, and vm_report_destroy before a write removes what was drawn.
+ * title: the page heading.
  * Returns VM_OK, VM_ERR_UNSUPPORTED (built without cairo), VM_ERR_IO (the
  * directory cannot be made or is not writable), VM_ERR_NOMEM.
  * *out receives the report (NULL on failure); free with vm_report_destroy. */
@@ -41,9 +45,10 @@ int vm_report_row(vm_report *r, const char *key, const char *fmt, ...)
  * per element type and overall, under `heading`. */
 int vm_report_quality_rows(vm_report *r, const char *heading, const vm_quality *q);
 
-/* Write DIR/index.html (temporary file + rename): title, the table, every
- * figure added so far in order with its caption. May be called again after
- * more figures are added. Returns VM_OK or VM_ERR_IO. */
+/* Write DIR/index.html: title, the table, every figure added so far in
+ * order with its caption, and move the figures drawn since the last write
+ * into DIR with it (index.html last). May be called again after more
+ * figures are added. Returns VM_OK or VM_ERR_IO. */
 int vm_report_write(vm_report *r);
 
 /* Every figure function below writes DIR/<name>.png (name: letters, digits,

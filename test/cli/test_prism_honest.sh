@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# test/cli/test_prism_honest.sh: vm-prism refuses a self-intersecting wall
+# at once, and says plainly when a run did not finish (issue 21, items 10
+# and 13): a sphere poked through itself ran 72 s and exited 3, two
+# overlapping spheres past 120 s (now exit 1 in well under a second, with
+# the count of intersecting pairs and a location); --time-limit exited 0
+# with "valid": true and 1 of 20 layers (now exit 4, "timed_out": true, the
+# layers reached on stderr); a stopped run whose outer faces cross says
+# NOT VALID; -T 1e-300 is a usage error, not bad input (item 14).
+# usage: test_prism_honest.sh VM_GEN VM_CONVERT VM_PRISM
+set -u
+gen=$1 conv=$2 prism=$3
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+"$gen" sphere --level 3 "$dir/s.vmsh" && "$conv" "$dir/s.vmsh" "$dir/s.off" || exit 1
+# two IN.off DX OUT.off: IN and a copy shifted by DX along x, one OFF
+two() {
+  awk -v dx="$2" 'NR == 1 { next } NR == 2 { nv = $1; nf = $2; next }
+    NR <= 2 + nv { v[NR - 3] = $0; next } { f[NR - 3 - nv] = $0 }
+    END {
+      print "OFF"; print 2 * nv, 2 * nf, 0
+      for (i = 0; i < nv; i++) print v[i]
+      for (i = 0; i < nv; i++) { split(v[i], a, " "); printf "%.17g %s %s\n", a[1] + dx, a[2], a[3] }
+      for (i = 0; i < nf; i++) print f[i]
+      for (i = 0; i < nf; i++) { split(f[i], a, " "); print 3, a[2] + nv, a[3] + nv, a[4] + nv }
+    }' "$1" >"$3"
+}
+# the north pole pushed through the south side
+awk 'NR == 2 { nv = $1 } NR > 2 && NR <= 2 + nv && $3 > 0.999 { $3 = -1.5 } { print }' \
+  "$dir/s.off" >"$dir/poked.off"
+two "$dir/s.off" 1.0 "$dir/overlap.off"
+two "$dir/s.off" 2.02 "$dir/close.off" # 0.02 apart: the thin layer crosses
+for f in poked overlap; do
+  t0=$(date +%s%N)
+  "$prism" -q "$dir/$f.off" "$dir/o.vmsh" 2>"$dir/err"
+  rc=$?
+  ms=$((($(date +%s%N) - t0) / 1000000))
+  check '[ $rc -eq 1 ] && [ ! -e "$dir/o.vmsh" ] && grep -Eq "intersects itself: [0-9]+ pairs of triangles intersect, e.g. elements [0-9]+ and [0-9]+ near \(" "$dir/err" && [ $(wc -l <"$dir/err") -eq 1 ]' "$f sphere: refused as bad input, pairs and a location (exit $rc, $(cat "$dir/err"))"
+  check '[ $ms -lt 5000 ]' "$f sphere: refused in ${ms} ms"
+done
+"$prism" -q --json --time-limit 1e-9 "$dir/s.off" "$dir/o.vmsh" >"$dir/j" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 4 ] && [ -s "$dir/o.vmsh" ]' "--time-limit: exit 4, the mesh so far written (exit $rc)"
+check 'grep -q "\"timed_out\": true" "$dir/j" && grep -q "\"valid\": false" "$dir/j"' "--time-limit: \"timed_out\": true, \"valid\": false in --json"
+check 'grep -Eq "stopped at the time limit after .*: 1 of 20 layers" "$dir/err"' "--time-limit: the layers reached said on stderr, even with -q ($(cat "$dir/err"))"
+"$prism" -q --json --time-limit 1e-9 "$dir/close.off" "$dir/o2.vmsh" >"$dir/j" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 4 ] && grep -q "NOT VALID: .* [1-9][0-9]* pairs of outer/wall faces crossing" "$dir/err"' "a stopped run whose outer faces cross says NOT VALID (exit $rc: $(cat "$dir/err"))"
+"$prism" -q -T 1e-300 "$dir/s.off" "$dir/o3.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 2 ] && grep -q "thickness 1e-300 is below" "$dir/err" && [ ! -e "$dir/o3.vmsh" ]' "-T 1e-300: a usage error naming the thickness (exit $rc: $(cat "$dir/err"))"
+exit $fail
