@@ -57,14 +57,16 @@ typedef struct {
   vm_volume_report *rep;
   const vm_surface_ops *surf;
   int64_t nnodes;
-  double *dets;              /* per node, at the last statistics */
-  double *node_eps;          /* one-way penalty */
-  int split_stage;           /* staged: untangling the 6-tet split (M_max, best not kept) */
-  int repair_stage;          /* certifying repair (M_max, best not kept: the rule's M stays 0) */
-  uint8_t *guard;            /* staged: nodes kept admissible (eps = delta0), or NULL */
-  double *nw;                /* repair: node weights (0: left out, not counted), or NULL */
-  const uint8_t *outer_mask; /* repair: the active elements outside local rounds */
-  double *best;              /* coordinates with the fewest inverted nodes */
+  vm_rule rule;       /* the problem's present rule */
+  double *dets;       /* per node, at the last statistics */
+  double *node_eps;   /* one-way penalty */
+  int split_stage;    /* staged: untangling the 6-tet split (M_max, best not kept) */
+  int repair_stage;   /* certifying repair (M_max, best not kept: the rule's M stays 0) */
+  uint8_t *guard;     /* staged: nodes kept admissible (eps = delta0), or NULL */
+  double *nw;         /* repair: node weights (0: left out, not counted), or NULL */
+  double *best;       /* coordinates with the fewest inverted nodes */
+  const double *tref; /* reference target coordinates of m's vertices, or NULL */
+  double *tref_own;   /* a sub-state's own copy of them */
   int64_t best_M;
   int64_t M; /* at the last statistics */
   double min_det;
@@ -276,8 +278,9 @@ static int out_of_time(const ut_state *s) {
   return s->o->time_limit > 0 && now() - s->t0 >= s->o->time_limit;
 }
 
-/* emask grown by `rings` layers of elements (sharing a vertex); vmark[v]
- * then says whether every element around v is in it (v may move). */
+/* emask grown by `rings` layers of elements (sharing a vertex, marked 1;
+ * the marks already there stay); vmark[v] then says whether every element
+ * around v is in it (v may move). */
 static void grow_mask(const vm_mesh *m, int rings, const int64_t *vrp, const int32_t *vel,
                       uint8_t *emask, uint8_t *vmark) {
   for (int r = 0; r < rings; r++) {
@@ -287,7 +290,8 @@ static void grow_mask(const vm_mesh *m, int rings, const int64_t *vrp, const int
         for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) vmark[m->conn[k]] = 1;
     for (int64_t v = 0; v < m->nv; v++)
       if (vmark[v])
-        for (int64_t k = vrp[v]; k < vrp[v + 1]; k++) emask[vel[k]] = 1;
+        for (int64_t k = vrp[v]; k < vrp[v + 1]; k++)
+          if (!emask[vel[k]]) emask[vel[k]] = 1;
   }
   /* a vertex may move only if every element around it is in the functional:
    * otherwise it would fold the elements outside unseen */
@@ -298,46 +302,244 @@ static void grow_mask(const vm_mesh *m, int rings, const int64_t *vrp, const int
   }
 }
 
+/* Elements of emask marked 1 (grown, not the seeds marked 2) whose vertices
+ * are all fixed, in the mesh or by vmark, taken out of it: their nodes are
+ * constants of the region's functional (on the rotated cube, the cells
+ * inside the fixed inner cube, about a third of the mesh), so evaluating
+ * them every iteration is wasted. No vertex that moves loses an element. */
+static void drop_fixed(const vm_mesh *m, const uint8_t *vmark, uint8_t *emask) {
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (emask[e] != 1) continue;
+    int fixed = 1;
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1] && fixed; k++)
+      fixed = !vmark[m->conn[k]] || m->vflag[m->conn[k]] == VM_VERTEX_FIXED;
+    if (fixed) emask[e] = 0;
+  }
+}
+
 /* Elements within `rings` layers of the elements holding inverted nodes;
- * vertices of other elements are frozen (saved flags restored by caller). */
+ * vertices of other elements do not move; cells all of whose vertices are
+ * fixed are left out (drop_fixed). */
 static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t *vel,
                       uint8_t *emask, uint8_t *vmark) {
   const vm_mesh *m = s->m;
   const int32_t *nel = vm_problem_node_elements(s->P);
   memset(emask, 0, (size_t)m->ne);
   for (int64_t q = 0; q < s->nnodes; q++)
-    if (s->dets[q] <= 0 && !(s->nw && s->nw[q] == 0)) emask[nel[q]] = 1;
+    if (s->dets[q] <= 0 && !(s->nw && s->nw[q] == 0)) emask[nel[q]] = 2;
   grow_mask(m, rings, vrp, vel, emask, vmark);
+  drop_fixed(m, vmark, emask);
   return VM_OK;
 }
 
+static int has_hex(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (m->etype[e] == VM_HEX) return 1;
+  return 0;
+}
+
+/* The per-node arrays sized for the problem's present rule; no guards. */
+static int size_node_arrays(ut_state *s) {
+  s->nnodes = vm_problem_num_nodes(s->P);
+  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
+  vm_free(s->ctx, s->dets);
+  vm_free(s->ctx, s->node_eps);
+  vm_free(s->ctx, s->guard);
+  vm_free(s->ctx, s->nw);
+  s->guard = NULL;
+  s->nw = NULL;
+  s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
+  s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
+  return s->dets && s->node_eps ? VM_OK : VM_ERR_NOMEM;
+}
+
+/* The elements of m marked in emask (those of dimension tdim) as a mesh of
+ * their own, with their vertices in ascending order of their numbers in m:
+ * e_of and v_of give those numbers. Vertices not marked in vmark are fixed
+ * in it; the others keep their flags and surfaces. */
+typedef struct {
+  vm_mesh *m;
+  int32_t *e_of; /* per element of m: its number in the full mesh */
+  int32_t *v_of; /* per vertex */
+} submesh;
+
+static void submesh_destroy(vm_ctx *ctx, submesh *sm) {
+  vm_mesh_destroy(&sm->m);
+  vm_free(ctx, sm->e_of);
+  vm_free(ctx, sm->v_of);
+  memset(sm, 0, sizeof *sm);
+}
+
+static int submesh_create(vm_ctx *ctx, const vm_mesh *m, int tdim, const uint8_t *emask,
+                          const uint8_t *vmark, submesh *sm) {
+  memset(sm, 0, sizeof *sm);
+  int32_t *vloc = vm_alloc_array(ctx, (size_t)m->nv + 1, sizeof *vloc);
+  if (!vloc) return VM_ERR_NOMEM;
+  for (int64_t v = 0; v < m->nv; v++) vloc[v] = -1;
+  int64_t ne = 0, nc = 0, nv = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (!emask[e] || vm_elem_dim(m->etype[e]) != tdim) continue;
+    ne++;
+    nc += m->eoff[e + 1] - m->eoff[e];
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) vloc[m->conn[k]] = 0;
+  }
+  for (int64_t v = 0; v < m->nv; v++)
+    if (vloc[v] == 0) vloc[v] = (int32_t)++nv; /* 1-based until the end */
+  int st = vm_mesh_create(ctx, &sm->m);
+  if (st >= 0) st = vm_mesh_set_vertices(sm->m, nv);
+  if (st >= 0) st = vm_mesh_set_elements(sm->m, ne, nc);
+  sm->e_of = vm_alloc_array(ctx, (size_t)ne + 1, sizeof *sm->e_of);
+  sm->v_of = vm_alloc_array(ctx, (size_t)nv + 1, sizeof *sm->v_of);
+  if (st >= 0 && (!sm->e_of || !sm->v_of)) st = VM_ERR_NOMEM;
+  if (st < 0) {
+    vm_free(ctx, vloc);
+    submesh_destroy(ctx, sm);
+    return st;
+  }
+  vm_mesh *s = sm->m;
+  s->dim = m->dim;
+  for (int64_t v = 0; v < m->nv; v++) {
+    if (vloc[v] <= 0) continue;
+    int32_t w = --vloc[v];
+    sm->v_of[w] = (int32_t)v;
+    memcpy(s->xyz + 3 * (int64_t)w, m->xyz + 3 * v, 3 * sizeof *s->xyz);
+    s->vflag[w] = vmark[v] ? m->vflag[v] : VM_VERTEX_FIXED;
+    if (m->vsurf) s->vsurf[w] = m->vsurf[v];
+  }
+  int64_t se = 0, k1 = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (!emask[e] || vm_elem_dim(m->etype[e]) != tdim) continue;
+    sm->e_of[se] = (int32_t)e;
+    s->etype[se] = m->etype[e];
+    for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++) s->conn[k1++] = vloc[m->conn[k]];
+    s->eoff[++se] = k1;
+  }
+  vm_free(ctx, vloc);
+  return VM_OK;
+}
+
+/* A state for the elements in emask as a mesh of their own (submesh_create,
+ * vertices not in vmark fixed): its own problem with `rule`, the parent's
+ * targets and the measure k, prm; the parent's per-node guards and weights
+ * carried over when the rule is the parent's (the sub-problem's nodes are
+ * the parent's nodes of those elements, in the same order); the scalar
+ * state (eps and its rule's counters) copied. Costs what the region costs. */
+static int sub_begin(ut_state *s, vm_rule rule, vm_measure_kind k, const vm_measure_params *prm,
+                     const uint8_t *emask, const uint8_t *vmark, ut_state *ss, submesh *sm) {
+  vm_ctx *ctx = s->ctx;
+  *ss = *s;
+  ss->tref_own = NULL;
+  ss->P = NULL;
+  ss->dets = ss->node_eps = ss->nw = ss->best = NULL;
+  ss->guard = NULL;
+  int st = submesh_create(ctx, s->m, vm_problem_dim(s->P), emask, vmark, sm);
+  if (st < 0) return st;
+  ss->m = sm->m;
+  if ((st = vm_problem_create(ctx, sm->m, &ss->P)) < 0) return st;
+  ss->tref_own = NULL;
+  if (s->tref) {
+    /* the parent's numbering, which is the full mesh's only at the top */
+    double *tref = vm_alloc_array(ctx, (size_t)sm->m->nv * 3 + 1, sizeof *tref);
+    if (!(ss->tref_own = tref)) return VM_ERR_NOMEM;
+    ss->tref = tref;
+    for (int64_t v = 0; v < sm->m->nv; v++)
+      memcpy(tref + 3 * v, s->tref + 3 * (int64_t)sm->v_of[v], 3 * sizeof *tref);
+    st = vm_problem_set_target_reference(ss->P, tref);
+  } else {
+    /* the full mesh's size, not one fitted to the region */
+    st = vm_problem_set_target_ideal(ss->P, vm_problem_target_size(s->P));
+  }
+  if (st < 0 || (st = vm_problem_set_rule(ss->P, rule)) < 0) return st;
+  ss->rule = rule;
+  if ((st = size_node_arrays(ss)) < 0) return st;
+  if ((st = vm_problem_set_measure(ss->P, k, prm)) < 0) return st;
+  /* the sub-problem's M is the mesh's (every inverted node is in it, and
+   * nothing outside moves): its best state is the mesh's best state */
+  if (s->best && !(ss->best = vm_alloc_array(ctx, (size_t)sm->m->nv * 3 + 1, sizeof *ss->best)))
+    return VM_ERR_NOMEM;
+  if (rule != s->rule || (!s->guard && !s->nw)) return VM_OK;
+  size_t nn = (size_t)ss->nnodes + 1;
+  if (s->guard && !(ss->guard = vm_alloc_array(ctx, nn, 1))) return VM_ERR_NOMEM;
+  if (s->nw && !(ss->nw = vm_alloc_array(ctx, nn, sizeof *ss->nw))) return VM_ERR_NOMEM;
+  const int32_t *nel = vm_problem_node_elements(s->P);
+  int64_t r = 0;
+  for (int64_t q = 0; q < s->nnodes && r < ss->nnodes; q++) {
+    int32_t e = nel[q];
+    if (!emask[e] || vm_elem_dim(s->m->etype[e]) != vm_problem_dim(s->P)) continue;
+    if (ss->guard) ss->guard[r] = s->guard[q];
+    if (ss->nw) ss->nw[r] = s->nw[q];
+    r++;
+  }
+  if (r != ss->nnodes)
+    return vm_error(ctx, VM_ERR_ARG, "sub-problem: %lld of %lld nodes", (long long)r,
+                    (long long)ss->nnodes);
+  return ss->nw ? vm_problem_set_node_weights(ss->P, ss->nw) : VM_OK;
+}
+
+/* The free vertices' coordinates and the scalar state back to the parent;
+ * the sub-state freed. */
+static void sub_end(ut_state *s, ut_state *ss, submesh *sm, const uint8_t *vmark) {
+  vm_ctx *ctx = s->ctx;
+  if (ss->best && ss->best_M < s->best_M) {
+    memcpy(s->best, s->m->xyz, (size_t)s->m->nv * 3 * sizeof *s->best);
+    for (int64_t v = 0; v < sm->m->nv; v++)
+      if (vmark[sm->v_of[v]])
+        memcpy(s->best + 3 * (int64_t)sm->v_of[v], ss->best + 3 * v, 3 * sizeof *s->best);
+    s->best_M = ss->best_M;
+  }
+  if (sm->m && ss->m == sm->m)
+    for (int64_t v = 0; v < sm->m->nv; v++)
+      if (vmark[sm->v_of[v]])
+        memcpy(s->m->xyz + 3 * (int64_t)sm->v_of[v], sm->m->xyz + 3 * v, 3 * sizeof *s->m->xyz);
+  s->eps = ss->eps;
+  s->eps_restart = ss->eps_restart;
+  s->pressure = ss->pressure;
+  s->done = ss->done;
+  s->block_iter = ss->block_iter;
+  s->F_block0 = ss->F_block0;
+  s->F_before = ss->F_before;
+  s->F_after = ss->F_after;
+  s->have_step = ss->have_step;
+  s->phase_iter = ss->phase_iter;
+  s->total_iter = ss->total_iter;
+  vm_free(ctx, ss->dets);
+  vm_free(ctx, ss->node_eps);
+  vm_free(ctx, ss->guard);
+  vm_free(ctx, ss->nw);
+  vm_free(ctx, ss->best);
+  vm_free(ctx, ss->tref_own);
+  vm_problem_destroy(&ss->P);
+  submesh_destroy(ctx, sm);
+}
+
 /* Local untangling: penalty on subdomains with the explicit solver, rings
- * growing when a round makes no progress. */
-static int local_phase(ut_state *s, int *budget) {
+ * growing when a round makes no progress. Each round runs on its subdomain
+ * as a mesh of its own (sub_begin): node determinants, eps and the steps
+ * cost what the subdomain costs, not what the mesh does. */
+static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *prm, int *budget) {
   vm_mesh *m = s->m;
   vm_ctx *ctx = s->ctx;
   int64_t *vrp = NULL;
   int32_t *vel = NULL;
   uint8_t *emask = vm_malloc(ctx, (size_t)m->ne + 1);
   uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
-  uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
-  int st = (!emask || !vmark || !saved) ? VM_ERR_NOMEM : vm_mesh_vertex_elements(m, &vrp, &vel);
+  int st = (!emask || !vmark) ? VM_ERR_NOMEM : vm_mesh_vertex_elements(m, &vrp, &vel);
   int rings = s->o->local_rings, stalls = 0;
   while (st >= 0 && s->M > 0 && *budget > 0 && !out_of_time(s) &&
          rings <= 4 * s->o->local_rings + 8) {
     int64_t M0 = s->M;
     local_mask(s, rings, vrp, vel, emask, vmark);
-    memcpy(saved, m->vflag, (size_t)m->nv);
-    for (int64_t v = 0; v < m->nv; v++)
-      if (!vmark[v]) m->vflag[v] = VM_VERTEX_FIXED;
-    if ((st = vm_problem_set_active(s->P, emask)) < 0) break;
-    vm_minimize_result res;
+    ut_state ss;
+    submesh sm;
+    vm_minimize_result res = {0};
     int chunk = *budget < 200 ? *budget : 200;
-    s->go_local = 0;
-    st = run_phase(s, "local", VM_MINIMIZER_EXPLICIT, chunk, before_untangle, &res);
-    memcpy(m->vflag, saved, (size_t)m->nv);
-    int st2 = vm_problem_set_active(s->P, s->outer_mask);
-    if (st >= 0 && st2 < 0) st = st2;
+    st = sub_begin(s, s->rule, k, prm, emask, vmark, &ss, &sm);
+    if (st >= 0) st = stats(&ss, ss.m->xyz);
+    if (st >= 0) {
+      ss.go_local = 0;
+      st = run_phase(&ss, "local", VM_MINIMIZER_EXPLICIT, chunk, before_untangle, &res);
+    }
+    sub_end(s, &ss, &sm, vmark);
     s->rep->iter_local += res.iterations;
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) break;
@@ -358,7 +560,6 @@ static int local_phase(ut_state *s, int *budget) {
   }
   vm_free(ctx, emask);
   vm_free(ctx, vmark);
-  vm_free(ctx, saved);
   vm_free(ctx, vrp);
   vm_free(ctx, vel);
   return st;
@@ -404,40 +605,18 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
     if (st < 0) return st;
     if ((st = stats(s, s->m->xyz)) < 0) return st;
     if (s->M > 0 && s->M < o->local_threshold) {
-      vm_problem_set_measure(s->P, k, &prm);
-      if ((st = local_phase(s, budget)) < 0) return st;
-      vm_problem_set_node_eps(s->P, NULL);
+      if ((st = local_phase(s, k, &prm, budget)) < 0) return st;
     }
     if (s->M > 0 && s->M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
   }
   return st;
 }
 
-static int has_hex(const vm_mesh *m) {
-  for (int64_t e = 0; e < m->ne; e++)
-    if (m->etype[e] == VM_HEX) return 1;
-  return 0;
-}
-
-/* The per-node arrays sized for the problem's present rule; no guards. */
-static int size_node_arrays(ut_state *s) {
-  s->nnodes = vm_problem_num_nodes(s->P);
-  size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
-  vm_free(s->ctx, s->dets);
-  vm_free(s->ctx, s->node_eps);
-  vm_free(s->ctx, s->guard);
-  vm_free(s->ctx, s->nw);
-  s->guard = NULL;
-  s->nw = NULL;
-  s->dets = vm_alloc_array(s->ctx, nn, sizeof *s->dets);
-  s->node_eps = vm_alloc_array(s->ctx, nn, sizeof *s->node_eps);
-  return s->dets && s->node_eps ? VM_OK : VM_ERR_NOMEM;
-}
-
 /* Switch the problem to `rule` for a stage: node arrays sized for it, the
  * split's nodes of the guarded rules marked as guards. */
 static int set_stage_rule(ut_state *s, vm_rule rule) {
   int st = vm_problem_set_rule(s->P, rule);
+  if (st >= 0) s->rule = rule;
   if (st < 0 || (st = size_node_arrays(s)) < 0) return st;
   size_t nn = (size_t)(s->nnodes ? s->nnodes : 1);
   if (rule == VM_RULE_CORNER_SPLIT || rule == VM_RULE_GEOMETRIC_SPLIT) {
@@ -526,13 +705,54 @@ static int repair_roles(ut_state *s, const uint8_t *verdict, const uint8_t *soft
   return vm_problem_set_node_weights(s->P, s->nw);
 }
 
+/* One round of the certifying repair on the active region only: the cells
+ * marked in emask as a mesh of their own (sub_begin), with the vertices
+ * marked in vmark free and the nodes of VM_RULE_GEOMETRIC_SPLIT in their
+ * roles (repair_roles); the untangling of steps 1-2 runs on it and the
+ * free vertices' coordinates are copied back. Everything outside the
+ * region is untouched, bit for bit. */
+static int repair_round(ut_state *s, const vm_measure_params *prm, const uint8_t *verdict,
+                        const uint8_t *soft, const uint8_t *emask, const uint8_t *vmark,
+                        int *budget) {
+  vm_ctx *ctx = s->ctx;
+  ut_state ss;
+  submesh sm;
+  int st = sub_begin(s, VM_RULE_GEOMETRIC_SPLIT, VM_MEASURE_PENALTY, prm, emask, vmark, &ss, &sm);
+  ss.repair_stage = 1;
+  uint8_t *sv = NULL, *ssoft = NULL;
+  if (st >= 0) {
+    size_t nn = (size_t)ss.nnodes + 1, ne = (size_t)sm.m->ne + 1;
+    ss.guard = vm_alloc_array(ctx, nn, 1);
+    ss.nw = vm_alloc_array(ctx, nn, sizeof *ss.nw);
+    sv = vm_malloc(ctx, ne);
+    ssoft = soft ? vm_malloc(ctx, ne) : NULL;
+    if (!ss.guard || !ss.nw || !sv || (soft && !ssoft)) st = VM_ERR_NOMEM;
+  }
+  if (st >= 0) {
+    for (int64_t e = 0; e < sm.m->ne; e++) {
+      sv[e] = verdict[sm.e_of[e]];
+      if (ssoft) ssoft[e] = soft[sm.e_of[e]];
+    }
+    if ((st = repair_roles(&ss, sv, ssoft)) >= 0) st = stats(&ss, sm.m->xyz);
+  }
+  if (st >= 0) {
+    ss.eps = 0;
+    ss.eps_restart = 0;
+    st = untangle_rounds(&ss, prm, budget);
+  }
+  sub_end(s, &ss, &sm, vmark);
+  vm_free(ctx, sv);
+  vm_free(ctx, ssoft);
+  return st;
+}
+
 /* Certifying repair: while some cells are not certified valid (the corner
  * rule's nodes can all be positive with det J < 0 inside a hex), untangle
- * the geometric rule's nodes of those cells only, locally first (rings
- * around them), with every positive node elsewhere guarded, then certify
- * again; stops when every cell is certified, after a round without fewer
- * uncertified cells twice, or at the budget. Leaves the mesh with the
- * fewest uncertified cells seen. */
+ * the geometric rule's nodes of those cells only, on the cells within
+ * `rings` of them (repair_round), with every positive node elsewhere
+ * guarded, then certify again; stops when every cell is certified, after
+ * three rounds in a row without fewer uncertified cells, or at the budget.
+ * Leaves the mesh with the fewest uncertified cells seen. */
 static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) {
   vm_ctx *ctx = s->ctx;
   vm_mesh *m = s->m;
@@ -541,68 +761,41 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   uint8_t *emask = vm_malloc(ctx, (size_t)m->ne + 1);
   uint8_t *soft = vm_malloc(ctx, (size_t)m->ne + 1);
   uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
-  uint8_t *saved = vm_malloc(ctx, (size_t)m->nv + 1);
   double *best = vm_alloc_array(ctx, (size_t)m->nv * 3 + 1, sizeof *best);
   int64_t *vrp = NULL;
   int32_t *vel = NULL;
-  int st = verdict && best && emask && soft && vmark && saved
-               ? vm_mesh_vertex_elements(m, &vrp, &vel)
-               : VM_ERR_NOMEM;
+  int st = verdict && best && emask && soft && vmark ? vm_mesh_vertex_elements(m, &vrp, &vel)
+                                                     : VM_ERR_NOMEM;
   int rings = s->o->repair_rings;
   int64_t nbad = st < 0 ? -1 : certify(s, verdict), best_bad = nbad;
   s->rep->cert_bad_init = nbad;
   if (nbad < 0 && st >= 0) st = VM_ERR_NOMEM;
   if (st >= 0) memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
   int stalls = 0;
+  s->phase_name = "repair";
   for (int round = 0; st >= 0 && nbad > 0 && round<o0->repair_rounds && * budget> 0 &&
                       !out_of_time(s) && stalls < 3;
        round++) {
-    if (round == 0) {
-      s->repair_stage = 1;
-      if ((st = set_stage_rule(s, VM_RULE_GEOMETRIC_SPLIT)) < 0) break;
-      if (!s->guard && !(s->guard = vm_alloc_array(ctx, (size_t)s->nnodes + 1, 1))) {
-        st = VM_ERR_NOMEM;
-        break;
-      }
-      if (!(s->nw = vm_alloc_array(ctx, (size_t)s->nnodes + 1, sizeof *s->nw))) {
-        st = VM_ERR_NOMEM;
-        break;
-      }
-      s->phase_name = "repair";
-    }
     /* after a round without progress, the walls of the certified cells
      * around the rest are lowered to penalties, one ring more each time */
     if (stalls > 0) {
       for (int64_t e = 0; e < m->ne; e++) soft[e] = verdict[e] != VM_JAC_VALID;
       grow_mask(m, stalls, vrp, vel, soft, vmark);
     }
-    if ((st = repair_roles(s, verdict, stalls > 0 ? soft : NULL)) < 0 ||
-        (st = stats(s, m->xyz)) < 0)
-      break;
-    /* only the cells within `rings` of those not certified are assembled and
+    /* only the cells within `rings` of those not certified take part and
      * only their inner vertices move: the rest of the mesh keeps its
      * certified cells and costs nothing */
-    for (int64_t e = 0; e < m->ne; e++) emask[e] = verdict[e] != VM_JAC_VALID;
+    for (int64_t e = 0; e < m->ne; e++) emask[e] = verdict[e] != VM_JAC_VALID ? 2 : 0;
     grow_mask(m, rings, vrp, vel, emask, vmark);
-    memcpy(saved, m->vflag, (size_t)m->nv);
-    for (int64_t v = 0; v < m->nv; v++)
-      if (!vmark[v]) m->vflag[v] = VM_VERTEX_FIXED;
-    if ((st = vm_problem_set_active(s->P, emask)) < 0) break;
-    s->outer_mask = emask;
-    s->eps = 0;
-    s->eps_restart = 0;
+    drop_fixed(m, vmark, emask);
     /* the untangling counters keep the schedule's iterations */
     int u0 = s->rep->iter_untangle, l0 = s->rep->iter_local;
     /* a round ends at its own budget: a fold squeezed flat against a guard
      * would otherwise keep the local rounds busy until the run's budget */
     int round_budget = *budget < o0->repair_round_iter ? *budget : o0->repair_round_iter;
     int used0 = round_budget;
-    st = untangle_rounds(s, prm, &round_budget);
+    st = repair_round(s, prm, verdict, stalls > 0 ? soft : NULL, emask, vmark, &round_budget);
     *budget -= used0 - round_budget;
-    memcpy(m->vflag, saved, (size_t)m->nv);
-    s->outer_mask = NULL;
-    int st2 = vm_problem_set_active(s->P, NULL);
-    if (st >= 0 && st2 < 0) st = st2;
     s->rep->iter_repair += s->rep->iter_untangle - u0 + s->rep->iter_local - l0;
     s->rep->iter_untangle = u0;
     s->rep->iter_local = l0;
@@ -626,18 +819,11 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
     certify(s, verdict);
   }
   if (nbad == 0) s->rep->time_certified = now() - s->t0;
-  if (s->repair_stage) {
-    s->repair_stage = 0;
-    int st2 = set_stage_rule(s, o0->rule);
-    if (st2 >= 0) st2 = stats(s, m->xyz);
-    if (st >= 0 && st2 < 0) st = st2;
-  }
   s->phase_name = "untangle";
   vm_free(ctx, verdict);
   vm_free(ctx, emask);
   vm_free(ctx, soft);
   vm_free(ctx, vmark);
-  vm_free(ctx, saved);
   vm_free(ctx, vrp);
   vm_free(ctx, vel);
   vm_free(ctx, best);
@@ -654,6 +840,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   memset(&s, 0, sizeof s);
   s.ctx = ctx;
   s.m = m;
+  s.tref = o.target_xyz;
   s.o = &o;
   s.rep = &rep;
   s.surf = surf;
@@ -665,6 +852,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   vm_measure_params prm = vm_measure_params_default();
   prm.theta = o.theta;
   if ((st = vm_problem_set_rule(s.P, o.rule)) < 0) goto done;
+  s.rule = o.rule;
   if (o.target_xyz)
     st = vm_problem_set_target_reference(s.P, o.target_xyz);
   else
