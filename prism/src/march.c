@@ -427,6 +427,36 @@ static double column_skew(const vm_prism *p, int64_t v) {
   return worst;
 }
 
+/* Column v's levels 1..nl-1 put along its polyline `old` (levels 0..nl,
+ * arc lengths `arc`) at the shares frac[k]^gamma of its length. */
+static void place_levels(vm_prism *p, int64_t v, int nl, const double *old, const double *arc,
+                         const double *frac, double gamma) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int k = 1, s = 0; k < nl; k++) {
+    double a = (gamma == 1 ? frac[k] : pow(frac[k], gamma)) * arc[nl];
+    while (s + 1 < nl && arc[s + 1] < a) s++;
+    double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    for (int c = 0; c < 3; c++)
+      p->lev[k * lsz + 3 * v + c] = old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
+  }
+}
+
+/* Are the prisms of every layer around column v free of inverted corner
+ * tets and at or above quality `floor`? */
+static int column_valid(const vm_prism *p, int64_t v, double floor) {
+  int nl = p->nlev - 1;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+    for (int k = 0; k < nl; k++) {
+      double x[18];
+      int inv;
+      prism_at(p, p->vt[j], k, x);
+      pr_prism_corner_quality(x, &inv);
+      if (inv || !(pr_prism_quality(x) >= floor)) return 0;
+    }
+  return 1;
+}
+
 /* Every column's levels 1..nlev-2 put back on the schedule: level k at the
  * share (h_0 + ... + h_{k-1}) / T of the column's length, measured along
  * the column's polyline (the levels move along it, so the column keeps its
@@ -467,30 +497,8 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
       double q = layers_quality(p, p->vt[j], 0, nl - 1);
       q0 = q < q0 ? q : q0;
     }
-    for (int k = 1, s = 0; k < nl; k++) {
-      double a = frac[k] * arc[nl];
-      while (s + 1 < nl && arc[s + 1] < a) s++;
-      double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
-      u = u < 0 ? 0 : u > 1 ? 1 : u;
-      for (int c = 0; c < 3; c++)
-        p->lev[k * lsz + 3 * v + c] = old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
-    }
-    int ok = 1;
-    double floor = quality_floor(p, q0, p->k.redistribute_qshare);
-    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1] && ok; j++) {
-      int64_t t = p->vt[j];
-      for (int k = 0; k < nl && ok; k++) {
-        double x[18];
-        int inv;
-        for (int i = 0; i < 3; i++) {
-          memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-          memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i],
-                 3 * sizeof *x);
-        }
-        pr_prism_corner_quality(x, &inv);
-        ok = !inv && pr_prism_quality(x) >= floor;
-      }
-    }
+    place_levels(p, v, nl, old, arc, frac, 1);
+    int ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare));
     /* nor may the column raise the skewness of its cells' faces above
      * k.skew_limit (what checkMesh fails at, with a margin) */
     if (ok) {
@@ -523,21 +531,6 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
 }
 
 static double first_tilt(const vm_prism *p, int64_t v);
-
-/* Are the prisms of every layer around column v free of inverted corner
- * tets and at or above quality `floor`? */
-static int column_valid(const vm_prism *p, int64_t v, double floor) {
-  int nl = p->nlev - 1;
-  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
-    for (int k = 0; k < nl; k++) {
-      double x[18];
-      int inv;
-      prism_at(p, p->vt[j], k, x);
-      pr_prism_corner_quality(x, &inv);
-      if (inv || !(pr_prism_quality(x) >= floor)) return 0;
-    }
-  return 1;
-}
 
 /* Skewness relief where a column's cells stay skewed beyond k.skew_limit:
  * at a sharp trailing edge the side face between the last prisms of the
@@ -610,15 +603,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
       for (int g = 0; g < ng; g++) {
         double gamma = p->k.relief_gamma[g];
         if (!(gamma > 0)) continue;
-        for (int k = 1, s = 0; k < nl; k++) {
-          double a = pow(frac[k], gamma) * arc[nl];
-          while (s + 1 < nl && arc[s + 1] < a) s++;
-          double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
-          u = u < 0 ? 0 : u > 1 ? 1 : u;
-          for (int c = 0; c < 3; c++)
-            p->lev[k * lsz + 3 * v + c] =
-                old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
-        }
+        place_levels(p, v, nl, old, arc, frac, gamma);
         if (!column_valid(p, v, floor) || (p->smooth[v] && first_tilt(p, v) > tilt_max)) continue;
         double s1 = column_skew(p, v);
         if (s1 < best * (1 - 1e-3)) {
@@ -627,16 +612,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
         }
       }
       if (bestg >= 0) {
-        double gamma = p->k.relief_gamma[bestg];
-        for (int k = 1, s = 0; k < nl; k++) {
-          double a = pow(frac[k], gamma) * arc[nl];
-          while (s + 1 < nl && arc[s + 1] < a) s++;
-          double u = (a - arc[s]) / (arc[s + 1] - arc[s]);
-          u = u < 0 ? 0 : u > 1 ? 1 : u;
-          for (int c = 0; c < 3; c++)
-            p->lev[k * lsz + 3 * v + c] =
-                old[3 * s + c] + u * (old[3 * (s + 1) + c] - old[3 * s + c]);
-        }
+        place_levels(p, v, nl, old, arc, frac, p->k.relief_gamma[bestg]);
         moved_now++;
         /* the neighbours' cells changed with this column's */
         for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)

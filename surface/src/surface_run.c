@@ -200,6 +200,24 @@ static void elem_normal(const vm_mesh *m, const double *x, int64_t e, double n[3
   }
 }
 
+/* Elements of m whose orientation reversed against x0 (their normals at
+ * m->xyz and at x0 meet at 90 degrees or more); their vertices are marked
+ * in mark if it is not NULL. */
+static int64_t reversed(const vm_mesh *m, const double *x0, uint8_t *mark) {
+  int64_t n = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    double a[3], b[3];
+    elem_normal(m, m->xyz, e, a);
+    elem_normal(m, x0, e, b);
+    if (vm_dot3(a, b) > 0) continue;
+    n++;
+    if (!mark) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int k = 0; k < vm_elem_nverts(m->etype[e]); k++) mark[c[k]] = 1;
+  }
+  return n;
+}
+
 /* vm_surface_unfold (surface.h): rounds of 1, 2, 4 and 8 rings. */
 int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   if (!m || !x0 || !s) return VM_ERR_ARG;
@@ -210,13 +228,7 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   int32_t *pairs = NULL;
   int st = count_pairs(m, &n, &pairs, s->fold_at);
   if (st < 0) return st;
-  int64_t flipped = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    double a[3], b[3];
-    elem_normal(m, m->xyz, e, a);
-    elem_normal(m, x0, e, b);
-    flipped += vm_dot3(a, b) <= 0;
-  }
+  int64_t flipped = reversed(m, x0, NULL);
   s->self_intersections = n;
   if (n == 0 && flipped == 0) {
     vm_free(ctx, pairs);
@@ -249,14 +261,7 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
       const int32_t *c = m->conn + m->eoff[pairs[i]];
       for (int a = 0; a < 3; a++) mark[c[a]] = 1;
     }
-    for (int64_t e = 0; e < m->ne; e++) {
-      double a[3], b[3];
-      elem_normal(m, m->xyz, e, a);
-      elem_normal(m, x0, e, b);
-      if (vm_dot3(a, b) > 0) continue;
-      const int32_t *c = m->conn + m->eoff[e];
-      for (int k = 0; k < vm_elem_nverts(m->etype[e]); k++) mark[c[k]] = 1;
-    }
+    reversed(m, x0, mark);
     /* rings of neighbours, through the elements */
     for (int r = 0; r < rings[round]; r++) {
       memcpy(next, mark, (size_t)nv);
@@ -274,13 +279,7 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
     vm_free(ctx, pairs);
     pairs = NULL;
     if ((st = count_pairs(m, &n, &pairs, s->fold_at)) < 0) break;
-    flipped = 0;
-    for (int64_t e = 0; e < m->ne; e++) {
-      double a[3], b[3];
-      elem_normal(m, m->xyz, e, a);
-      elem_normal(m, x0, e, b);
-      flipped += vm_dot3(a, b) <= 0;
-    }
+    flipped = reversed(m, x0, NULL);
   }
   s->adapt_backed_off = 0;
   for (int64_t v = 0; v < nv; v++) s->adapt_backed_off += mark[v];

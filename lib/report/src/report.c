@@ -213,6 +213,20 @@ static int make_tmp(vm_report *r) {
   return VM_OK;
 }
 
+/* Rename r->tmp/name to r->dir/name. */
+static int move_into_place(vm_report *r, const char *name) {
+  vm_ctx *ctx = r->ctx;
+  int st = VM_OK;
+  char *a = format(ctx, "%s/%s", r->tmp, name), *b = format(ctx, "%s/%s", r->dir, name);
+  if (!a || !b)
+    st = VM_ERR_NOMEM;
+  else if (rename(a, b) != 0)
+    st = vm_error(ctx, VM_ERR_IO, "%s: cannot move into place: %s", b, strerror(errno));
+  vm_free(ctx, a);
+  vm_free(ctx, b);
+  return st;
+}
+
 /* Put the files of r->tmp in place: the whole directory renamed to r->dir
  * if that is still missing, else file by file into it (index.html last),
  * so that a failure before this (a full disk) leaves no partial report. */
@@ -230,24 +244,11 @@ static int publish(vm_report *r) {
         index = 1;
         continue;
       }
-      char *a = format(ctx, "%s/%s", r->tmp, e->d_name),
-           *b = format(ctx, "%s/%s", r->dir, e->d_name);
-      if (!a || !b)
-        st = VM_ERR_NOMEM;
-      else if (rename(a, b) != 0)
-        st = vm_error(ctx, VM_ERR_IO, "%s: cannot move into place: %s", b, strerror(errno));
-      vm_free(ctx, a);
-      vm_free(ctx, b);
+      st = move_into_place(r, e->d_name);
     }
     closedir(dd);
     if (st == VM_OK && index) {
-      char *a = format(ctx, "%s/index.html", r->tmp), *b = format(ctx, "%s/index.html", r->dir);
-      if (!a || !b)
-        st = VM_ERR_NOMEM;
-      else if (rename(a, b) != 0)
-        st = vm_error(ctx, VM_ERR_IO, "%s: cannot move into place: %s", b, strerror(errno));
-      vm_free(ctx, a);
-      vm_free(ctx, b);
+      st = move_into_place(r, "index.html");
     }
     remove_tmp(r->tmp);
   }
