@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # test/cli/test_messages.sh: honest exits and messages (issue 21, item 14):
 # a legal 245-byte output name works (the temporary name no longer
-# overflows NAME_MAX); a write failure says why (strerror); a --report that
+# overflows NAME_MAX); a write failure says why (strerror, CGNS too); a --report that
 # fails half-way (no space) leaves no report directory; Ctrl-C during
 # vm-surface's remeshing exits 4 (was 130); vm-gen --angle nan is a usage
 # error; vm-volume names the file and says what a collapsed hex and an
@@ -28,6 +28,15 @@ for ext in vmsh su2 stl obj off ply vtk; do
   rc=$?
   check '[ $rc -eq 1 ] && grep -q "write failed: File too large" err && [ ! -e "w.$ext" ]' "a failed .$ext write says why (exit $rc: $(cat err))"
 done
+# CGNS (when built): libcgns's message and the system's reason; no crash in
+# HDF5's exit handler (it segfaulted on the file whose close had failed) and
+# no temporary file left
+if "$conv" s.vmsh c.cgns 2>/dev/null; then
+  (ulimit -f 8; trap '' XFSZ; "$conv" s4.vmsh w.cgns 2>err)
+  rc=$?
+  check '[ $rc -eq 1 ] && grep -q "libcgns: .*write failed: File too large" err && [ $(wc -l <err) -eq 1 ] && [ -z "$(ls | grep "^w\.cgns")" ]' "a failed .cgns write says why, exit 1, nothing left (exit $rc: $(cat err))"
+  rm -f c.cgns
+fi
 
 (ulimit -f 20; trap '' XFSZ; "$qual" --report R s4.vmsh >/dev/null 2>err)
 rc=$?

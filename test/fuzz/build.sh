@@ -49,9 +49,25 @@ for r in $readers; do
   "$CC" "${common[@]}" "${san[@]}" -fsanitize=fuzzer -DVM_FUZZ_READER="\"$r\"" \
     "$here/fuzz_reader.c" "${objs_fuzz[@]}" -lm -o "$out/fuzz-$r"
 done
+# CGNS: a structure-aware harness (fuzz_cgns.c) that writes each input's
+# file with libcgns and reads it back; cgns.c compiled again with libcgns
+# (the objects above have CGNS compiled out). Only where libcgns-dev is.
+ncgns=0
+if [ -f /usr/include/cgnslib.h ]; then
+  "$CC" "${common[@]}" "${san[@]}" -fsanitize=fuzzer-no-link -DVM_HAVE_CGNS \
+    -c "$root/lib/io/src/cgns.c" -o "$out/obj-fuzz/cgns-lib.o"
+  objs_cgns=()
+  for o in "${objs_fuzz[@]}"; do
+    [ "$(basename "$o")" = cgns.o ] && o="$out/obj-fuzz/cgns-lib.o"
+    objs_cgns+=("$o")
+  done
+  "$CC" "${common[@]}" "${san[@]}" -fsanitize=fuzzer "$here/fuzz_cgns.c" "${objs_cgns[@]}" \
+    -lcgns -lm -o "$out/fuzz-cgns"
+  ncgns=1
+fi
 "$CC" "${common[@]}" "${san[@]}" "$here/replay.c" "${objs_san[@]}" -lm -o "$out/replay"
 "$CC" "${common[@]}" "$here/gen_corpus.c" "${objs_san[@]}" "${san[@]}" -lm -o "$out/gen_corpus"
-echo "build.sh: built $(echo $readers | wc -w) fuzzers, replay and gen_corpus in $out"
+echo "build.sh: built $(( $(echo $readers | wc -w) + ncgns )) fuzzers, replay and gen_corpus in $out"
 if [ "$regen" = 1 ]; then
   rm -f "$here"/corpus/*/gen-*
   "$out/gen_corpus" "$here/corpus"

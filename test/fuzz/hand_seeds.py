@@ -3,7 +3,8 @@
 (test/fuzz/corpus/<reader>/hand-*): variants the library's writers never
 produce (zlib-compressed and appended VTU, big-endian PLY, OBJ with slashes
 and negative indices, MEDIT keywords, msh sections, comments) and edge cases
-(empty, header only). Run: python3 test/fuzz/hand_seeds.py"""
+(empty, header only); for CGNS, programs of the structure-aware harness
+fuzz_cgns.c that describe valid meshes. Run: python3 test/fuzz/hand_seeds.py"""
 import base64
 import os
 import struct
@@ -395,6 +396,49 @@ put("su2", "zone-ffd", "NZONE= 1\nIZONE= 1\nNDIME= 3\nNELEM= 1\n12 0 1 2 3 4 5 6
     "NPOIN= 8\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
     "NMARK= 1\nMARKER_TAG= box\nMARKER_ELEMS= 2\n9 0 3 2 1\n9 4 5 6 7\nFFD_NBOX= 0\n"
     "FFD_NLEVEL= 0\n")
+
+
+def cgns_program(cdim, nv, coords, sections, bcs, solution=True):
+    """A program for fuzz_cgns.c (its bytes are read in this order): a base,
+    an unstructured zone, all three coordinates, sections (type index, element
+    nodes; each starting after the last), boundary conditions as element ranges
+    with a family, and a cell solution."""
+    types = ["TRI_3", "QUAD_4", "TETRA_4", "PYRA_5", "PENTA_6", "HEXA_8"]
+    b = [cdim - 1, 2, 1, nv, sum(len(e) for _, e in sections), 0]
+    for k in range(3):
+        b += [128 + 16 * int(c[k]) for c in coords]
+    b.append(len(sections))
+    for t, elems in sections:
+        b += [types.index(t), 1, len(elems)]
+        for e in elems:
+            b += [v % (nv + 3) for v in e]  # node v (1-based) is byte v + 1 - 1
+    b.append(len(bcs))
+    for first, last, fam in bcs:
+        b += [2, 1, first + 1, last + 1, 0, 1, fam]
+    if solution:
+        b += [1, 1, 1] + [128, 3] * 64 + [1]
+    return bytes(b)
+
+
+# the bytes of a node: take_int(b, nv) = c % (nv + 3) - 1, so node v is c = v + 1
+def _n(*vs):
+    return [v + 1 for v in vs]
+
+
+put("cgns", "tet", cgns_program(3, 4, [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)],
+                                [("TETRA_4", [_n(1, 2, 3, 4)]), ("TRI_3", [_n(1, 3, 2)])],
+                                [(2, 2, 0)]))
+put("cgns", "prism-pyramid", cgns_program(
+    3, 7, [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 1, 0)],
+    [("PENTA_6", [_n(1, 2, 3, 4, 5, 6)]), ("TETRA_4", [_n(2, 7, 3, 5)]),
+     ("TRI_3", [_n(1, 3, 2), _n(4, 5, 6)])], [(3, 3, 0), (4, 4, 1)]))
+put("cgns", "hex", cgns_program(
+    3, 8, [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)],
+    [("HEXA_8", [_n(1, 2, 3, 4, 5, 6, 7, 8)]), ("QUAD_4", [_n(1, 4, 3, 2), _n(5, 6, 7, 8)])],
+    [(2, 3, 1)], solution=False))
+put("cgns", "surface", cgns_program(
+    2, 4, [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [("TRI_3", [_n(1, 2, 3), _n(1, 3, 4)])],
+    []))
 for r in ("vmsh", "vmsht", "vtk", "vtu", "msh", "medit", "stl", "obj", "off", "ply", "su2"):
     put(r, "empty", b"")
 put("vmsht", "header-only", "vmsht 1 0\ndim 3\nvertices 0\nelements 0\nfields 0\n")

@@ -14,9 +14,11 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 secs=${1:-60}
 [ $# -gt 0 ] && shift
-readers=${*:-vmsh vmsht vtk vtu msh medit stl obj off ply su2}
+readers=${*:-vmsh vmsht vtk vtu msh medit stl obj off ply su2 cgns}
 bin=${FUZZ_DIR:-$root/build-fuzz}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}
+# third-party leaks by design (libcgns on malformed files): test/lsan.supp
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/test/lsan.supp:print_suppressions=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 bad=0
 for r in $readers; do

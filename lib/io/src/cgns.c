@@ -3,6 +3,7 @@
  * Family_t + BC_t per family, cell fields as a cell-centred FlowSolution_t
  * (a surface mesh: a base of cell dimension 2, sections TRI_3 / QUAD_4, no
  * families); import: the same and what varmesh/io.h lists. */
+#include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -18,8 +19,32 @@
 
 int vm_have_cgns(void) { return 1; }
 
+/* A failed write: libcgns's message, and the system's reason when the
+ * failure came from the disk (errno is cleared before each write step, so
+ * a reason left by an earlier, harmless probe is not reported). */
 static int cg_fail(vm_ctx *ctx, const char *path, const char *what) {
-  return vm_error(ctx, VM_ERR_BACKEND, "%s: libcgns: %s: %s", path, what, cg_get_error());
+  int e = errno;
+  int disk = e == ENOSPC || e == EFBIG || e == EDQUOT || e == EIO || e == EACCES || e == EROFS ||
+             e == EPERM;
+  return vm_error(ctx, VM_ERR_BACKEND, "%s: libcgns: %s: %s%s%s", path, what, cg_get_error(),
+                  disk ? ": write failed: " : "", disk ? strerror(e) : "");
+}
+
+/* HDF5 closes every file it still has open in an atexit handler, and that
+ * handler crashes (SIGSEGV in H5F__close_cb) on a file whose close failed,
+ * e.g. on a full disk. varmesh closes its files itself, so the handler is
+ * turned off before HDF5's first use: H5dont_atexit, looked up at run time
+ * in the HDF5 that libcgns loaded (its headers are not needed). */
+static void hdf5_no_atexit(void) {
+  static int done;
+  if (done) return;
+  done = 1;
+  void *self = dlopen(NULL, RTLD_NOW);
+  if (!self) return;
+  int (*dont)(void);
+  *(void **)&dont = dlsym(self, "H5dont_atexit"); /* POSIX's idiom for a function */
+  if (dont) dont();
+  dlclose(self);
 }
 
 /* CGNS type and VTK-order -> CGNS-order (identical for linear cells). */
@@ -38,7 +63,10 @@ static CGNS_ENUMT(ElementType_t) cg_type(int t) {
 static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const char *tmp,
                       const char *path) {
   int fn, B, Z, st = VM_OK;
+  hdf5_no_atexit();
+  errno = 0;
   if (cg_open(tmp, CG_MODE_WRITE, &fn)) return cg_fail(ctx, path, "open");
+  errno = 0;
   cgsize_t size[3] = {(cgsize_t)m->nv, (cgsize_t)g->ncell, 0};
   double *c = vm_alloc_array(ctx, (size_t)(m->nv ? m->nv : 1), sizeof *c);
   int32_t *order = vm_alloc_array(ctx, (size_t)(g->ncell ? g->ncell : 1), sizeof *order);
@@ -59,6 +87,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
   for (int k = 0; k < 3; k++) {
     int C;
     for (int64_t v = 0; v < m->nv; v++) c[v] = m->xyz[3 * v + k];
+    errno = 0;
     if (cg_coord_write(fn, B, Z, CGNS_ENUMV(RealDouble), cname[k], c, &C)) {
       st = cg_fail(ctx, path, "coordinates");
       goto done;
@@ -82,6 +111,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
     }
     if (!n) continue;
     int S;
+    errno = 0;
     if (cg_section_write(fn, B, Z, vol_names[ti], cg_type(vol_types[ti]), next, next + n - 1, 0,
                          conn, &S)) {
       st = cg_fail(ctx, path, "cell section");
@@ -105,6 +135,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
       char sname[64];
       snprintf(sname, sizeof sname, "%.40s_%s", g->name[f], nv == 3 ? "tri" : "quad");
       int S;
+      errno = 0;
       if (cg_section_write(fn, B, Z, sname, nv == 3 ? CGNS_ENUMV(TRI_3) : CGNS_ENUMV(QUAD_4), next,
                            next + n - 1, 0, conn, &S)) {
         st = cg_fail(ctx, path, "face section");
@@ -121,6 +152,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
          : kind == EX_FAM_SYMMETRY ? CGNS_ENUMV(BCSymmetryPlane)
                                    : CGNS_ENUMV(BCTypeUserDefined);
     cgsize_t range[2] = {first, next - 1};
+    errno = 0;
     if (cg_family_write(fn, B, g->name[f], &F) || cg_fambc_write(fn, B, F, "FamBC", bt, &FB) ||
         cg_boco_write(fn, B, Z, g->name[f], CGNS_ENUMV(FamilySpecified), CGNS_ENUMV(PointRange), 2,
                       range, &BC) ||
@@ -142,6 +174,7 @@ static int write_file(vm_ctx *ctx, const vm_mesh *m, const ex_groups *g, const c
       goto done;
     }
     int F, r;
+    errno = 0;
     if (fl->type == VM_FIELD_F64) {
       double *v = cellval;
       for (int64_t k = 0; k < g->ncell; k++) v[k] = ((const double *)fl->data)[order[k]];
@@ -161,6 +194,7 @@ done:
   vm_free(ctx, cellval);
   vm_free(ctx, order);
   vm_free(ctx, conn);
+  errno = 0;
   if (cg_close(fn) && st == VM_OK) st = cg_fail(ctx, path, "close");
   return st;
 }
@@ -684,9 +718,19 @@ int vm_read_cgns(vm_ctx *ctx, const char *name, const uint8_t *buf, size_t len, 
   void *hp;
   memcpy(&hp, &handler, sizeof hp);
   cg_configure(CG_CONFIG_ERROR, hp);
+  hdf5_no_atexit();
+  r.fn = -1;
   int st = cg_open(tmp, CG_MODE_READ, &r.fn);
   remove(tmp); /* the open file stays readable */
-  if (st) return cg_rfail(&r, "not a readable CGNS file");
+  if (st) {
+    /* libcgns keeps the file open when cg_open fails while reading its
+     * tree (e.g. Elements_t in a structured zone): one descriptor lost per
+     * bad file, and after a few hundred "Too many files opened" for every
+     * file (found by test/fuzz/fuzz_cgns.c). It has given the number. */
+    st = cg_rfail(&r, "not a readable CGNS file");
+    if (r.fn >= 0) cg_close(r.fn);
+    return st;
+  }
   st = vm_mesh_create(ctx, &r.m);
   if (!st) st = cg_parse(&r);
   cg_close(r.fn);
