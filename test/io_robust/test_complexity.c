@@ -11,7 +11,16 @@
  *  - MSH 4.1: one element block per element, each on its own entity with
  *    its own physical name (searches per block, one attribute per name);
  *  - MEDIT: one Triangles and one Corners section per triangle (a growing
- *    element array per section).
+ *    element array per section);
+ *  - OFF: the star polygons;
+ *  - SU2: one marker per boundary triangle, each with its own name (an
+ *    attribute each, once searched among all the others);
+ *  - .vmsht and .vmsh: many one-value fields (vm_mesh_check compared every
+ *    pair of names: a 6 MB .vmsht took 67 s);
+ *  - CGNS (where libcgns is): many fields, refused past the reader's
+ *    ceiling of fields (libcgns finds each by name among all); libcgns still
+ *    reads the whole tree first, its own cost. At 0.25 and 2.5 MB: libcgns's
+ *    writer, which makes the files, is quadratic in the fields.
  * The CPU time of the 10 MB file must stay within 30 times the 1 MB file's
  * (linear: 10; n log n: about 12) and below 10 s (1 MB/s: the readers take
  * 0.2-0.3 s; before, the stars took 54 s), and every file must read (a mesh with
@@ -86,6 +95,15 @@ static void make_poly(buf *b, const char *fmt, size_t target, int convex, int64_
     for (int p = 0; p < np; p++) {
       put(b, "f");
       for (int i = 0; i < K; i++) put(b, " %d", p * K + i + 1);
+      put(b, "\n");
+    }
+  } else if (!strcmp(fmt, "off")) {
+    put(b, "OFF\n%d %d 0\n", np * K, np);
+    for (int p = 0; p < np; p++)
+      for (int i = 0; i < K; i++) put(b, "%.6g %.6g %d\n", x[i], y[i], p);
+    for (int p = 0; p < np; p++) {
+      put(b, "%d", K);
+      for (int i = 0; i < K; i++) put(b, " %d", p * K + i);
       put(b, "\n");
     }
   } else {
@@ -226,6 +244,57 @@ static void make_medit_sections(buf *b, size_t target, int64_t *ntri) {
   *ntri = n;
 }
 
+/* SU2: a tetrahedron, then one marker per boundary triangle, each with its
+ * own name (one attribute per marker, once searched among all the others). */
+static void make_su2_markers(buf *b, size_t target, int64_t *ne) {
+  int64_t n = (int64_t)(target / 40) + 1;
+  b->n = 0;
+  put(b, "NDIME= 3\nNELEM= 1\n10 0 1 2 3\nNPOIN= 4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nNMARK= %lld\n",
+      (long long)n);
+  for (int64_t k = 0; k < n; k++)
+    put(b, "MARKER_TAG= m%lld\nMARKER_ELEMS= 1\n5 0 2 1\n", (long long)k);
+  *ne = 1 + n;
+}
+
+/* .vmsht: one triangle and many one-value element fields (vm_mesh_check
+ * compared every pair of names: 6 MB took 67 s). */
+static void make_vmsht_fields(buf *b, size_t target, int64_t *ne) {
+  int64_t n = (int64_t)(target / 40) + 1;
+  b->n = 0;
+  put(b,
+      "vmsht 1 0\ndim 3\nvertices 3\n0 0 0 free -1\n1 0 0 free -1\n0 1 0 free -1\n"
+      "elements 1\ntri 0 1 2\nfields %lld\n",
+      (long long)n);
+  for (int64_t k = 0; k < n; k++) put(b, "field element f64 1 \"f%lld\"\n0\n", (long long)k);
+  put(b, "attributes 0\nend\n");
+  *ne = 1;
+}
+
+/* The same mesh in another format (binary .vmsh, CGNS), through the
+ * library's writer: b holds the file's bytes after. */
+static int convert_buf(vm_ctx *ctx, buf *b, const char *dir, const char *ext, int fmt) {
+  vm_mesh *m = NULL;
+  char path[300];
+  snprintf(path, sizeof path, "%s/conv.%s", dir, ext);
+  int st = vm_mesh_read_memory(ctx, "x.vmsht", (const uint8_t *)b->p, b->n, VM_FMT_VMSH_TEXT, &m);
+  if (st >= 0) st = vm_mesh_write(ctx, m, path, fmt, NULL);
+  vm_mesh_destroy(&m);
+  if (st < 0) return st;
+  FILE *f = fopen(path, "rb");
+  if (!f) return VM_ERR_IO;
+  fseek(f, 0, SEEK_END);
+  long len = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  if (len < 0 || (size_t)len > b->cap) {
+    b->cap = (size_t)(len < 0 ? 0 : len) + 1;
+    b->p = realloc(b->p, b->cap);
+  }
+  b->n = len > 0 ? fread(b->p, 1, (size_t)len, f) : 0;
+  fclose(f);
+  remove(path);
+  return VM_OK;
+}
+
 /* The CPU seconds of reading b as `path`: it must give a mesh of
  * want_tri elements, or (want_tri < 0) be refused with a message
  * holding `refusal`. */
@@ -261,11 +330,18 @@ int main(void) {
   struct {
     const char *name, *ext;
     int kind; /* 0 poly comb, 1 poly convex, 2 stl, 3 vtk arrays, 4 vtu arrays, 5 msh
-                 blocks, 6 medit sections */
-  } cases[] = {{"OBJ stars", "obj", 0},    {"OBJ convex", "obj", 1},     {"PLY stars", "ply", 0},
-               {"STL one slot", "stl", 2}, {"VTK arrays", "vtk", 3},     {"VTU arrays", "vtu", 4},
-               {"MSH blocks", "msh", 5},   {"MEDIT sections", "mesh", 6}};
+                 blocks, 6 medit sections, 7 su2 markers, 8 vmsht fields, 9 vmsh fields,
+                 10 cgns fields */
+  } cases[] = {
+      {"OBJ stars", "obj", 0},    {"OBJ convex", "obj", 1},     {"PLY stars", "ply", 0},
+      {"OFF stars", "off", 0},    {"STL one slot", "stl", 2},   {"VTK arrays", "vtk", 3},
+      {"VTU arrays", "vtu", 4},   {"MSH blocks", "msh", 5},     {"MEDIT sections", "mesh", 6},
+      {"SU2 markers", "su2", 7},  {"VMSHT fields", "vmsht", 8}, {"VMSH fields", "vmsh", 9},
+      {"CGNS fields", "cgns", 10}};
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    /* CGNS where the library has it: many fields are refused past the
+     * reader's ceiling, after libcgns has read the file's tree */
+    if (cases[c].kind == 10 && !vm_have_cgns()) continue;
     double t[2];
     size_t bytes[2];
     for (int s = 0; s < 2; s++) {
@@ -280,7 +356,23 @@ int main(void) {
         make_msh_blocks(&b, target, &ntri);
       else if (kind == 6)
         make_medit_sections(&b, target, &ntri);
-      else
+      else if (kind == 7)
+        make_su2_markers(&b, target, &ntri);
+      else if (kind == 8)
+        make_vmsht_fields(&b, target, &ntri);
+      else if (kind == 9) {
+        /* the binary chunks are bigger than the text's lines */
+        make_vmsht_fields(&b, target / 2, &ntri);
+        CHECK(convert_buf(ctx, &b, dir, "vmsh", VM_FMT_VMSH) == VM_OK, "VMSH fields: written");
+      } else if (kind == 10) {
+        /* HDF5 spends about 700 bytes on a field; a quarter of the sizes
+         * (0.25 and 2.5 MB): libcgns's writer takes the square of the
+         * fields' count (10 MB, 15,000 fields: a minute) */
+        make_vmsht_fields(&b, target / 68, &ntri);
+        CHECK(convert_buf(ctx, &b, dir, "cgns", VM_FMT_CGNS) >= 0, "CGNS fields: written");
+        /* read (386 fields), or refused past the ceiling (3,856) */
+        if ((int64_t)(target / 68 / 40) + 1 > 1024) ntri = -1;
+      } else
         make_poly(&b, cases[c].ext, target, kind == 1, &ntri);
       snprintf(path, sizeof path, "%s/x.%s", dir, cases[c].ext);
       bytes[s] = b.n;

@@ -2,7 +2,10 @@
  * attributes, invariant checks. */
 #include "varmesh/mesh.h"
 
+#include "mesh_names.h"
+
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 static const int nverts_tab[VM_NTYPES] = {3, 4, 4, 5, 6, 8};
@@ -233,6 +236,44 @@ int vm_mesh_add_element(vm_mesh *m, int type, const int32_t *verts) {
   return VM_OK;
 }
 
+/* Duplicate names (fields per location, attribute keys), found by sorting so
+ * a file with many names cannot make the check quadratic. */
+
+typedef struct {
+  const char *s;
+  int group;
+  int index;
+} name_ref;
+
+static int name_ref_cmp(const void *a, const void *b) {
+  const name_ref *x = a, *y = b;
+  if (x->group != y->group) return x->group < y->group ? -1 : 1;
+  int c = strcmp(x->s, y->s);
+  if (c) return c;
+  return (x->index > y->index) - (x->index < y->index);
+}
+
+/* mesh_names.h */
+int vm_mesh_first_duplicate(vm_ctx *ctx, const vm_mesh *m, int fields, int *dup) {
+  int n = fields ? m->nfield : m->nattr;
+  *dup = -1;
+  if (n < 2) return VM_OK;
+  name_ref *r = vm_alloc_array(ctx, (size_t)n, sizeof *r);
+  if (!r) return VM_ERR_NOMEM;
+  for (int i = 0; i < n; i++) {
+    r[i].s = fields ? m->fields[i].name : m->attrs[i].key;
+    r[i].group = fields ? m->fields[i].location : 0;
+    r[i].index = i;
+  }
+  qsort(r, (size_t)n, sizeof *r, name_ref_cmp);
+  for (int i = 1; i < n; i++)
+    if (r[i].group == r[i - 1].group && !strcmp(r[i].s, r[i - 1].s) &&
+        (*dup < 0 || r[i].index < *dup))
+      *dup = r[i].index;
+  vm_free(ctx, r);
+  return VM_OK;
+}
+
 int vm_mesh_check(const vm_mesh *m) {
   vm_ctx *ctx = m->ctx;
   if (m->dim != 2 && m->dim != 3)
@@ -266,9 +307,16 @@ int vm_mesh_check(const vm_mesh *m) {
     if (f->ncomp < 1 || (f->type != VM_FIELD_F64 && f->type != VM_FIELD_I32) ||
         (f->location != VM_FIELD_VERTEX && f->location != VM_FIELD_ELEMENT))
       return vm_error(ctx, VM_ERR_FORMAT, "field '%s': bad description", f->name);
-    for (int j = 0; j < i; j++)
-      if (m->fields[j].location == f->location && !strcmp(m->fields[j].name, f->name))
-        return vm_error(ctx, VM_ERR_FORMAT, "field '%s' appears twice", f->name);
+    /* a few fields: every pair; many: sorted (n log n whatever their count) */
+    if (m->nfield <= 16)
+      for (int j = 0; j < i; j++)
+        if (m->fields[j].location == f->location && !strcmp(m->fields[j].name, f->name))
+          return vm_error(ctx, VM_ERR_FORMAT, "field '%s' appears twice", f->name);
+  }
+  if (m->nfield > 16) {
+    int d;
+    if (vm_mesh_first_duplicate(ctx, m, 1, &d)) return VM_ERR_NOMEM;
+    if (d >= 0) return vm_error(ctx, VM_ERR_FORMAT, "field '%s' appears twice", m->fields[d].name);
   }
   return VM_OK;
 }
@@ -378,15 +426,44 @@ int vm_mesh_clone(const vm_mesh *src, vm_mesh **out) {
   memcpy(m->etype, src->etype, (size_t)src->ne);
   memcpy(m->eoff, src->eoff, (size_t)(src->ne + 1) * sizeof *m->eoff);
   memcpy(m->conn, src->conn, (size_t)src->eoff[src->ne] * sizeof *m->conn);
+  /* fields and attributes copied as they are, in one allocation each (not
+   * through vm_mesh_add_field's search by name: many fields stay linear) */
+  if (src->nfield && !(m->fields = vm_calloc(ctx, (size_t)src->nfield, sizeof *m->fields))) {
+    st = VM_ERR_NOMEM;
+    goto fail;
+  }
   for (int i = 0; i < src->nfield; i++) {
     const vm_field *f = &src->fields[i];
-    vm_field *g;
-    if ((st = vm_mesh_add_field(m, f->name, f->location, f->type, f->ncomp, &g))) goto fail;
     size_t esz = f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t);
-    memcpy(g->data, f->data, (size_t)vm_field_count(src, f) * (size_t)f->ncomp * esz);
+    size_t n = (size_t)vm_field_count(src, f) * (size_t)f->ncomp;
+    vm_field *g = &m->fields[m->nfield];
+    *g = *f;
+    g->name = vm_strdup(ctx, f->name);
+    g->data = vm_alloc_array(ctx, n ? n : 1, esz);
+    if (!g->name || !g->data) {
+      free_field(ctx, g);
+      st = VM_ERR_NOMEM;
+      goto fail;
+    }
+    memcpy(g->data, f->data, n * esz);
+    m->nfield++;
   }
-  for (int i = 0; i < src->nattr; i++)
-    if ((st = vm_mesh_set_attr(m, src->attrs[i].key, src->attrs[i].value))) goto fail;
+  if (src->nattr && !(m->attrs = vm_calloc(ctx, (size_t)src->nattr, sizeof *m->attrs))) {
+    st = VM_ERR_NOMEM;
+    goto fail;
+  }
+  for (int i = 0; i < src->nattr; i++) {
+    vm_attr *a = &m->attrs[m->nattr];
+    a->key = vm_strdup(ctx, src->attrs[i].key);
+    a->value = vm_strdup(ctx, src->attrs[i].value);
+    if (!a->key || !a->value) {
+      vm_free(ctx, a->key);
+      vm_free(ctx, a->value);
+      st = VM_ERR_NOMEM;
+      goto fail;
+    }
+    m->nattr++;
+  }
   *out = m;
   return VM_OK;
 fail:

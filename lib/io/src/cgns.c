@@ -585,6 +585,12 @@ static int cg_fields(cg_rd *r, int64_t ncell) {
     if (cg_sol_info(r->fn, 1, 1, S, sname, &loc) || cg_nfields(r->fn, 1, 1, S, &nf) ||
         cg_sol_size(r->fn, 1, 1, S, &ddim, dims))
       return cg_rfail(r, "solution");
+    /* libcgns finds each field by name among all of its solution's
+     * (cg_field_read): many fields would cost their square */
+    if ((int64_t)r->m->nfield + nf > VM_IO_MAX_ARRAYS)
+      return vm_error(r->ctx, VM_ERR_FORMAT,
+                      "%s: solution '%.32s': more than %d fields (the reader's ceiling)", r->name,
+                      sname, VM_IO_MAX_ARRAYS);
     int at_cells = loc == CGNS_ENUMV(CellCenter);
     int64_t n = at_cells ? ncell : r->m->nv;
     if ((loc != CGNS_ENUMV(Vertex) && !at_cells) || ddim != 1 || dims[0] != n ||

@@ -333,6 +333,12 @@ static int su2_markers(su2_rd *r, int64_t n) {
   if (st) return st;
   r->mbeg = vm_alloc_array(r->ctx, (size_t)n + 1, sizeof *r->mbeg);
   if (!r->mbeg) return VM_ERR_NOMEM;
+  /* the markers' names are the mesh's first attributes, their keys unique
+   * (the marker's number): appended, not searched (many markers stay
+   * linear) */
+  int fresh = r->m->nattr == 0;
+  if (fresh && n > 0 && !(r->m->attrs = vm_calloc(r->ctx, (size_t)n, sizeof *r->m->attrs)))
+    return VM_ERR_NOMEM;
   for (int64_t k = 0; k < n; k++) {
     su2_kv kv;
     if (vm_lex_eof(&r->lx))
@@ -349,7 +355,19 @@ static int su2_markers(su2_rd *r, int64_t n) {
     memcpy(nm, kv.val, kv.nval);
     nm[kv.nval] = 0;
     snprintf(key, sizeof key, "gmsh:physical_name:2:%lld", (long long)k + 1);
-    if ((st = vm_mesh_set_attr(r->m, key, nm))) return st;
+    if (!fresh) {
+      if ((st = vm_mesh_set_attr(r->m, key, nm))) return st;
+    } else {
+      vm_attr *a = &r->m->attrs[r->m->nattr];
+      a->key = vm_strdup(r->ctx, key);
+      a->value = vm_strdup(r->ctx, nm);
+      if (!a->key || !a->value) {
+        vm_free(r->ctx, a->key);
+        vm_free(r->ctx, a->value);
+        return VM_ERR_NOMEM;
+      }
+      r->m->nattr++;
+    }
     if (vm_lex_eof(&r->lx))
       return vm_lex_fail(&r->lx, "unexpected end of file, expected MARKER_ELEMS= of marker '%s'",
                          nm);

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "formats_private.h"
+#include "mesh_names.h"
 #include "lex_private.h"
 
 #define VMSH_MAJOR 1
@@ -89,46 +90,6 @@ static char *dup_bytes(vm_ctx *ctx, const void *p, size_t n) {
   if (n) memcpy(s, p, n);
   s[n] = 0;
   return s;
-}
-
-/* Duplicate names (fields per location, attribute keys), found by sorting so
- * a file with many names cannot make the check quadratic. */
-
-typedef struct {
-  const char *s;
-  int group;
-  int index;
-} name_ref;
-
-static int name_ref_cmp(const void *a, const void *b) {
-  const name_ref *x = a, *y = b;
-  if (x->group != y->group) return x->group < y->group ? -1 : 1;
-  int c = strcmp(x->s, y->s);
-  if (c) return c;
-  return (x->index > y->index) - (x->index < y->index);
-}
-
-/* *dup: index (in input order) of the first field name (fields != 0) or
- * attribute key that repeats an earlier one in its group, -1 if none.
- * Returns VM_OK or VM_ERR_NOMEM. */
-static int first_duplicate(vm_ctx *ctx, const vm_mesh *m, int fields, int *dup) {
-  int n = fields ? m->nfield : m->nattr;
-  *dup = -1;
-  if (n < 2) return VM_OK;
-  name_ref *r = vm_alloc_array(ctx, (size_t)n, sizeof *r);
-  if (!r) return VM_ERR_NOMEM;
-  for (int i = 0; i < n; i++) {
-    r[i].s = fields ? m->fields[i].name : m->attrs[i].key;
-    r[i].group = fields ? m->fields[i].location : 0;
-    r[i].index = i;
-  }
-  qsort(r, (size_t)n, sizeof *r, name_ref_cmp);
-  for (int i = 1; i < n; i++)
-    if (r[i].group == r[i - 1].group && !strcmp(r[i].s, r[i - 1].s) &&
-        (*dup < 0 || r[i].index < *dup))
-      *dup = r[i].index;
-  vm_free(ctx, r);
-  return VM_OK;
 }
 
 /* Binary reader. */
@@ -479,7 +440,8 @@ static int alloc_mesh(vm_ctx *ctx, const char *name, int dim, int64_t nv, int64_
 static int check_duplicates(vm_ctx *ctx, const char *name, const vm_mesh *m,
                             const uint64_t *field_at, const uint64_t *attr_at, int text) {
   int d;
-  if (first_duplicate(ctx, m, 1, &d)) return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", name);
+  if (vm_mesh_first_duplicate(ctx, m, 1, &d))
+    return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", name);
   if (d >= 0) {
     const vm_field *f = &m->fields[d];
     if (text)
@@ -489,7 +451,8 @@ static int check_duplicates(vm_ctx *ctx, const char *name, const vm_mesh *m,
                     "%s: FILD chunk at offset %llu: %s field '%.80s' appears twice", name,
                     (unsigned long long)field_at[d], loc_names[f->location], f->name);
   }
-  if (first_duplicate(ctx, m, 0, &d)) return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", name);
+  if (vm_mesh_first_duplicate(ctx, m, 0, &d))
+    return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", name);
   if (d >= 0) {
     if (text)
       return vm_error(ctx, VM_ERR_FORMAT, "%s: line %llu: attribute '%.80s' appears twice", name,
@@ -885,7 +848,8 @@ static int check_writable(vm_ctx *ctx, const vm_mesh *m, const char *path) {
       return vm_error(ctx, VM_ERR_ARG, "%s: attribute %d: key is empty or too long", path, i);
   }
   int d;
-  if (first_duplicate(ctx, m, 0, &d)) return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", path);
+  if (vm_mesh_first_duplicate(ctx, m, 0, &d))
+    return vm_error(ctx, VM_ERR_NOMEM, "%s: out of memory", path);
   if (d >= 0)
     return vm_error(ctx, VM_ERR_ARG, "%s: attribute '%.80s' appears twice", path, m->attrs[d].key);
   return VM_OK;
