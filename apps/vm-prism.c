@@ -210,10 +210,20 @@ static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *
 typedef struct {
   const char *in, *out, *report;
   double T_abs, T_rel;
+  double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
+  int growth_given;                   /* --growth given (else solved for a first height) */
   int json, fout;
   vm_prism_opts o;
   vm_write_opts wo;
 } args;
+
+/* --growth R: as given (without it, a first height solves for the ratio). */
+static int opt_growth(vm_cli *cli, const vm_opt *opt, const char *value, void *p) {
+  args *a = p;
+  if (vm_cli_double(cli, opt->name, value, 1, 10, &a->o.growth)) return VM_EXIT_USAGE;
+  a->growth_given = 1;
+  return VM_EXIT_OK;
+}
 
 /* -t: the thickness relative to the model's length (it overrides -T). */
 static int opt_thickness_rel(vm_cli *cli, const vm_opt *opt, const char *value, void *p) {
@@ -235,10 +245,19 @@ static const vm_opt opts[] = {
      .hi = 1000},
     {"--first-height", NULL, VM_OPT_DOUBLE, A(o.first_height), "H",
      "height of the first layer (absolute)", .lo = 1e-300, .hi = 1e300},
-    {"--growth", NULL, VM_OPT_DOUBLE, A(o.growth), "R",
-     "ratio of successive layer heights (default 1.2; with --first-height alone the ratio is "
-     "solved for)",
-     .lo = 1, .hi = 10},
+    {"--growth", NULL, VM_OPT_CALL, 0, "R",
+     "ratio of successive layer heights (default 1.2; with --first-height or --yplus and no "
+     "--growth the ratio is solved for, so the layers fill the thickness; with both, the growth "
+     "law is kept and fewer layers may be made)",
+     .fn = opt_growth},
+    {"--yplus", NULL, VM_OPT_DOUBLE, A(yplus), "Y",
+     "first-layer height for a target y+ by the flat-plate estimate (needs --reynolds; "
+     "docs/prism.md)",
+     .lo = 1e-6, .hi = 1e4},
+    {"--reynolds", NULL, VM_OPT_DOUBLE, A(reynolds), "RE",
+     "Reynolds number over the reference length, for --yplus (10 to 1e12)", .lo = 10, .hi = 1e12},
+    {"--ref-length", NULL, VM_OPT_DOUBLE, A(ref_length), "L",
+     "reference length of --reynolds (default the model's length)", .lo = 1e-300, .hi = 1e300},
     {"--springback-iter", NULL, VM_OPT_INT, A(o.springback_iter), "N",
      "implicit iterations of the springback (default 100; up to 3N while the line search keeps "
      "cutting the step)",
@@ -490,6 +509,30 @@ int main(int argc, char **argv) {
                             o->thickness, L);
     goto done;
   }
+  if (a.yplus > 0 || a.reynolds > 0 || a.ref_length > 0) {
+    if (!(a.yplus > 0) || !(a.reynolds > 0)) {
+      rc = vm_cli_usage_error(&cli, "--yplus needs --reynolds (and --reynolds, --ref-length "
+                                    "are for --yplus)");
+      goto done;
+    }
+    if (o->first_height > 0) {
+      rc = vm_cli_usage_error(&cli, "give --first-height or --yplus, not both");
+      goto done;
+    }
+    double Lr = a.ref_length > 0 ? a.ref_length : L;
+    o->first_height = vm_prism_yplus_height(a.yplus, a.reynolds, Lr);
+    if (!(o->first_height > 0)) {
+      rc = vm_cli_usage_error(&cli, "--yplus %g at Reynolds number %g over %g gives no height",
+                              a.yplus, a.reynolds, Lr);
+      goto done;
+    }
+    vm_log(cli.ctx, VM_LOG_INFO,
+           "first height %g for y+ %g at Reynolds number %g over the length %g (flat "
+           "plate, Schlichting's Cf)",
+           o->first_height, a.yplus, a.reynolds, Lr);
+  }
+  /* a first height alone: the growth ratio is solved for */
+  if (o->first_height > 0 && !a.growth_given) o->growth = 0;
   if (o->first_height > 0 && !(o->first_height < o->thickness)) {
     rc = vm_cli_usage_error(&cli, "--first-height %g is not below the thickness %g",
                             o->first_height, o->thickness);
@@ -508,6 +551,11 @@ int main(int argc, char **argv) {
   vm_cli_catch_interrupts(&cli);
   vm_prism_report r;
   int st = vm_prism_run(cli.ctx, m, o, &res, &r);
+  if (st >= 0 && o->growth == 0 && r.growth > 1.5)
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "the growth ratio solved for the first height %g is %.3g: more layers (-n) or a "
+           "smaller thickness would keep it near 1.2",
+           r.first_height, r.growth);
   if (st < 0 && st != VM_ERR_INTERRUPTED) {
     /* no wall triangles counted: the wall or the options were refused */
     if (r.wall_triangles == 0) {

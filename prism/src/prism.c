@@ -13,6 +13,14 @@ const char *vm_prism_phase_name(vm_prism_phase ph) {
   return (int)ph >= 0 && ph < VM_PRISM_NPHASES ? names[ph] : "unknown";
 }
 
+double vm_prism_yplus_height(double yplus, double reynolds, double ref_length) {
+  if (!(yplus > 0) || !(ref_length > 0) || !(reynolds >= 10 && reynolds <= 1e12) ||
+      !isfinite(yplus) || !isfinite(ref_length))
+    return NAN;
+  double cf = pow(2 * log10(reynolds) - 0.65, -2.3);
+  return yplus * ref_length / (reynolds * sqrt(0.5 * cf));
+}
+
 vm_prism_opts vm_prism_opts_default(void) {
   vm_prism_opts o;
   memset(&o, 0, sizeof o);

@@ -98,6 +98,16 @@ typedef struct vm_prism_opts {
  * defaults and reasons, in prism/src/params.h. */
 vm_prism_opts vm_prism_opts_default(void);
 
+/* First-layer height for a target y+ by the flat-plate estimate: the
+ * turbulent skin friction of Schlichting, Cf = (2 log10 Re - 0.65)^-2.3,
+ * gives the friction velocity u_tau = U sqrt(Cf / 2), and y = y+ nu / u_tau
+ * with nu = U L / Re, i.e. h1 = yplus L / (Re sqrt(Cf / 2)). reynolds: the
+ * Reynolds number over the reference length ref_length (the length unit of
+ * the result). NAN unless yplus > 0, ref_length > 0 and 10 <= reynolds <=
+ * 1e12. An estimate for sizing, as every mesher's y+ calculator: the
+ * solver's y+ follows the actual flow. */
+double vm_prism_yplus_height(double yplus, double reynolds, double ref_length);
+
 /* The summary of a run (every figure is measured, not assumed). */
 typedef struct vm_prism_report {
   int64_t wall_vertices, wall_triangles, prisms;
