@@ -70,6 +70,24 @@ static void progress(void *user, const vm_prism_progress *p) {
   ps->last_phase = (int)p->phase;
 }
 
+/* The wall's field f added to the prism mesh r (*g, and its row size in
+ * bytes), unless the prism stage writes a field of that name itself: then
+ * 0, said on stderr. < 0: out of memory. */
+static int carry_field(vm_cli *cli, const vm_field *f, vm_mesh *r, vm_field **g, size_t *row) {
+  if (vm_mesh_find_field(r, f->name, f->location)) {
+    if (!cli->quiet)
+      fprintf(stderr,
+              "vm-prism: warning: the wall's %s field '%s' is not carried up the columns: the "
+              "prism stage writes its own\n",
+              f->location == VM_FIELD_VERTEX ? "vertex" : "element", f->name);
+    return 0;
+  }
+  int st = vm_mesh_add_field(r, f->name, f->location, f->type, f->ncomp, g);
+  if (st < 0) return st;
+  *row = (f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t)) * (size_t)f->ncomp;
+  return 1;
+}
+
 /* Copy the vertex fields of the wall mesh w onto the prism mesh r, whose
  * vertex k*nw + l is level k of the column on the l-th wall vertex used by
  * a triangle or quad of w (in w's order, as vm_prism_create numbers them):
@@ -93,17 +111,11 @@ static int pass_wall_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t n
   for (int i = 0; st == VM_OK && n == nw && i < w->nfield; i++) {
     const vm_field *f = &w->fields[i];
     if (f->location != VM_FIELD_VERTEX) continue;
-    if (vm_mesh_find_field(r, f->name, VM_FIELD_VERTEX)) {
-      if (!cli->quiet)
-        fprintf(stderr,
-                "vm-prism: warning: the wall's vertex field '%s' is not carried up the "
-                "columns: the prism stage writes its own\n",
-                f->name);
-      continue;
-    }
     vm_field *g;
-    if ((st = vm_mesh_add_field(r, f->name, VM_FIELD_VERTEX, f->type, f->ncomp, &g)) < 0) break;
-    size_t sz = f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t), row = sz * f->ncomp;
+    size_t row;
+    int c = carry_field(cli, f, r, &g, &row);
+    if (c < 0) st = c;
+    if (c <= 0) continue;
     int64_t levels = strcmp(f->name, "fixed") ? nlev : 1;
     for (int64_t k = 0; k < levels; k++)
       for (int64_t l = 0; l < nw; l++)
@@ -135,17 +147,11 @@ static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, i
   for (int i = 0; st == VM_OK && n == nt && i < w->nfield; i++) {
     const vm_field *f = &w->fields[i];
     if (f->location != VM_FIELD_ELEMENT) continue;
-    if (vm_mesh_find_field(r, f->name, VM_FIELD_ELEMENT)) {
-      if (!cli->quiet)
-        fprintf(stderr,
-                "vm-prism: warning: the wall's element field '%s' is not carried up the "
-                "columns: the prism stage writes its own\n",
-                f->name);
-      continue;
-    }
     vm_field *g;
-    if ((st = vm_mesh_add_field(r, f->name, VM_FIELD_ELEMENT, f->type, f->ncomp, &g)) < 0) break;
-    size_t sz = f->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t), row = sz * f->ncomp;
+    size_t row;
+    int c = carry_field(cli, f, r, &g, &row);
+    if (c < 0) st = c;
+    if (c <= 0) continue;
     for (int64_t e = 0; e < r->ne; e++)
       memcpy((char *)g->data + (size_t)e * row, (const char *)f->data + (size_t)src[e % nt] * row,
              row);

@@ -52,8 +52,7 @@ def main():
     types, _, nodes = gmsh.model.mesh.getElements(3)
     nprism, bad, ntri = 0, 0, 0
     for t, nd in zip(types, nodes):
-        name, _, _, nn, _, _ = gmsh.model.mesh.getElementProperties(t)
-        if nn != 6:
+        if gmsh.model.mesh.getElementProperties(t)[3] != 6:
             continue
         P = X[nd.astype(np.int64).reshape(-1, 6)]
         nprism += len(P)
@@ -66,7 +65,8 @@ def main():
         V = np.array(vols)
         sign = np.sign(np.median(V[0]))
         bad += int(np.sum(np.any(V * sign <= 0, axis=0)))
-    for t, nd in zip(*gmsh.model.mesh.getElements(2)[:1], gmsh.model.mesh.getElements(2)[2]):
+    types2, _, nodes2 = gmsh.model.mesh.getElements(2)
+    for t, nd in zip(types2, nodes2):
         if gmsh.model.mesh.getElementProperties(t)[3] == 3:
             ntri += len(nd) // 3
     gmsh.finalize()

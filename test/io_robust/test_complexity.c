@@ -97,21 +97,16 @@ static void make_poly(buf *b, const char *fmt, size_t target, int convex, int64_
       for (int i = 0; i < K; i++) put(b, " %d", p * K + i + 1);
       put(b, "\n");
     }
-  } else if (!strcmp(fmt, "off")) {
-    put(b, "OFF\n%d %d 0\n", np * K, np);
-    for (int p = 0; p < np; p++)
-      for (int i = 0; i < K; i++) put(b, "%.6g %.6g %d\n", x[i], y[i], p);
-    for (int p = 0; p < np; p++) {
-      put(b, "%d", K);
-      for (int i = 0; i < K; i++) put(b, " %d", p * K + i);
-      put(b, "\n");
-    }
   } else {
-    put(b,
-        "ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
-        "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
-        "end_header\n",
-        np * K, np);
+    /* OFF and PLY: a header, then the same vertex and face lines */
+    if (!strcmp(fmt, "off"))
+      put(b, "OFF\n%d %d 0\n", np * K, np);
+    else
+      put(b,
+          "ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+          "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
+          "end_header\n",
+          np * K, np);
     for (int p = 0; p < np; p++)
       for (int i = 0; i < K; i++) put(b, "%.6g %.6g %d\n", x[i], y[i], p);
     for (int p = 0; p < np; p++) {

@@ -577,19 +577,19 @@ static int elem2_o4(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_ac
   return elem2(p, ec, 3, 1, Fe, acc);
 }
 
-static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order, double *Fe,
-                     elem_acc *acc) {
+/* Element i's F into *Fe and, by order, its derivatives into acc; offd:
+ * with order 2, the off-diagonal entries too (only hoff reads them). */
+static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order, int offd,
+                     double *Fe, elem_acc *acc) {
   elem_ctx ec;
   elem_setup(p, i, x, &ec);
-  /* order 5: order 2 without the off-diagonal entries */
-  int offd = order != 5;
-  if (order == 5) order = 2;
   if (order) {
     memset(acc->g, 0, sizeof acc->g[0] * (size_t)ec.nv);
     if (order > 1) {
       memset(acc->h, 0, sizeof acc->h[0] * (size_t)ec.nv);
       if (order == 2) {
-        if (offd) memset(acc->o, 0, sizeof acc->o[0] * (size_t)p->npair[ec.t]);
+        /* (2D elements always accumulate them) */
+        if (offd || p->tdim != 3) memset(acc->o, 0, sizeof acc->o[0] * (size_t)p->npair[ec.t]);
       } else
         memset(acc->f, 0, sizeof acc->f[0] * (size_t)p->npair[ec.t]);
     }
@@ -739,7 +739,7 @@ int vm_problem_value(vm_problem *p, const double *x, double *F) {
     for (int64_t i = i0; i < i1; i++) {
       if (p->amask && !p->amask[i]) continue;
       double fe;
-      if (elem_eval(p, i, x, 0, &fe, NULL)) {
+      if (elem_eval(p, i, x, 0, 0, &fe, NULL)) {
 #pragma omp atomic write
         bad = 1;
         break;
@@ -761,7 +761,7 @@ int vm_problem_value(vm_problem *p, const double *x, double *F) {
 /* vm_problem_eval, and with hblk the full blocks (vm_problem_eval_blocks;
  * out->hoff must then be NULL). */
 static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *hblk, int psd) {
-  int order = hblk ? (psd ? 4 : 3) : out->hoff ? 2 : out->hdiag ? 5 : out->grad ? 1 : 0;
+  int order = hblk ? (psd ? 4 : 3) : out->hdiag || out->hoff ? 2 : out->grad ? 1 : 0;
   if (!order) return out->F ? vm_problem_value(p, x, out->F) : VM_OK;
   int64_t nv = p->m->nv, nnz = p->rowptr[nv];
   if ((out->hoff || hblk) && !p->ppos_stride) {
@@ -800,7 +800,7 @@ static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *
           stop = bad;
           if (stop) break;
           if (p->amask && !p->amask[i]) continue;
-          if (elem_eval(p, i, x, order, &p->Fe[i], &acc)) {
+          if (elem_eval(p, i, x, order, out->hoff != NULL, &p->Fe[i], &acc)) {
 #pragma omp atomic write
             bad = 1;
             break;

@@ -307,7 +307,8 @@ int vm_mesh_check(const vm_mesh *m) {
     if (f->ncomp < 1 || (f->type != VM_FIELD_F64 && f->type != VM_FIELD_I32) ||
         (f->location != VM_FIELD_VERTEX && f->location != VM_FIELD_ELEMENT))
       return vm_error(ctx, VM_ERR_FORMAT, "field '%s': bad description", f->name);
-    /* a few fields: every pair; many: sorted (n log n whatever their count) */
+    /* a few fields: every pair, with no allocation (the writers' checks
+     * cannot fail for memory); many: sorted (n log n whatever their count) */
     if (m->nfield <= 16)
       for (int j = 0; j < i; j++)
         if (m->fields[j].location == f->location && !strcmp(m->fields[j].name, f->name))

@@ -287,16 +287,24 @@ bool to_surface_mesh(const vm_mesh *m, SMesh &sm, int64_t *bad_elem) {
   return true;
 }
 
+// Face f's largest squared edge length and the squared norm of its doubled
+// area vector.
+void face_sizes(const SMesh &sm, face_descriptor f, double &l2, double &a4) {
+  halfedge_descriptor h = sm.halfedge(f);
+  const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)),
+              &c = sm.point(sm.target(sm.next(h)));
+  K::Vector_3 u = b - a, v = c - a, w = c - b;
+  l2 = std::max({u.squared_length(), v.squared_length(), w.squared_length()});
+  a4 = CGAL::cross_product(u, v).squared_length();
+}
+
 // A face whose area or squared edge lengths overflow double precision
 // (coordinates too large: not a zero area), or null.
 face_descriptor overflowing_face(const SMesh &sm) {
   for (face_descriptor f : sm.faces()) {
-    halfedge_descriptor h = sm.halfedge(f);
-    const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)),
-                &c = sm.point(sm.target(sm.next(h)));
-    K::Vector_3 u = b - a, v = c - a, w = c - b;
-    double l2 = std::max({u.squared_length(), v.squared_length(), w.squared_length()});
-    if (!std::isfinite(l2) || !std::isfinite(CGAL::cross_product(u, v).squared_length())) return f;
+    double l2, a4;
+    face_sizes(sm, f, l2, a4);
+    if (!std::isfinite(l2) || !std::isfinite(a4)) return f;
   }
   return SMesh::null_face();
 }
@@ -305,13 +313,9 @@ face_descriptor overflowing_face(const SMesh &sm) {
 std::size_t numerically_degenerate(const SMesh &sm) {
   std::size_t n = 0;
   for (face_descriptor f : sm.faces()) {
-    halfedge_descriptor h = sm.halfedge(f);
-    const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)),
-                &c = sm.point(sm.target(sm.next(h)));
-    K::Vector_3 u = b - a, v = c - a, w = c - b;
-    double l2 = std::max({u.squared_length(), v.squared_length(), w.squared_length()});
-    double a2 = std::sqrt(CGAL::cross_product(u, v).squared_length());
-    if (!(a2 > 1e-12 * l2)) n++;
+    double l2, a4;
+    face_sizes(sm, f, l2, a4);
+    if (!(std::sqrt(a4) > 1e-12 * l2)) n++;
   }
   return n;
 }
