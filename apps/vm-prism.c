@@ -356,11 +356,12 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
           "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, min "
           "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
           "above 5 deg), intersecting pairs %lld, max "
-          "growth %.3f, %.2f s%s\n",
+          "growth %.3f, OpenFOAM non-orthogonality max %.1f deg (%lld faces beyond 70), "
+          "skewness max %.2f, %.2f s%s\n",
           out, (long long)r->prisms, r->layers, r->first_height, r->growth, 100 * r->full_fraction,
           r->thick_min, r->thick_mean, (long long)r->inverted, r->sj_min, r->normal_dev_max,
           (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
-          r->growth_max, r->time_total,
+          r->growth_max, r->nonortho_max, (long long)r->nonortho_over70, r->skew_max, r->time_total,
           rc == VM_EXIT_CHECK ? "  -- NOT VALID"
           : (interrupted || timed_out) && bad
               ? (timed_out ? "  -- time limit reached, NOT VALID" : "  -- interrupted, NOT VALID")
@@ -410,6 +411,10 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
          (long long)r.smooth_vertices, (long long)r.normal_dev_over5);
   printf(", \"growth_max\": ");
   vm_json_double(stdout, r.growth_max);
+  printf(", \"nonortho_over_70deg\": %lld, \"nonortho_max_deg\": ", (long long)r.nonortho_over70);
+  vm_json_double(stdout, r.nonortho_max);
+  printf(", \"skewness_max\": ");
+  vm_json_double(stdout, r.skew_max);
   printf(", \"springback_iterations\": %d, \"cut_rounds\": %d, \"cut_pairs_first\": %lld, "
          "\"time\": {",
          r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
@@ -448,6 +453,11 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         (long long)r.normal_dev_over5, (long long)r.smooth_vertices);
   if (st2 >= 0)
     st2 = vm_report_row(report, "max growth of successive heights", "%.3f", r.growth_max);
+  if (st2 >= 0)
+    st2 =
+        vm_report_row(report, "faces as OpenFOAM measures them",
+                      "max non-orthogonality %.1f deg, %lld faces beyond 70 deg, max skewness %.2f",
+                      r.nonortho_max, (long long)r.nonortho_over70, r.skew_max);
   if (st2 >= 0)
     st2 = vm_report_row(report, "springback iterations, cutting rounds (pairs at first)",
                         "%d, %d (%lld)", r.springback_iter, r.cut_rounds,

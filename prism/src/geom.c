@@ -214,3 +214,167 @@ void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, co
     memcpy(tgt + 18 * t, bx, sizeof bx);
   }
 }
+
+/* OpenFOAM's face centre c and area vector s of polygon x (n vertices):
+ * the triangles fanned around the vertex mean, area-weighted. */
+void pr_foam_face(const double *x, int n, double *c, double *s) {
+  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int r = 0; r < 3; r++) pc[r] += x[3 * i + r] / n;
+  s[0] = s[1] = s[2] = 0;
+  for (int i = 0; i < n; i++) {
+    const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % n);
+    double u[3], w[3], nn[3];
+    for (int r = 0; r < 3; r++) {
+      u[r] = b[r] - a[r];
+      w[r] = pc[r] - a[r];
+    }
+    vm_cross3(u, w, nn);
+    double an = vm_norm3(nn);
+    for (int r = 0; r < 3; r++) {
+      s[r] += 0.5 * nn[r];
+      sc[r] += an * (a[r] + b[r] + pc[r]);
+    }
+    sa += an;
+  }
+  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
+}
+
+/* The prism's faces in its 18 coordinates: bottom, top, three quads. */
+const int pr_prism_faces[5][4] = {
+    {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
+
+/* OpenFOAM's cell centre of prism x: the pyramids on its faces around the
+ * face centres' mean, volume-weighted. */
+void pr_foam_cell(const double *x, double *cc) {
+  double fc[5][3], fs[5][3];
+  pr_foam_cell_faces(x, cc, fc, fs);
+}
+
+void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*fs)[3]) {
+  double est[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double y[12];
+    int n = pr_prism_faces[f][3] < 0 ? 3 : 4;
+    for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * pr_prism_faces[f][i], 3 * sizeof *y);
+    pr_foam_face(y, n, fc[f], fs[f]);
+    for (int r = 0; r < 3; r++) est[r] += fc[f][r] / 5;
+  }
+  double sv = 0, sum[3] = {0, 0, 0};
+  for (int f = 0; f < 5; f++) {
+    double d[3] = {fc[f][0] - est[0], fc[f][1] - est[1], fc[f][2] - est[2]};
+    double v = fabs(vm_dot3(fs[f], d));
+    for (int r = 0; r < 3; r++) sum[r] += v * (0.75 * fc[f][r] + 0.25 * est[r]);
+    sv += v;
+  }
+  for (int r = 0; r < 3; r++) cc[r] = sv > 0 ? sum[r] / sv : est[r];
+}
+
+/* OpenFOAM's skewness of face x (n vertices) between the cells centred at
+ * cp and cn: the distance from the face centre to where the line joining
+ * the centres meets the face, over the face's extent that way (at least a
+ * fifth of the centres' distance). */
+double pr_foam_skew(const double *x, int n, const double *cp, const double *cn) {
+  double c[3], s[3];
+  pr_foam_face(x, n, c, s);
+  return pr_foam_skew_of(x, n, c, s, cp, cn);
+}
+
+double pr_foam_skew_of(const double *x, int n, const double *c, const double *s, const double *cp,
+                       const double *cn) {
+  double d[3], e[3], sv[3];
+  for (int r = 0; r < 3; r++) {
+    d[r] = cn[r] - cp[r];
+    e[r] = c[r] - cp[r];
+  }
+  double sd = vm_dot3(s, d);
+  if (!(fabs(sd) > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
+  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
+  for (int i = 0; i < n && l > 0; i++) {
+    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = a > fd ? a : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+/* OpenFOAM's skewness of boundary face x (n vertices) of the cell centred
+ * at cp: the offset of the face centre from the cell centre along the
+ * face, over the face's extent that way (at least a fifth of the centre's
+ * distance from the face). */
+double pr_foam_boundary_skew(const double *x, int n, const double *cp) {
+  double c[3], s[3], e[3], sv[3];
+  pr_foam_face(x, n, c, s);
+  double ls = vm_norm3(s);
+  if (!(ls > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) e[r] = c[r] - cp[r];
+  double a = vm_dot3(s, e) / ls;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - a * s[r] / ls;
+  double l = vm_norm3(sv), fd = 0.2 * fabs(a);
+  for (int i = 0; i < n && l > 0; i++) {
+    double b = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = b > fd ? b : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn) {
+  double c[3], s[3];
+  pr_foam_face(x, n, c, s);
+  return pr_foam_ortho_cos_of(c, s, cp, cn);
+}
+
+double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn) {
+  double d[3], e[3];
+  for (int r = 0; r < 3; r++) {
+    d[r] = cn[r] - cp[r];
+    e[r] = c[r] - cp[r];
+  }
+  double ls = vm_norm3(s), ld = vm_norm3(d);
+  if (!(ls > 0) || !(ld > 0)) return -1;
+  /* the face's orientation: away from cp (the face centre lies on cp's
+   * outer side of a valid cell) */
+  double sd = vm_dot3(s, d) / (ls * ld);
+  return vm_dot3(s, e) < 0 ? -sd : sd;
+}
+
+double pr_foam_weight_of(const double *c, const double *s, const double *cp, const double *cn) {
+  double dp = fabs(s[0] * (c[0] - cp[0]) + s[1] * (c[1] - cp[1]) + s[2] * (c[2] - cp[2]));
+  double dn = fabs(s[0] * (cn[0] - c[0]) + s[1] * (cn[1] - c[1]) + s[2] * (cn[2] - c[2]));
+  double w = dp + dn > 0 ? dn / (dp + dn) : 0;
+  return w < 1 - w ? w : 1 - w;
+}
+
+/* Signed volume (times 6) of tet (a, b, c, d). */
+static double tet6(const double *a, const double *b, const double *c, const double *d) {
+  double u[3], v[3], w[3], x[3];
+  for (int r = 0; r < 3; r++) {
+    u[r] = b[r] - a[r];
+    v[r] = c[r] - a[r];
+    w[r] = d[r] - a[r];
+  }
+  vm_cross3(u, v, x);
+  return vm_dot3(x, w);
+}
+
+int pr_foam_face_tets_ok(const double *x, int n, const double *c, const double *s, const double *cp,
+                         const double *cn) {
+  /* the face turned to point from cp to cn: sg */
+  double sg = (s[0] * (c[0] - cp[0]) + s[1] * (c[1] - cp[1]) + s[2] * (c[2] - cp[2])) < 0 ? -1 : 1;
+  double l = 0;
+  for (int r = 0; r < 3; r++) l += (cn[r] - cp[r]) * (cn[r] - cp[r]);
+  double tol = 1e-12 * l * sqrt(l);
+  for (int b = 0; b < n; b++) {
+    int ok = 1;
+    const double *pb = x + 3 * b;
+    for (int j = 1; j + 1 < n && ok; j++) {
+      const double *p1 = x + 3 * ((b + j) % n), *p2 = x + 3 * ((b + j + 1) % n);
+      /* the owner's tet is positive where its centre lies behind the
+       * triangle (triple product of the triangle's edges and the centre
+       * negative along sg), the neighbour's where its centre lies in front */
+      ok = -sg * tet6(pb, p1, p2, cp) > tol && sg * tet6(pb, p1, p2, cn) > tol;
+    }
+    if (ok) return 1;
+  }
+  return 0;
+}

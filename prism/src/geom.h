@@ -60,4 +60,47 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *s, const pr_dir_params *k, c
 void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, const double *base,
                       const double *fn, const double *dir, const double *h, double *tgt);
 
+/* ---- a finite-volume solver's view of the cells (OpenFOAM's definitions,
+ * as its checkMesh computes them) ---- */
+
+/* The prism's faces in its 18 coordinates: bottom, top, three quads (-1
+ * ends a triangle). */
+extern const int pr_prism_faces[5][4];
+/* Face centre c and area vector s of polygon x (n vertices): the triangles
+ * fanned around the vertex mean, area-weighted. */
+void pr_foam_face(const double *x, int n, double *c, double *s);
+/* Cell centre of prism x: the pyramids on its faces around the face
+ * centres' mean, volume-weighted. */
+void pr_foam_cell(const double *x, double *cc);
+/* The same, with its faces' centres fc and area vectors fs (in
+ * pr_prism_faces' order and orientation). */
+void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*fs)[3]);
+/* Skewness of face x (n vertices) between the cells centred at cp and cn:
+ * the distance from the face centre to where the line joining the centres
+ * meets the face, over the face's extent that way (at least a fifth of
+ * the centres' distance). */
+double pr_foam_skew(const double *x, int n, const double *cp, const double *cn);
+/* The same of a face whose centre c and area vector s are known. */
+double pr_foam_skew_of(const double *x, int n, const double *c, const double *s, const double *cp,
+                       const double *cn);
+/* Skewness of boundary face x (n vertices) of the cell centred at cp. */
+double pr_foam_boundary_skew(const double *x, int n, const double *cp);
+/* Cosine of the non-orthogonality of face x (n vertices) between the cells
+ * centred at cp and cn: of the angle between its area vector, turned to
+ * point from cp's side to cn's, and cn - cp (1: orthogonal; <= 0: the
+ * centres on the wrong sides, -1 for a degenerate face). */
+double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn);
+/* The same of a face whose centre c and area vector s are known. */
+double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn);
+/* Interpolation weight of a face (centre c, area vector s) between the
+ * cells centred at cp and cn: the lesser of the two shares of the centres'
+ * distances from the face along s (checkMesh fails below 0.05). */
+double pr_foam_weight_of(const double *c, const double *s, const double *cp, const double *cn);
+/* Does face x (n vertices, centre c, area vector s) decompose into positive
+ * tets with both cell centres, from one of its vertices as the base point
+ * (OpenFOAM's face-tet check, which a solver's particle tracking and
+ * interpolation need)? */
+int pr_foam_face_tets_ok(const double *x, int n, const double *c, const double *s, const double *cp,
+                         const double *cn);
+
 #endif

@@ -7,7 +7,9 @@
  * schedule, both guarded by OpenFOAM's skewness), and the first layer is
  * made orthogonal at the wall on smooth parts: columns stood up
  * geometrically where their prisms allow it, the rest solved for with
- * their neighbours. */
+ * their neighbours. Last the skewness relief and the non-orthogonality
+ * relief (ortho.c) move levels where OpenFOAM's measures of a face are
+ * beyond what checkMesh accepts. */
 #include <math.h>
 #include <omp.h>
 #include <string.h>
@@ -280,98 +282,6 @@ static int orthogonal_first_level(vm_prism *p) {
   return VM_OK;
 }
 
-/* OpenFOAM's face centre c and area vector s of polygon x (n vertices):
- * the triangles fanned around the vertex mean, area-weighted. */
-static void foam_face(const double *x, int n, double *c, double *s) {
-  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
-  for (int i = 0; i < n; i++)
-    for (int r = 0; r < 3; r++) pc[r] += x[3 * i + r] / n;
-  s[0] = s[1] = s[2] = 0;
-  for (int i = 0; i < n; i++) {
-    const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % n);
-    double u[3], w[3], nn[3];
-    for (int r = 0; r < 3; r++) {
-      u[r] = b[r] - a[r];
-      w[r] = pc[r] - a[r];
-    }
-    vm_cross3(u, w, nn);
-    double an = vm_norm3(nn);
-    for (int r = 0; r < 3; r++) {
-      s[r] += 0.5 * nn[r];
-      sc[r] += an * (a[r] + b[r] + pc[r]);
-    }
-    sa += an;
-  }
-  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
-}
-
-/* The prism's faces in its 18 coordinates: bottom, top, three quads. */
-static const int prism_faces[5][4] = {
-    {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
-
-/* OpenFOAM's cell centre of prism x: the pyramids on its faces around the
- * face centres' mean, volume-weighted. */
-static void foam_cell(const double *x, double *cc) {
-  double fc[5][3], fs[5][3], est[3] = {0, 0, 0};
-  for (int f = 0; f < 5; f++) {
-    double y[12];
-    int n = prism_faces[f][3] < 0 ? 3 : 4;
-    for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * prism_faces[f][i], 3 * sizeof *y);
-    foam_face(y, n, fc[f], fs[f]);
-    for (int r = 0; r < 3; r++) est[r] += fc[f][r] / 5;
-  }
-  double sv = 0, sum[3] = {0, 0, 0};
-  for (int f = 0; f < 5; f++) {
-    double d[3] = {fc[f][0] - est[0], fc[f][1] - est[1], fc[f][2] - est[2]};
-    double v = fabs(vm_dot3(fs[f], d));
-    for (int r = 0; r < 3; r++) sum[r] += v * (0.75 * fc[f][r] + 0.25 * est[r]);
-    sv += v;
-  }
-  for (int r = 0; r < 3; r++) cc[r] = sv > 0 ? sum[r] / sv : est[r];
-}
-
-/* OpenFOAM's skewness of face x (n vertices) between the cells centred at
- * cp and cn: the distance from the face centre to where the line joining
- * the centres meets the face, over the face's extent that way (at least a
- * fifth of the centres' distance). */
-static double foam_skew(const double *x, int n, const double *cp, const double *cn) {
-  double c[3], s[3], d[3], e[3], sv[3];
-  foam_face(x, n, c, s);
-  for (int r = 0; r < 3; r++) {
-    d[r] = cn[r] - cp[r];
-    e[r] = c[r] - cp[r];
-  }
-  double sd = vm_dot3(s, d);
-  if (!(fabs(sd) > 0)) return INFINITY;
-  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
-  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
-  for (int i = 0; i < n && l > 0; i++) {
-    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
-    fd = a > fd ? a : fd;
-  }
-  return fd > 0 ? l / fd : INFINITY;
-}
-
-/* OpenFOAM's skewness of boundary face x (n vertices) of the cell centred
- * at cp: the offset of the face centre from the cell centre along the
- * face, over the face's extent that way (at least a fifth of the centre's
- * distance from the face). */
-static double foam_boundary_skew(const double *x, int n, const double *cp) {
-  double c[3], s[3], e[3], sv[3];
-  foam_face(x, n, c, s);
-  double ls = vm_norm3(s);
-  if (!(ls > 0)) return INFINITY;
-  for (int r = 0; r < 3; r++) e[r] = c[r] - cp[r];
-  double a = vm_dot3(s, e) / ls;
-  for (int r = 0; r < 3; r++) sv[r] = e[r] - a * s[r] / ls;
-  double l = vm_norm3(sv), fd = 0.2 * fabs(a);
-  for (int i = 0; i < n && l > 0; i++) {
-    double b = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
-    fd = b > fd ? b : fd;
-  }
-  return fd > 0 ? l / fd : INFINITY;
-}
-
 /* Prism x of triangle t between levels k and k + 1. */
 static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
   size_t lsz = (size_t)(3 * p->nw);
@@ -390,7 +300,7 @@ static void cell_centre(const vm_prism *p, const double *cc, int64_t t, int k, d
   }
   double x[18];
   prism_at(p, t, k, x);
-  foam_cell(x, c);
+  pr_foam_cell(x, c);
 }
 
 /* The largest OpenFOAM skewness over the faces of triangle t's cells (every
@@ -417,10 +327,10 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
     cell_centre(p, cc, t, k, cp);
     if (k + 1 < nl) {
       cell_centre(p, cc, t, k + 1, cn);
-      double q = foam_skew(x + 9, 3, cp, cn);
+      double q = pr_foam_skew(x + 9, 3, cp, cn);
       worst = q > worst ? q : worst;
     } else {
-      double q = foam_boundary_skew(x + 9, 3, cp);
+      double q = pr_foam_boundary_skew(x + 9, 3, cp);
       worst = q > worst ? q : worst;
     }
     for (int i = 0; i < 3; i++) {
@@ -431,7 +341,7 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
       memcpy(f + 6, x + 9 + 3 * ((i + 1) % 3), 3 * sizeof *f);
       memcpy(f + 9, x + 9 + 3 * i, 3 * sizeof *f);
       cell_centre(p, cc, nb[i], k, cn);
-      double q = foam_skew(f, 4, cp, cn);
+      double q = pr_foam_skew(f, 4, cp, cn);
       worst = q > worst ? q : worst;
     }
   }
@@ -467,7 +377,7 @@ static int all_column_skew(const vm_prism *p, double *sk) {
   for (int64_t c = 0; c < nt * nl; c++) {
     double x[18];
     prism_at(p, c / nl, (int)(c % nl), x);
-    foam_cell(x, cc + 3 * c);
+    pr_foam_cell(x, cc + 3 * c);
   }
 #pragma omp parallel for schedule(static)
   for (int64_t t = 0; t < nt; t++) tq[t] = tri_skew(p, t, cc);
@@ -956,9 +866,9 @@ static int stack_smooth(vm_prism *p) {
                3 * sizeof *x);
       }
       double cc[3];
-      if (k == p->nlev - 2) foam_cell(x, cc);
+      if (k == p->nlev - 2) pr_foam_cell(x, cc);
       if (prism_lean_deg(x) > kp->stack_lean_deg ||
-          (k == p->nlev - 2 && foam_boundary_skew(x + 9, 3, cc) > kp->skew_limit)) {
+          (k == p->nlev - 2 && pr_foam_boundary_skew(x + 9, 3, cc) > kp->skew_limit)) {
         for (int i = 0; i < 3; i++) ring[p->tri[3 * t + i]] = 0;
         break;
       }
@@ -1184,8 +1094,9 @@ int vm_prism_march(vm_prism *p) {
   memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
   p->nlev = made + 1;
   /* seconds of the marching's steps: splits, stack smoothing,
-   * redistribution, orthogonal first level, orthogonal solve, relief */
-  double ts[7];
+   * redistribution, orthogonal first level, orthogonal solve, skewness
+   * relief, non-orthogonality relief */
+  double ts[8];
   ts[0] = t0;
   ts[1] = omp_get_wtime();
   if (p->nlev > 2 && (st = stack_smooth(p)) < 0) goto done;
@@ -1209,10 +1120,22 @@ int vm_prism_march(vm_prism *p) {
            (long long)nr, s0, s1);
   }
   ts[6] = omp_get_wtime();
+  if (p->nlev > 2) {
+    pr_ortho_summary os;
+    if ((st = pr_ortho_relief(p, &os)) < 0) goto done;
+    vm_log(ctx, VM_LOG_INFO,
+           "prism: non-orthogonality relief: %lld steps in %d sweeps; faces beyond 70 degrees "
+           "%lld -> %lld, largest non-orthogonality %.1f -> %.1f degrees",
+           (long long)os.moves, os.sweeps, (long long)os.over70_before, (long long)os.over70_after,
+           acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI);
+  }
+  ts[7] = omp_get_wtime();
   vm_log(ctx, VM_LOG_INFO,
          "prism: marching steps (s): splits %.2f, stack smoothing %.2f, redistribution %.2f, "
-         "orthogonal first level %.2f, orthogonal solve %.2f, skewness relief %.2f",
-         ts[1] - ts[0], ts[2] - ts[1], ts[3] - ts[2], ts[4] - ts[3], ts[5] - ts[4], ts[6] - ts[5]);
+         "orthogonal first level %.2f, orthogonal solve %.2f, skewness relief %.2f, "
+         "non-orthogonality relief %.2f",
+         ts[1] - ts[0], ts[2] - ts[1], ts[3] - ts[2], ts[4] - ts[3], ts[5] - ts[4], ts[6] - ts[5],
+         ts[7] - ts[6]);
   /* the paper's option: drop a skewed outermost remainder */
   if (p->o.drop_quality > 0 && p->nlev > 2 &&
       level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz, p->lev + (size_t)(p->nlev - 1) * lsz) <

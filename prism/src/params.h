@@ -145,70 +145,92 @@ typedef struct pr_params {
                                    more than this share of T */
 
   /* phase 5, marching (march.c) */
-  double split_mul[5];        /* {1, 0.8, 1.25, 0.64, 1.5}: factors of the
-                                 schedule's split fraction tried where the
-                                 straight split is not valid */
-  double split_max_frac;      /* 0.9: a changed split never takes more than 90 %
-                                 of the remainder (the outer sublayer would be a
-                                 sliver) */
-  double min_target_height;   /* 1e-4: marching's targets are at least this
-                                 share of the mean edge length high (a column
-                                 cut to nothing still gets a proper target) */
-  double tilt_limit_deg;      /* 5: the first layer's orthogonality target in
-                                 degrees (the report counts the smooth columns
-                                 beyond it) */
-  double ortho_qmin;          /* 0.3: standing up never has to keep a prism
-                                 better than this ... */
-  double ortho_round_share;   /* 0.5: ... nor, all columns at once, better than
-                                 half its quality before */
-  double ortho_alone_share;   /* 0.25: a column standing up alone (or with its
-                                 ring) keeps its prisms above a quarter of
-                                 their quality before */
-  int ortho_layers;           /* 24: layers measured when columns stand up */
-  int ortho_bend;             /* 6: layers over which a column bends back to its
-                                 course when all stand up at once */
-  int ortho_rounds;           /* 100: rounds sending columns back at most */
-  int ortho_bends[PR_NBENDS]; /* {6, 12, 9, 18, 0, 3, 2, 1}: bends tried
-                                 alone, in layers (0: all measured layers);
-                                 the long ones for columns tilted far over */
-  int ortho_passes;           /* 4: passes over the columns that went back (a
-                                 neighbour standing up can make room) */
-  double ortho_lean_deg;      /* 4.5: the last resort leans by this much, within
-                                 the 5 degree target */
-  double ortho_high_ratio;    /* 0.5: a first level more than twice as high as
-                                 its neighbours' mean is lowered to it */
-  double redistribute_tol;    /* 0.05: a column whose levels are all within 5 %
-                                 of their layer's scheduled height of the
-                                 schedule's place is left as it is */
-  double redistribute_qshare; /* 0.1: ... and whose prisms stay above a tenth
-                                 of their quality before (a fan's wedge prism
-                                 starts near 0.03 and loses more than half of
-                                 it as its long first level comes down) */
-  double skew_limit;          /* 3.6: the stack smoothing and the columns put
-                                 on the schedule may not raise OpenFOAM's
-                                 skewness of a face above this (checkMesh
-                                 fails at 4) */
-  double relief_gamma[10];    /* {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1,
-                                1.25, 1.6}: exponents
-                                tried by the skewness relief (level k of a
-                                skewed column at the share frac_k^gamma of
-                                its length) */
-  int relief_sweeps;          /* 3: sweeps of the skewness relief */
-  double stack_lean_deg;      /* 45: a prism of layers 1..n-1 whose centroids'
-                                 line leans beyond this from its base normal
-                                 sends its columns to the stack smoothing */
-  int stack_iter;             /* 20: implicit iterations of the stack
-                                 smoothing */
-  double tilt_solve_deg;      /* 4.5: smooth columns tilted beyond this go to the
-                                 patch solve */
-  int solve_rings;            /* 2: rings of neighbours moving with them */
-  double solve_weight;        /* 1e4: weight (12) of the first layer in the patch
-                                 (10^2 left 6 of the aircraft's columns tilted) */
-  int solve_iter;             /* 50: Newton iterations per chunk of a patch solve */
-  int solve_tries;            /* 4: solves at most, holding the neighbours one
-                                 tilted */
-  int solve_chunks;           /* 6: chunks at most (each restarts Newton, which
-                                 gets further than one long solve) */
+  double split_mul[5];             /* {1, 0.8, 1.25, 0.64, 1.5}: factors of the
+                                      schedule's split fraction tried where the
+                                      straight split is not valid */
+  double split_max_frac;           /* 0.9: a changed split never takes more than 90 %
+                                      of the remainder (the outer sublayer would be a
+                                      sliver) */
+  double min_target_height;        /* 1e-4: marching's targets are at least this
+                                      share of the mean edge length high (a column
+                                      cut to nothing still gets a proper target) */
+  double tilt_limit_deg;           /* 5: the first layer's orthogonality target in
+                                      degrees (the report counts the smooth columns
+                                      beyond it) */
+  double ortho_qmin;               /* 0.3: standing up never has to keep a prism
+                                      better than this ... */
+  double ortho_round_share;        /* 0.5: ... nor, all columns at once, better than
+                                      half its quality before */
+  double ortho_alone_share;        /* 0.25: a column standing up alone (or with its
+                                      ring) keeps its prisms above a quarter of
+                                      their quality before */
+  int ortho_layers;                /* 24: layers measured when columns stand up */
+  int ortho_bend;                  /* 6: layers over which a column bends back to its
+                                      course when all stand up at once */
+  int ortho_rounds;                /* 100: rounds sending columns back at most */
+  int ortho_bends[PR_NBENDS];      /* {6, 12, 9, 18, 0, 3, 2, 1}: bends tried
+                                      alone, in layers (0: all measured layers);
+                                      the long ones for columns tilted far over */
+  int ortho_passes;                /* 4: passes over the columns that went back (a
+                                      neighbour standing up can make room) */
+  double ortho_lean_deg;           /* 4.5: the last resort leans by this much, within
+                                      the 5 degree target */
+  double ortho_high_ratio;         /* 0.5: a first level more than twice as high as
+                                      its neighbours' mean is lowered to it */
+  double redistribute_tol;         /* 0.05: a column whose levels are all within 5 %
+                                      of their layer's scheduled height of the
+                                      schedule's place is left as it is */
+  double redistribute_qshare;      /* 0.1: ... and whose prisms stay above a tenth
+                                      of their quality before (a fan's wedge prism
+                                      starts near 0.03 and loses more than half of
+                                      it as its long first level comes down) */
+  double skew_limit;               /* 3.6: the stack smoothing and the columns put
+                                      on the schedule may not raise OpenFOAM's
+                                      skewness of a face above this (checkMesh
+                                      fails at 4) */
+  double relief_gamma[10];         /* {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1,
+                                     1.25, 1.6}: exponents
+                                     tried by the skewness relief (level k of a
+                                     skewed column at the share frac_k^gamma of
+                                     its length) */
+  int relief_sweeps;               /* 3: sweeps of the skewness relief */
+  double ortho_relief_deg;         /* 60: the non-orthogonality relief (ortho.c)
+                                      weighs faces beyond this angle ... */
+  double ortho_relief_active_deg;  /* 65: ... around the vertices of the cells
+                                  on faces beyond this (checkMesh's 70 with a
+                                  margin) */
+  int ortho_relief_sweeps;         /* 20: sweeps at most ... */
+  double ortho_relief_gain;        /* 0.01: ... ending when one lowers the count of
+                                      faces beyond 70 degrees by less than 1 % */
+  double ortho_relief_step;        /* 0.5: a step moves a vertex at most this share
+                                      of its local size (the shorter of its wall
+                                      edges and its column's span over its cells)
+                                      ... */
+  int ortho_relief_backtracks;     /* 10: ... halved at most this often */
+  double ortho_relief_qshare;      /* 0.5: a step keeps every prism around above
+                                      min(ortho_qmin, half its quality before) */
+  double ortho_relief_growth_band; /* 1.5: nor takes a ratio of successive
+                                 heights outside [G / 1.5, 1.5 G], G the
+                                 growth ratio (issue 24's band) */
+  double ortho_relief_wmin;        /* 0.1: nor lowers a face's interpolation weight
+                                      below this (checkMesh fails at 0.05) */
+  double ortho_relief_fd;          /* 1e-6: finite-difference step of the gradient,
+                                      a share of the local size */
+  double stack_lean_deg;           /* 45: a prism of layers 1..n-1 whose centroids'
+                                      line leans beyond this from its base normal
+                                      sends its columns to the stack smoothing */
+  int stack_iter;                  /* 20: implicit iterations of the stack
+                                      smoothing */
+  double tilt_solve_deg;           /* 4.5: smooth columns tilted beyond this go to the
+                                      patch solve */
+  int solve_rings;                 /* 2: rings of neighbours moving with them */
+  double solve_weight;             /* 1e4: weight (12) of the first layer in the patch
+                                      (10^2 left 6 of the aircraft's columns tilted) */
+  int solve_iter;                  /* 50: Newton iterations per chunk of a patch solve */
+  int solve_tries;                 /* 4: solves at most, holding the neighbours one
+                                      tilted */
+  int solve_chunks;                /* 6: chunks at most (each restarts Newton, which
+                                      gets further than one long solve) */
 
   pr_isect_params isect;
 } pr_params;
@@ -275,6 +297,16 @@ static inline pr_params pr_params_default(void) {
       .skew_limit = 3.6,
       .relief_gamma = {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1, 1.25, 1.6},
       .relief_sweeps = 3,
+      .ortho_relief_deg = 60,
+      .ortho_relief_active_deg = 65,
+      .ortho_relief_sweeps = 20,
+      .ortho_relief_gain = 0.01,
+      .ortho_relief_step = 0.5,
+      .ortho_relief_backtracks = 10,
+      .ortho_relief_qshare = 0.5,
+      .ortho_relief_growth_band = 1.5,
+      .ortho_relief_wmin = 0.1,
+      .ortho_relief_fd = 1e-6,
       .stack_lean_deg = 45,
       .stack_iter = 20,
       .tilt_solve_deg = 4.5,

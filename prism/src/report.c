@@ -150,6 +150,8 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
         if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
       }
     R.growth_max = gmax;
+    int st = pr_foam_figures(p, L, nlev, &R.nonortho_over70, &R.nonortho_max, &R.skew_max);
+    if (st < 0) return st;
   }
   *r = R;
   return VM_OK;

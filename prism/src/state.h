@@ -97,4 +97,24 @@ int pr_check_valid(vm_prism *p, const char *when);
  * intersecting face pairs in *npairs (cutting.c). */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
 
+/* ---- the non-orthogonality relief (ortho.c) ---- */
+
+typedef struct pr_ortho_summary {
+  int sweeps;
+  int64_t moves;                       /* vertex steps kept */
+  int64_t over70_before, over70_after; /* internal faces beyond 70 degrees */
+  double cmin_before, cmin_after;      /* the worst face's non-orthogonality cosine */
+} pr_ortho_summary;
+
+/* Levels 1..nlev-2 moved across their columns where the faces of their
+ * cells are far from orthogonal (OpenFOAM's measure), every prism kept
+ * valid and shaped (ortho.c says how). */
+int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s);
+/* OpenFOAM's measures of the layer's faces at levels L (nlev levels of nw
+ * vertices): internal faces beyond 70 degrees of non-orthogonality, the
+ * largest non-orthogonality (degrees) and the largest skewness (the wall
+ * and the outer surface included). */
+int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over70,
+                    double *nonortho_max, double *skew_max);
+
 #endif

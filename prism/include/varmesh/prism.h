@@ -127,9 +127,15 @@ typedef struct vm_prism_report {
   double normal_dev_max;        /* degrees: first-layer side edges vs the wall's
                                    vertex normal, at smooth vertices */
   double normal_dev_mean;
-  int64_t smooth_vertices;       /* vertices where normal_dev is measured */
-  int64_t normal_dev_over5;      /* of those, deviating by more than 5 degrees */
-  double growth_max;             /* max h_{k+1}/h_k over columns */
+  int64_t smooth_vertices;  /* vertices where normal_dev is measured */
+  int64_t normal_dev_over5; /* of those, deviating by more than 5 degrees */
+  double growth_max;        /* max h_{k+1}/h_k over columns */
+  /* the layer's faces as OpenFOAM's checkMesh measures them: internal
+   * faces whose non-orthogonality is beyond 70 degrees, the largest
+   * non-orthogonality (degrees), the largest skewness (the wall and the
+   * outer surface included; checkMesh fails at 4) */
+  int64_t nonortho_over70;
+  double nonortho_max, skew_max;
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
   int reoriented; /* the wall was oriented inwards and its triangles were turned */

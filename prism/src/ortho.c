@@ -1,0 +1,557 @@
+/* prism/src/ortho.c: the non-orthogonality relief, the marching's last
+ * step. A finite-volume solver measures a face by the angle between its
+ * area vector and the line joining its two cells' centres (OpenFOAM's
+ * checkMesh fails nothing below 70 degrees, and its schemes lose accuracy
+ * and stability beyond). The marching's steps keep prisms valid and
+ * shaped, not their centres aligned: where columns converge (a concave
+ * junction, the upper layers over a wing root) or lean (tips, tails) the
+ * lateral faces of neighbouring stacks reach 85 degrees.
+ *
+ * The relief moves the vertices of levels 1..nlev-2 (never the wall, never
+ * the outer surface, so the layer's intersection checks stay true) one at
+ * a time (level by level, in vertex order), across their column (a move along the column would
+ * change the layer heights): a few steps of gradient descent on
+ *
+ *   E(x) = sum over the faces of the cells around x of max(0, c0 - cos)^2,
+ *
+ * cos the face's non-orthogonality cosine and c0 that of
+ * k.ortho_relief_deg, so faces within it weigh nothing. A step is kept only
+ * if every prism around the vertex keeps its corner tets positive and its
+ * quality above min(k.ortho_qmin, k.ortho_relief_qshare of its quality
+ * before), no face around it becomes more skewed than k.skew_limit (or than
+ * it was), its worst face gets no worse (or stays within
+ * k.ortho_relief_active_deg), no more of its faces fail OpenFOAM's
+ * face-tet decomposition, their smallest interpolation weight stays above
+ * k.ortho_relief_wmin (or where it was), the ratios of the column's
+ * successive heights stay within [G / b, b G] (G the growth ratio, b
+ * k.ortho_relief_growth_band; or where they were), and a smooth column's
+ * first side edge stays within k.tilt_limit_deg of its normal (or its tilt
+ * before). Vertices are visited where a face of their cells is beyond
+ * k.ortho_relief_active_deg; sweeps repeat while one lowers the count of
+ * faces beyond 70 degrees by more than k.ortho_relief_gain of it. Each
+ * level is visited in vertex order; levels five apart, which share
+ * nothing, run on separate threads, so the result is the same on every run
+ * and thread count. */
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+#include "state.h"
+
+/* Levels this far apart are relieved at the same time (see the sweep). */
+#define PR_ORTHO_STRIDE 5
+
+/* The cell across face f (0 bottom, 1 top, 2 + i the side over edge i) of
+ * cell (t, k) in *u, *j; 0 where the face is on the boundary (wall, outer
+ * surface, an open edge). */
+static int across(const vm_prism *p, const int32_t *nbt, int64_t t, int k, int f, int64_t *u,
+                  int *j) {
+  int nl = p->nlev - 1;
+  if (f == 0) {
+    *u = t;
+    *j = k - 1;
+    return k > 0;
+  }
+  if (f == 1) {
+    *u = t;
+    *j = k + 1;
+    return k + 1 < nl;
+  }
+  *u = nbt[3 * t + f - 2];
+  *j = k;
+  return *u >= 0;
+}
+
+/* Face f of prism x into y; its vertex count. */
+static int face_of(const double *x, int f, double *y) {
+  int n = pr_prism_faces[f][3] < 0 ? 3 : 4;
+  for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * pr_prism_faces[f][i], 3 * sizeof *y);
+  return n;
+}
+
+/* Prism of triangle t between levels k and k + 1 of levels L. */
+static void prism_of(const vm_prism *p, const double *L, int64_t t, int k, double *x) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int i = 0; i < 3; i++) {
+    memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+    memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
+  }
+}
+
+/* Each wall triangle's neighbour over each of its edges (-1: open). */
+static void edge_neighbours(const vm_prism *p, int32_t *nbt) {
+  for (int64_t t = 0; t < p->nt; t++)
+    for (int i = 0; i < 3; i++) {
+      int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
+      nbt[3 * t + i] = -1;
+      for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1] && nbt[3 * t + i] < 0; m++) {
+        int64_t u = p->vt[m];
+        const int32_t *c = p->tri + 3 * u;
+        if (u != t && (c[0] == b || c[1] == b || c[2] == b)) nbt[3 * t + i] = (int32_t)u;
+      }
+    }
+}
+
+/* The relief's view of the layer's faces: every cell's centre, and for
+ * the internal faces a cell owns (its top, its sides towards later
+ * triangles) which are beyond the active angle (bit f of bad[c] for face f)
+ * and how many beyond 70 degrees (o70[c]), and the worst owned cosine
+ * (cw[c]). Kept up to date cell by cell as vertices move. */
+typedef struct facemap {
+  double *cc; /* 3 nt nl: cell centres, cell c = t nl + k */
+  uint8_t *bad;
+  uint8_t *o70;
+  double *cw;
+  uint8_t *mark; /* nt nl scratch: cells to update */
+} facemap;
+
+/* The cells around level k of column v (layers k - 1 and k of v's
+ * triangles) and, for each of their faces, the cell across: another cell
+ * around (its centre moves with the vertex) or a fixed one, whose centre
+ * the facemap keeps. */
+typedef struct hood {
+  int n;                      /* cells: 2 deg */
+  int64_t t[2 * PR_RING_MAX]; /* triangle and layer of each */
+  int j[2 * PR_RING_MAX];
+  int nb[2 * PR_RING_MAX][5];           /* per face: -1 boundary, -2 fixed, else a cell around */
+  const double *cn[2 * PR_RING_MAX][5]; /* a fixed neighbour's centre (in the facemap) */
+} hood;
+
+static void make_hood(const vm_prism *p, const int32_t *nbt, const facemap *fm, int64_t v, int k,
+                      hood *h) {
+  h->n = 0;
+  for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
+    for (int j = k - 1; j <= k; j++) {
+      h->t[h->n] = p->vt[m];
+      h->j[h->n] = j;
+      h->n++;
+    }
+  for (int c = 0; c < h->n; c++)
+    for (int f = 0; f < 5; f++) {
+      int64_t u;
+      int jn;
+      if (!across(p, nbt, h->t[c], h->j[c], f, &u, &jn)) {
+        h->nb[c][f] = -1;
+        continue;
+      }
+      h->nb[c][f] = -2;
+      for (int d = 0; d < h->n && h->nb[c][f] == -2; d++)
+        if (h->t[d] == u && h->j[d] == jn) h->nb[c][f] = d;
+      if (h->nb[c][f] == -2) h->cn[c][f] = fm->cc + 3 * (u * (p->nlev - 1) + jn);
+    }
+}
+
+/* What the relief weighs around the vertex. */
+typedef struct around {
+  double e;                  /* E: the penalty of the faces of the cells around */
+  double cmin;               /* the worst face's non-orthogonality cosine */
+  double skew;               /* the largest skewness of those faces (boundary faces too) */
+  double wmin;               /* their smallest interpolation weight */
+  int badtets;               /* those failing the face-tet decomposition */
+  double q[2 * PR_RING_MAX]; /* each cell's quality: the lesser of its scaled
+                               Jacobian and its quadrature quality (-1 if
+                               either is not positive) */
+} around;
+
+/* The figures of hood h at the current coordinates: E alone (qfloor NULL,
+ * for the gradient), or everything, stopping at the first cell below its
+ * floor qfloor[c] (returns 0; else 1). */
+static int eval_around(const vm_prism *p, const hood *h, double c0, const double *qfloor,
+                       around *a) {
+  const int full = qfloor != NULL;
+  double x[2 * PR_RING_MAX][18], cc[2 * PR_RING_MAX][3];
+  double fc[2 * PR_RING_MAX][5][3], fs[2 * PR_RING_MAX][5][3];
+  a->e = 0;
+  a->cmin = 1;
+  a->skew = 0;
+  a->wmin = 0.5;
+  a->badtets = 0;
+  for (int c = 0; c < h->n; c++) {
+    prism_of(p, p->lev, h->t[c], h->j[c], x[c]);
+    if (full) {
+      int inv;
+      double q = pr_prism_corner_quality(x[c], &inv), qn = pr_prism_quality(x[c]);
+      q = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
+      a->q[c] = q;
+      if (!(q >= qfloor[c])) return 0;
+    }
+    pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
+  }
+  for (int c = 0; c < h->n; c++)
+    for (int f = 0; f < 5; f++) {
+      if (h->nb[c][f] == -1) {
+        /* the wall and the outer surface: their skewness only */
+        if (full && f < 2) {
+          double y[12];
+          int n = face_of(x[c], f, y);
+          double s = pr_foam_boundary_skew(y, n, cc[c]);
+          a->skew = s > a->skew ? s : a->skew;
+        }
+        continue;
+      }
+      const double *cn = h->nb[c][f] >= 0 ? cc[h->nb[c][f]] : h->cn[c][f];
+      double cs = pr_foam_ortho_cos_of(fc[c][f], fs[c][f], cc[c], cn);
+      if (full) {
+        double y[12];
+        int n = face_of(x[c], f, y);
+        double s = pr_foam_skew_of(y, n, fc[c][f], fs[c][f], cc[c], cn);
+        a->skew = s > a->skew ? s : a->skew;
+        double w = pr_foam_weight_of(fc[c][f], fs[c][f], cc[c], cn);
+        a->wmin = w < a->wmin ? w : a->wmin;
+        a->badtets += !pr_foam_face_tets_ok(y, n, fc[c][f], fs[c][f], cc[c], cn);
+      }
+      a->cmin = cs < a->cmin ? cs : a->cmin;
+      if (cs < c0) a->e += (c0 - cs) * (c0 - cs);
+    }
+  return 1;
+}
+
+/* Centres of the marked cells (mark[c] & 1; all if mark is NULL), then
+ * the faces owned by the cells marked 2 (all if NULL). */
+static void update_faces(const vm_prism *p, const int32_t *nbt, double cact, facemap *fm,
+                         const uint8_t *mark) {
+  int64_t nt = p->nt;
+  int nl = p->nlev - 1;
+  const double c70 = cos(70 * PR_PI / 180);
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < nt * nl; c++) {
+    if (mark && !(mark[c] & 1)) continue;
+    double x[18];
+    prism_of(p, p->lev, c / nl, (int)(c % nl), x);
+    pr_foam_cell(x, fm->cc + 3 * c);
+  }
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < nt * nl; c++) {
+    if (mark && !(mark[c] & 2)) continue;
+    int64_t t = c / nl;
+    int k = (int)(c % nl);
+    double x[18], worst = 1;
+    prism_of(p, p->lev, t, k, x);
+    uint8_t b = 0, n70 = 0;
+    for (int f = 1; f < 5; f++) {
+      int64_t u;
+      int j;
+      if (!across(p, nbt, t, k, f, &u, &j) || (f >= 2 && u < t)) continue;
+      double y[12];
+      int n = face_of(x, f, y);
+      double cs = pr_foam_ortho_cos(y, n, fm->cc + 3 * c, fm->cc + 3 * (u * nl + j));
+      n70 += cs < c70;
+      worst = cs < worst ? cs : worst;
+      if (cs < cact) b |= (uint8_t)(1 << f);
+    }
+    fm->bad[c] = b;
+    fm->o70[c] = n70;
+    fm->cw[c] = worst;
+  }
+}
+
+/* Faces beyond 70 degrees in *n70, the worst cosine in *cmin. */
+static void face_totals(const vm_prism *p, const facemap *fm, int64_t *n70, double *cmin) {
+  int64_t n = p->nt * (p->nlev - 1), over = 0;
+  double worst = 1;
+#pragma omp parallel for schedule(static) reduction(+ : over) reduction(min : worst)
+  for (int64_t c = 0; c < n; c++) {
+    over += fm->o70[c];
+    worst = fm->cw[c] < worst ? fm->cw[c] : worst;
+  }
+  *n70 = over;
+  *cmin = worst;
+}
+
+/* The vertices (v, k), k in 1..nl-1, of the two cells on every face beyond
+ * the active angle, marked in act (nw per level). */
+static void activate(const vm_prism *p, const int32_t *nbt, const facemap *fm, uint8_t *act) {
+  int64_t nt = p->nt, nw = p->nw;
+  int nl = p->nlev - 1;
+  memset(act, 0, (size_t)(nw * (nl + 1)));
+  for (int64_t c = 0; c < nt * nl; c++) {
+    if (!fm->bad[c]) continue;
+    int64_t t = c / nl;
+    int k = (int)(c % nl);
+    for (int f = 1; f < 5; f++) {
+      if (!(fm->bad[c] >> f & 1)) continue;
+      int64_t u;
+      int j;
+      across(p, nbt, t, k, f, &u, &j);
+      const int64_t cells[2][2] = {{t, k}, {u, j}};
+      for (int s = 0; s < 2; s++)
+        for (int i = 0; i < 3; i++)
+          for (int l = (int)cells[s][1]; l <= cells[s][1] + 1; l++)
+            if (l >= 1 && l < nl) act[(size_t)l * nw + p->tri[3 * cells[s][0] + i]] = 1;
+    }
+  }
+}
+
+/* After vertices moved (moved: nw per level; relieve kept the centres of
+ * the cells around them current): the faces of those cells, owned by them
+ * or by the cells below and beside them, are measured again (bit 2). */
+static void refresh(const vm_prism *p, const int32_t *nbt, double cact, facemap *fm,
+                    const uint8_t *moved) {
+  int64_t nt = p->nt, nw = p->nw;
+  int nl = p->nlev - 1;
+  memset(fm->mark, 0, (size_t)(nt * nl));
+  for (int k = 1; k < nl; k++)
+    for (int64_t v = 0; v < nw; v++) {
+      if (!moved[(size_t)k * nw + v]) continue;
+      for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
+        for (int j = k - 1; j <= k; j++) fm->mark[p->vt[m] * nl + j] |= 1;
+    }
+  for (int64_t c = 0; c < nt * nl; c++) {
+    if (!(fm->mark[c] & 1)) continue;
+    int64_t t = c / nl;
+    int k = (int)(c % nl);
+    fm->mark[c] = (uint8_t)(fm->mark[c] | 2) & (uint8_t)~1u;
+    for (int f = 0; f < 5; f++) {
+      int64_t u;
+      int j;
+      if (across(p, nbt, t, k, f, &u, &j)) fm->mark[u * nl + j] |= 2;
+    }
+  }
+  update_faces(p, nbt, cact, fm, fm->mark);
+}
+
+/* The smallest and largest ratio of successive side-edge lengths of
+ * column v over the edges that level k ends or starts. */
+static void growth_around(const vm_prism *p, int64_t v, int k, double *lo, double *hi) {
+  size_t lsz = (size_t)(3 * p->nw);
+  int nl = p->nlev - 1;
+  double len[4];
+  /* len[i]: the edge from level k - 2 + i to k - 1 + i (0: none) */
+  for (int i = 0; i < 4; i++) {
+    int a = k - 2 + i;
+    len[i] = a >= 0 && a + 1 <= nl
+                 ? vm_dist3(p->lev + a * lsz + 3 * v, p->lev + (a + 1) * lsz + 3 * v)
+                 : 0;
+  }
+  *lo = INFINITY;
+  *hi = 0;
+  for (int i = 0; i + 1 < 4; i++) {
+    if (!(len[i] > 0) || !(len[i + 1] > 0)) continue;
+    double r = len[i + 1] / len[i];
+    *lo = r < *lo ? r : *lo;
+    *hi = r > *hi ? r : *hi;
+  }
+}
+
+/* One relief step at level k of column v; 1 if it moved. */
+static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit, int64_t v,
+                   int k, double c0, double cact) {
+  const pr_params *kp = &p->k;
+  size_t lsz = (size_t)(3 * p->nw);
+  double *xv = p->lev + k * lsz + 3 * v;
+  const double *below = p->lev + (k - 1) * lsz + 3 * v, *above = p->lev + (k + 1) * lsz + 3 * v;
+  int64_t deg = p->vt_off[v + 1] - p->vt_off[v];
+  if (deg > PR_RING_MAX) return 0;
+  hood h;
+  around a0, a1;
+  make_hood(p, nbt, fm, v, k, &h);
+  /* each cell's floor: from its quality before the relief, so steps do
+   * not wear it down */
+  double qfloor[2 * PR_RING_MAX];
+  for (int c = 0; c < h.n; c++) {
+    double q = kp->ortho_relief_qshare * qinit[h.t[c] * (p->nlev - 1) + h.j[c]];
+    qfloor[c] = q < kp->ortho_qmin ? q : kp->ortho_qmin;
+  }
+  /* an invalid neighbourhood is left to the verifier */
+  if (!eval_around(p, &h, c0, qfloor, &a0) || !(a0.e > 0)) return 0;
+  double skew_max = a0.skew > kp->skew_limit ? a0.skew : kp->skew_limit;
+  double cfloor = a0.cmin < cact ? a0.cmin : cact;
+  double wfloor = a0.wmin < kp->ortho_relief_wmin ? a0.wmin : kp->ortho_relief_wmin;
+  /* nor may the column's heights leave the growth band (or their ratios
+   * before, where outside it) */
+  double glo, ghi, band = kp->ortho_relief_growth_band;
+  growth_around(p, v, k, &glo, &ghi);
+  glo = glo < p->rep.growth / band ? glo : p->rep.growth / band;
+  ghi = ghi > p->rep.growth * band ? ghi : p->rep.growth * band;
+  double tilt_max = 0;
+  if (k == 1 && p->smooth[v]) {
+    double t0 = pr_tilt_deg(p->wall + 3 * v, xv, p->vnrm + 3 * v);
+    tilt_max = t0 > kp->tilt_limit_deg ? t0 : kp->tilt_limit_deg;
+  }
+  /* the column's course here: moves go across it */
+  double tc[3], x0[3], g[3];
+  for (int r = 0; r < 3; r++) tc[r] = above[r] - below[r];
+  double lt = vm_norm3(tc);
+  if (!(lt > 0)) return 0;
+  for (int r = 0; r < 3; r++) tc[r] /= lt;
+  /* a length scale: the shorter of the wall's edges here and the column's
+   * span over the two cells */
+  double hloc = p->elen[v] < lt ? p->elen[v] : lt;
+  double fd = kp->ortho_relief_fd * hloc;
+  memcpy(x0, xv, sizeof x0);
+  for (int r = 0; r < 3; r++) {
+    xv[r] = x0[r] + fd;
+    eval_around(p, &h, c0, NULL, &a1);
+    g[r] = (a1.e - a0.e) / fd;
+    xv[r] = x0[r];
+  }
+  double gt = vm_dot3(g, tc);
+  for (int r = 0; r < 3; r++) g[r] -= gt * tc[r];
+  double lg = vm_norm3(g);
+  if (!(lg > 0)) return 0;
+  double step = kp->ortho_relief_step * hloc / lg;
+  for (int b = 0; b < kp->ortho_relief_backtracks; b++, step *= 0.5) {
+    for (int r = 0; r < 3; r++) xv[r] = x0[r] - step * g[r];
+    if (!eval_around(p, &h, c0, qfloor, &a1)) continue;
+    if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
+        a1.wmin < wfloor)
+      continue;
+    if (tilt_max > 0 && pr_tilt_deg(p->wall + 3 * v, xv, p->vnrm + 3 * v) > tilt_max) continue;
+    double lo, hi;
+    growth_around(p, v, k, &lo, &hi);
+    if (lo < glo || hi > ghi) continue;
+    /* the cells around keep their centres current for the next hoods */
+    for (int c = 0; c < h.n; c++) {
+      double x[18];
+      prism_of(p, p->lev, h.t[c], h.j[c], x);
+      pr_foam_cell(x, fm->cc + 3 * (h.t[c] * (p->nlev - 1) + h.j[c]));
+    }
+    return 1;
+  }
+  memcpy(xv, x0, sizeof x0);
+  return 0;
+}
+
+int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
+  memset(s, 0, sizeof *s);
+  s->cmin_before = s->cmin_after = 1;
+  int nl = p->nlev - 1;
+  if (nl < 2) return VM_OK;
+  vm_ctx *ctx = p->ctx;
+  const pr_params *kp = &p->k;
+  int64_t nt = p->nt, nw = p->nw, nc = nt * nl;
+  size_t nv = (size_t)(nw * (nl + 1));
+  int32_t *nbt = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *nbt);
+  double *qinit = vm_alloc_array(ctx, (size_t)nc, sizeof *qinit);
+  uint8_t *act = vm_alloc_array(ctx, nv, sizeof *act);
+  uint8_t *moved = vm_alloc_array(ctx, nv, sizeof *moved);
+  facemap fm = {vm_alloc_array(ctx, (size_t)(3 * nc), sizeof *fm.cc),
+                vm_alloc_array(ctx, (size_t)nc, 1), vm_alloc_array(ctx, (size_t)nc, 1),
+                vm_alloc_array(ctx, (size_t)nc, sizeof *fm.cw), vm_alloc_array(ctx, (size_t)nc, 1)};
+  int st = VM_OK;
+  if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.mark) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  edge_neighbours(p, nbt);
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < nc; c++) {
+    double x[18];
+    int inv;
+    prism_of(p, p->lev, c / nl, (int)(c % nl), x);
+    double q = pr_prism_corner_quality(x, &inv), qn = pr_prism_quality(x);
+    qinit[c] = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
+  }
+  const double c0 = cos(kp->ortho_relief_deg * PR_PI / 180);
+  const double cact = cos(kp->ortho_relief_active_deg * PR_PI / 180);
+  update_faces(p, nbt, cact, &fm, NULL);
+  face_totals(p, &fm, &s->over70_before, &s->cmin_before);
+  int64_t n70 = s->over70_before, last = n70;
+  for (int sweep = 0; sweep < kp->ortho_relief_sweeps && pr_time_left(p) > 0; sweep++) {
+    int64_t nmoved = 0;
+    activate(p, nbt, &fm, act);
+    memset(moved, 0, nv);
+    /* a vertex at level k reads levels k - 2..k + 2 and the centres of
+     * layers k - 2..k + 1, and writes its level and the centres of layers
+     * k - 1 and k: levels PR_ORTHO_STRIDE apart never touch each other's,
+     * so they run at once, each level in vertex order, the classes of
+     * levels one after the other: the same result on any thread count */
+    for (int r = 0; r < PR_ORTHO_STRIDE; r++) {
+      int nk = (nl - 1 - r + PR_ORTHO_STRIDE - 1) / PR_ORTHO_STRIDE;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : nmoved)
+      for (int i = 0; i < nk; i++) {
+        int k = 1 + r + i * PR_ORTHO_STRIDE;
+        for (int64_t v = 0; v < nw; v++)
+          if (act[(size_t)k * nw + v] && relieve(p, nbt, &fm, qinit, v, k, c0, cact)) {
+            moved[(size_t)k * nw + v] = 1;
+            nmoved++;
+          }
+      }
+    }
+    refresh(p, nbt, cact, &fm, moved);
+    double cm;
+    face_totals(p, &fm, &n70, &cm);
+    s->moves += nmoved;
+    s->sweeps = sweep + 1;
+    vm_log(ctx, VM_LOG_DEBUG,
+           "prism: non-orthogonality relief sweep %d: %lld steps, %lld faces beyond 70 degrees",
+           sweep + 1, (long long)nmoved, (long long)n70);
+    /* done when a sweep gains less than k.ortho_relief_gain of the faces
+     * beyond 70 degrees it started with */
+    if (!nmoved || (double)(last - n70) <= kp->ortho_relief_gain * (double)last) break;
+    last = n70;
+  }
+  face_totals(p, &fm, &s->over70_after, &s->cmin_after);
+done:
+  vm_free(ctx, nbt);
+  vm_free(ctx, qinit);
+  vm_free(ctx, act);
+  vm_free(ctx, moved);
+  vm_free(ctx, fm.cc);
+  vm_free(ctx, fm.bad);
+  vm_free(ctx, fm.o70);
+  vm_free(ctx, fm.cw);
+  vm_free(ctx, fm.mark);
+  return st;
+}
+
+int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over70,
+                    double *nonortho_max, double *skew_max) {
+  *over70 = 0;
+  *nonortho_max = *skew_max = 0;
+  int nl = nlev - 1;
+  int64_t nt = p->nt, nc = nt * nl;
+  if (nl < 1) return VM_OK;
+  int32_t *nbt = vm_alloc_array(p->ctx, (size_t)(3 * nt), sizeof *nbt);
+  double *cc = vm_alloc_array(p->ctx, (size_t)(3 * nc), sizeof *cc);
+  if (!nbt || !cc) {
+    vm_free(p->ctx, nbt);
+    vm_free(p->ctx, cc);
+    return VM_ERR_NOMEM;
+  }
+  edge_neighbours(p, nbt);
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < nc; c++) {
+    double x[18];
+    prism_of(p, L, c / nl, (int)(c % nl), x);
+    pr_foam_cell(x, cc + 3 * c);
+  }
+  const double c70 = cos(70 * PR_PI / 180);
+  int64_t over = 0;
+  double worst = 1, skew = 0;
+#pragma omp parallel for schedule(static) reduction(+ : over) reduction(min : worst) \
+    reduction(max : skew)
+  for (int64_t c = 0; c < nc; c++) {
+    int64_t t = c / nl;
+    int k = (int)(c % nl);
+    double x[18];
+    prism_of(p, L, t, k, x);
+    for (int f = 0; f < 5; f++) {
+      double y[12];
+      int n = face_of(x, f, y);
+      /* the wall under layer 0 and the outer surface over the last */
+      if ((f == 0 && k == 0) || (f == 1 && k == nl - 1)) {
+        double sk = pr_foam_boundary_skew(y, n, cc + 3 * c);
+        skew = sk > skew ? sk : skew;
+        continue;
+      }
+      /* each internal face once: a cell's top, its sides towards later
+       * triangles */
+      int64_t u = f == 1 ? t : f >= 2 ? nbt[3 * t + f - 2] : -1;
+      int j = f == 1 ? k + 1 : k;
+      if (u < 0 || (f >= 2 && u < t)) continue;
+      const double *cn = cc + 3 * (u * nl + j);
+      double cs = pr_foam_ortho_cos(y, n, cc + 3 * c, cn);
+      over += cs < c70;
+      worst = cs < worst ? cs : worst;
+      double sk = pr_foam_skew(y, n, cc + 3 * c, cn);
+      skew = sk > skew ? sk : skew;
+    }
+  }
+  *over70 = over;
+  *nonortho_max = acos(worst < -1 ? -1 : worst) * 180 / PR_PI;
+  *skew_max = skew;
+  vm_free(p->ctx, nbt);
+  vm_free(p->ctx, cc);
+  return VM_OK;
+}
