@@ -366,6 +366,12 @@ int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *ar
   return VM_EXIT_OK;
 }
 
+int vm_cli_opt_verbose(vm_cli *cli, const vm_opt *opt, const char *value, void *args) {
+  (void)opt, (void)value, (void)args;
+  cli->verbose = 1;
+  return VM_EXIT_OK;
+}
+
 int vm_cli_volume_output(const vm_cli *cli, const char *path, int fmt) {
   if (fmt == VM_FMT_STL || fmt == VM_FMT_OBJ || fmt == VM_FMT_OFF || fmt == VM_FMT_PLY)
     return vm_cli_usage_error(cli,

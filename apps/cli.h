@@ -147,14 +147,18 @@ void vm_cli_print_help(const vm_cli_spec *spec, FILE *f);
 
 /* Callbacks for the options most programs share:
  *   -q, --quiet       cli->quiet = 1
+ *   -v, --verbose     cli->verbose = 1 (debug messages too)
  *   --threads N       vm_ctx_set_threads, N in [0, 4 x the online cores]
  *   --format F        int at offset = vm_cli_format(F); a missing value is
  *                     `error` if the option has one */
 int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+int vm_cli_opt_verbose(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 #define VM_CLI_OPT_QUIET(help)                                                                     \
   { "--quiet", "-q", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_quiet }
+#define VM_CLI_OPT_VERBOSE(help)                                                                   \
+  { "--verbose", "-v", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_verbose }
 #define VM_CLI_OPT_THREADS                                                                         \
   {                                                                                                \
     "--threads", NULL, VM_OPT_CALL, 0, "N", "OpenMP threads (results do not depend on it)",        \

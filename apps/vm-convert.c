@@ -30,6 +30,7 @@ static const vm_opt opts[] = {
     {"--strict", NULL, VM_OPT_FLAG, A(strict), NULL,
      "exit 3, writing nothing, if the output format cannot carry everything", .ival = 1},
     VM_CLI_OPT_QUIET("no warnings"),
+    VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
 
 static const vm_cli_spec spec = {

@@ -72,6 +72,7 @@ static const vm_opt opts[] = {
      .ival = 1},
     {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "JSON summary on stdout", .ival = 1},
     VM_CLI_OPT_QUIET("no progress"),
+    VM_CLI_OPT_VERBOSE("debug messages too (Gmsh's own)"),
     {0}};
 
 static const vm_cli_spec spec = {

@@ -304,6 +304,7 @@ static const vm_opt opts[] = {
     {"--check-incremental", NULL, VM_OPT_FLAG, A(o.check_incremental), NULL,
      "check every incremental intersection query against a full one (slow; for tests)", .ival = 1},
     VM_CLI_OPT_QUIET("no progress on stderr"),
+    VM_CLI_OPT_VERBOSE("debug messages too (the non-orthogonality relief's sweeps)"),
     {0}};
 
 static const vm_cli_spec spec = {

@@ -129,6 +129,7 @@ static const vm_opt opts[] = {
      "Jacobian)",
      .error = "expects a value"},
     VM_CLI_OPT_QUIET("no warnings"),
+    VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
 
 static const vm_cli_spec spec = {

@@ -102,6 +102,7 @@ static const vm_opt opts[] = {
      .error = "expects a directory"},
     {"--json", NULL, VM_OPT_FLAG, A(json), NULL, "JSON summary on stdout", .ival = 1},
     VM_CLI_OPT_QUIET("no progress"),
+    VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
 
 static const vm_cli_spec spec = {

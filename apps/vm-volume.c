@@ -120,6 +120,7 @@ static const vm_opt opts[] = {
      "and after",
      .error = "expects a directory"},
     VM_CLI_OPT_QUIET("no progress"),
+    VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
 
 static const vm_cli_spec spec = {

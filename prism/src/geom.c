@@ -378,3 +378,23 @@ int pr_foam_face_tets_ok(const double *x, int n, const double *c, const double *
   }
   return 0;
 }
+
+int pr_foam_cell_concave(const double (*fc)[3], const double (*fs)[3], const double *cc) {
+  for (int f = 0; f < 5; f++) {
+    double n[3], e[3];
+    for (int r = 0; r < 3; r++) e[r] = fc[f][r] - cc[r];
+    double l = vm_norm3(fs[f]);
+    if (!(l > 0)) return 1;
+    /* the face's normal turned out of the cell */
+    double sg = vm_dot3(fs[f], e) < 0 ? -1 : 1;
+    for (int r = 0; r < 3; r++) n[r] = sg * fs[f][r] / l;
+    for (int g = 0; g < 5; g++) {
+      if (g == f) continue;
+      double d[3];
+      for (int r = 0; r < 3; r++) d[r] = fc[g][r] - fc[f][r];
+      double ld = vm_norm3(d);
+      if (ld > 0 && vm_dot3(d, n) / ld > -1e-6) return 1;
+    }
+  }
+  return 0;
+}

@@ -92,6 +92,10 @@ double pr_foam_boundary_skew(const double *x, int n, const double *cp);
 double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn);
 /* The same of a face whose centre c and area vector s are known. */
 double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn);
+/* Is the prism with cell centre cc and faces fc, fs (pr_foam_cell_faces)
+ * concave as OpenFOAM's checkMesh sees it: another face's centre on or
+ * beyond the plane of a face (within a cosine of 1e-6)? */
+int pr_foam_cell_concave(const double (*fc)[3], const double (*fs)[3], const double *cc);
 /* Interpolation weight of a face (centre c, area vector s) between the
  * cells centred at cp and cn: the lesser of the two shares of the centres'
  * distances from the face along s (checkMesh fails below 0.05). */

@@ -21,12 +21,13 @@
  * before), no face around it becomes more skewed than k.skew_limit (or than
  * it was), its worst face gets no worse (or stays within
  * k.ortho_relief_active_deg), no more of its faces fail OpenFOAM's
- * face-tet decomposition, their smallest interpolation weight stays above
- * k.ortho_relief_wmin (or where it was), the ratios of the column's
- * successive heights stay within [G / b, b G] (G the growth ratio, b
- * k.ortho_relief_growth_band; or where they were), and a smooth column's
- * first side edge stays within k.tilt_limit_deg of its normal (or its tilt
- * before). Vertices are visited where a face of their cells is beyond
+ * face-tet decomposition and no more of its cells are concave, their
+ * smallest interpolation weight stays above k.ortho_relief_wmin (or where
+ * it was), the ratios of the column's successive heights stay within
+ * [G / b, b G] (G the growth ratio, b k.ortho_relief_growth_band; or where
+ * they were), and a smooth column's first side edge stays within
+ * k.tilt_limit_deg of its normal (or its tilt before). Vertices are
+ * visited where a face of their cells is beyond
  * k.ortho_relief_active_deg; sweeps repeat while one lowers the count of
  * faces beyond 70 degrees by more than k.ortho_relief_gain of it. Each
  * level is visited in vertex order; levels five apart, which share
@@ -148,6 +149,7 @@ typedef struct around {
   double skew;               /* the largest skewness of those faces (boundary faces too) */
   double wmin;               /* their smallest interpolation weight */
   int badtets;               /* those failing the face-tet decomposition */
+  int concave;               /* cells concave as checkMesh sees them */
   double q[2 * PR_RING_MAX]; /* each cell's quality: the lesser of its scaled
                                Jacobian and its quadrature quality (-1 if
                                either is not positive) */
@@ -166,6 +168,7 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   a->skew = 0;
   a->wmin = 0.5;
   a->badtets = 0;
+  a->concave = 0;
   for (int c = 0; c < h->n; c++) {
     prism_of(p, p->lev, h->t[c], h->j[c], x[c]);
     if (full) {
@@ -176,6 +179,9 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
       if (!(q >= qfloor[c])) return 0;
     }
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
+    if (full)
+      a->concave +=
+          pr_foam_cell_concave((const double(*)[3])fc[c], (const double(*)[3])fs[c], cc[c]);
   }
   for (int c = 0; c < h->n; c++)
     for (int f = 0; f < 5; f++) {
@@ -394,7 +400,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     for (int r = 0; r < 3; r++) xv[r] = x0[r] - step * g[r];
     if (!eval_around(p, &h, c0, qfloor, &a1)) continue;
     if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
-        a1.wmin < wfloor)
+        a1.concave > a0.concave || a1.wmin < wfloor)
       continue;
     if (tilt_max > 0 && pr_tilt_deg(p->wall + 3 * v, xv, p->vnrm + 3 * v) > tilt_max) continue;
     double lo, hi;

@@ -6,7 +6,8 @@
 # vm-surface's remeshing exits 4 (was 130); vm-gen --angle nan is a usage
 # error; vm-volume names the file and says what a collapsed hex and an
 # overflowing volume are; vm-surface does not call an overflow a zero
-# area; vm-prism counts non-manifold edges as the reader does.
+# area; vm-prism counts non-manifold edges as the reader does; -v adds
+# the debug lines and changes nothing else.
 # usage: test_messages.sh VM_GEN VM_CONVERT VM_QUALITY VM_VOLUME VM_SURFACE VM_PRISM
 set -u
 gen=$1 conv=$2 qual=$3 vol=$4 surf=$5 prism=$6
@@ -95,4 +96,11 @@ OBJ
 "$prism" -q fin.obj o.vmsh 2>err
 rc=$?
 check '[ $rc -eq 1 ] && grep -q " 1 edges are shared by more than two faces" err.read && grep -q " 1 edges are shared by more than two triangles" err' "vm-prism counts non-manifold edges as the reader does (exit $rc: $(cat err.read err))"
+# -v shows the debug messages (the prism stage's relief sweeps), -q and the
+# default do not
+"$gen" sphere --level 2 ball.vmsh || exit 1
+"$prism" -v -t 0.2 -n 3 ball.vmsh b.vmsh 2>err.v
+rc=$?
+"$prism" -t 0.2 -n 3 ball.vmsh b2.vmsh 2>err.d
+check '[ $rc -eq 0 ] && grep -q "non-orthogonality relief sweep 1:" err.v && ! grep -q "relief sweep" err.d && cmp -s b.vmsh b2.vmsh' "vm-prism -v adds the debug lines, nothing else changes (exit $rc)"
 exit $fail
