@@ -282,15 +282,6 @@ static int orthogonal_first_level(vm_prism *p) {
   return VM_OK;
 }
 
-/* Prism x of triangle t between levels k and k + 1. */
-static void prism_at(const vm_prism *p, int64_t t, int k, double *x) {
-  size_t lsz = (size_t)(3 * p->nw);
-  for (int i = 0; i < 3; i++) {
-    memcpy(x + 3 * i, p->lev + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-    memcpy(x + 9 + 3 * i, p->lev + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-  }
-}
-
 /* Centre of the cell of triangle t in layer k: from cc (3 per cell, layer
  * by layer of each triangle: cc + 3 (nl t + k)) if given, else computed. */
 static void cell_centre(const vm_prism *p, const double *cc, int64_t t, int k, double *c) {
@@ -299,7 +290,7 @@ static void cell_centre(const vm_prism *p, const double *cc, int64_t t, int k, d
     return;
   }
   double x[18];
-  prism_at(p, t, k, x);
+  pr_prism_at(p, p->lev, t, k, x);
   pr_foam_cell(x, c);
 }
 
@@ -311,19 +302,10 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
   int nl = p->nlev - 1;
   double worst = 0;
   int64_t nb[3];
-  for (int i = 0; i < 3; i++) {
-    int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
-    nb[i] = -1;
-    for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1] && nb[i] < 0; m++) {
-      int64_t u = p->vt[m];
-      if (u == t) continue;
-      const int32_t *c = p->tri + 3 * u;
-      if (c[0] == b || c[1] == b || c[2] == b) nb[i] = u;
-    }
-  }
+  for (int i = 0; i < 3; i++) nb[i] = pr_tri_across(p, t, i);
   for (int k = 0; k < nl; k++) {
     double x[18], cp[3], cn[3];
-    prism_at(p, t, k, x);
+    pr_prism_at(p, p->lev, t, k, x);
     cell_centre(p, cc, t, k, cp);
     if (k + 1 < nl) {
       cell_centre(p, cc, t, k + 1, cn);
@@ -376,7 +358,7 @@ static int all_column_skew(const vm_prism *p, double *sk) {
 #pragma omp parallel for schedule(static)
   for (int64_t c = 0; c < nt * nl; c++) {
     double x[18];
-    prism_at(p, c / nl, (int)(c % nl), x);
+    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
     pr_foam_cell(x, cc + 3 * c);
   }
 #pragma omp parallel for schedule(static)
@@ -415,7 +397,7 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
     for (int k = 0; k < nl; k++) {
       double x[18];
       int inv;
-      prism_at(p, p->vt[j], k, x);
+      pr_prism_at(p, p->lev, p->vt[j], k, x);
       pr_prism_corner_quality(x, &inv);
       if (inv || !(pr_prism_quality(x) >= floor)) return 0;
     }
@@ -926,7 +908,7 @@ static int stack_smooth(vm_prism *p) {
       for (int k = 0; k < p->nlev - 1 && !bad; k++) {
         double x[18];
         int inv;
-        prism_at(p, t, k, x);
+        pr_prism_at(p, p->lev, t, k, x);
         pr_prism_corner_quality(x, &inv);
         bad = inv || !(pr_prism_quality(x) > 0);
       }

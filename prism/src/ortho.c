@@ -70,27 +70,10 @@ static int face_of(const double *x, int f, double *y) {
   return n;
 }
 
-/* Prism of triangle t between levels k and k + 1 of levels L. */
-static void prism_of(const vm_prism *p, const double *L, int64_t t, int k, double *x) {
-  size_t lsz = (size_t)(3 * p->nw);
-  for (int i = 0; i < 3; i++) {
-    memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-    memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-  }
-}
-
 /* Each wall triangle's neighbour over each of its edges (-1: open). */
 static void edge_neighbours(const vm_prism *p, int32_t *nbt) {
   for (int64_t t = 0; t < p->nt; t++)
-    for (int i = 0; i < 3; i++) {
-      int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
-      nbt[3 * t + i] = -1;
-      for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1] && nbt[3 * t + i] < 0; m++) {
-        int64_t u = p->vt[m];
-        const int32_t *c = p->tri + 3 * u;
-        if (u != t && (c[0] == b || c[1] == b || c[2] == b)) nbt[3 * t + i] = (int32_t)u;
-      }
-    }
+    for (int i = 0; i < 3; i++) nbt[3 * t + i] = (int32_t)pr_tri_across(p, t, i);
 }
 
 /* The relief's view of the layer's faces: every cell's centre, and for
@@ -170,7 +153,7 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   a->badtets = 0;
   a->concave = 0;
   for (int c = 0; c < h->n; c++) {
-    prism_of(p, p->lev, h->t[c], h->j[c], x[c]);
+    pr_prism_at(p, p->lev, h->t[c], h->j[c], x[c]);
     if (full) {
       int inv;
       double q = pr_prism_corner_quality(x[c], &inv), qn = pr_prism_quality(x[c]);
@@ -223,7 +206,7 @@ static void update_faces(const vm_prism *p, const int32_t *nbt, double cact, fac
   for (int64_t c = 0; c < nt * nl; c++) {
     if (mark && !(mark[c] & 1)) continue;
     double x[18];
-    prism_of(p, p->lev, c / nl, (int)(c % nl), x);
+    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
     pr_foam_cell(x, fm->cc + 3 * c);
   }
 #pragma omp parallel for schedule(static)
@@ -232,7 +215,7 @@ static void update_faces(const vm_prism *p, const int32_t *nbt, double cact, fac
     int64_t t = c / nl;
     int k = (int)(c % nl);
     double x[18], worst = 1;
-    prism_of(p, p->lev, t, k, x);
+    pr_prism_at(p, p->lev, t, k, x);
     uint8_t b = 0, n70 = 0;
     for (int f = 1; f < 5; f++) {
       int64_t u;
@@ -409,7 +392,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     /* the cells around keep their centres current for the next hoods */
     for (int c = 0; c < h.n; c++) {
       double x[18];
-      prism_of(p, p->lev, h.t[c], h.j[c], x);
+      pr_prism_at(p, p->lev, h.t[c], h.j[c], x);
       pr_foam_cell(x, fm->cc + 3 * (h.t[c] * (p->nlev - 1) + h.j[c]));
     }
     return 1;
@@ -444,7 +427,7 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
   for (int64_t c = 0; c < nc; c++) {
     double x[18];
     int inv;
-    prism_of(p, p->lev, c / nl, (int)(c % nl), x);
+    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
     double q = pr_prism_corner_quality(x, &inv), qn = pr_prism_quality(x);
     qinit[c] = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
   }
@@ -519,7 +502,7 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
 #pragma omp parallel for schedule(static)
   for (int64_t c = 0; c < nc; c++) {
     double x[18];
-    prism_of(p, L, c / nl, (int)(c % nl), x);
+    pr_prism_at(p, L, c / nl, (int)(c % nl), x);
     pr_foam_cell(x, cc + 3 * c);
   }
   const double c70 = cos(70 * PR_PI / 180);
@@ -531,7 +514,7 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     int64_t t = c / nl;
     int k = (int)(c % nl);
     double x[18];
-    prism_of(p, L, t, k, x);
+    pr_prism_at(p, L, t, k, x);
     for (int f = 0; f < 5; f++) {
       double y[12];
       int n = face_of(x, f, y);

@@ -60,6 +60,29 @@ static inline pr_surf pr_wall_surf(const vm_prism *p) {
   return s;
 }
 
+/* Prism of triangle t between levels k and k + 1 of the levels L (nw
+ * vertices each) into x (18 values). */
+static inline void pr_prism_at(const vm_prism *p, const double *L, int64_t t, int k, double *x) {
+  size_t lsz = (size_t)(3 * p->nw);
+  for (int i = 0; i < 3; i++)
+    for (int r = 0; r < 3; r++) {
+      x[3 * i + r] = L[k * lsz + 3 * (size_t)p->tri[3 * t + i] + r];
+      x[9 + 3 * i + r] = L[(k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i] + r];
+    }
+}
+
+/* The wall triangle across edge i (tri[i], tri[i + 1]) of triangle t (-1:
+ * an open edge). */
+static inline int64_t pr_tri_across(const vm_prism *p, int64_t t, int i) {
+  int32_t a = p->tri[3 * t + i], b = p->tri[3 * t + (i + 1) % 3];
+  for (int64_t m = p->vt_off[a]; m < p->vt_off[a + 1]; m++) {
+    int64_t u = p->vt[m];
+    const int32_t *c = p->tri + 3 * u;
+    if (u != t && (c[0] == b || c[1] == b || c[2] == b)) return u;
+  }
+  return -1;
+}
+
 /* Time since creation. */
 double pr_elapsed(const vm_prism *p);
 /* Report progress (solver: 1 for a solve's iteration, see vm_prism_progress). */
