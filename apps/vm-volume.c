@@ -41,6 +41,8 @@ typedef struct {
   int json, free_boundary, slip_boundary, fout, every, method, direct;
   int auto_schedule; /* neither --staged nor --direct: chosen from the mesh, with fallback */
   double feature_deg, corner_deg;
+  double boundary_tol; /* free or sliding boundary: largest move, relative to the diagonal */
+  double min_sj;       /* an element below this scaled Jacobian is flat */
   vm_volume_opts o;
   vm_write_opts wo;
 } args;
@@ -105,6 +107,15 @@ static const vm_opt opts[] = {
      "boundary vertices slide on the input's boundary surface: along its sharp edges, its "
      "corners fixed ('fixed' ones stay)",
      .ival = 1},
+    {"--boundary-tolerance", NULL, VM_OPT_DOUBLE, A(boundary_tol), "R",
+     "free or sliding boundary: the largest distance (two-sided Hausdorff) the boundary may "
+     "move from the input's, relative to its bounding-box diagonal; beyond it the run fails "
+     "(default 0.01)",
+     .lo = 0, .hi = 1e300},
+    {"--min-sj", NULL, VM_OPT_DOUBLE, A(min_sj), "S",
+     "an element with a free vertex and a scaled Jacobian below S is flat, and the run fails "
+     "(default 1e-5; 0: no check)",
+     .lo = 0, .hi = 1},
     {"--feature-angle", NULL, VM_OPT_DOUBLE, A(feature_deg), "D",
      "dihedral angle making a boundary edge sharp (default 40)", .lo = 1e-3, .hi = 180},
     {"--corner-angle", NULL, VM_OPT_DOUBLE, A(corner_deg), "D",
@@ -146,6 +157,12 @@ typedef struct {
   vm_quality q; /* corner rule */
   int64_t bad;  /* inverted nodes of the rule used, as vm_mesh_quality counts them */
   double slip_dist;
+  /* free or sliding boundary: how far the shape moved (NAN: fixed boundary) */
+  double shape_dist, shape_diag, shape_at[3]; /* shape_at: where it moved most */
+  int shape_moved;
+  /* flat elements left: those with a free vertex and sj < --min-sj */
+  int64_t flat, flat_worst;
+  double flat_sj, flat_at[3]; /* the worst one's sj and centroid */
   int verified;
   vm_jac_report cert; /* the independent certification of the written mesh */
   int staged;         /* the schedule that ran last */
@@ -171,6 +188,13 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
               "surface, %lld along %d sharp edge lines, %lld corners and %lld fixed ones stay\n",
               (long long)si.nboundary, (long long)si.nsurface, (long long)si.nline, si.lines,
               (long long)si.ncorner, (long long)si.nkept_fixed);
+    if (si.fold_edges > 0 && !cli->quiet)
+      fprintf(stderr,
+              "vm-volume: slip boundary: %lld sharp edges and line turns where the input's "
+              "boundary folds back "
+              "over tangled elements (150 degrees or more) are not features: their vertices "
+              "slide\n",
+              (long long)si.fold_edges);
   } else if (!a->free_boundary && vm_mesh_mark_boundary(m, VM_VERTEX_FIXED, &nbnd) < 0) {
     return vm_cli_input_error(cli, NULL);
   }
@@ -191,8 +215,10 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
 /* The exit code the run earns before the exact check. */
 static int run_code(const outcome *r) {
   if (r->st == VM_ERR_INTERRUPTED || r->rep.timed_out) return VM_EXIT_INTERRUPTED;
-  return r->bad > 0 || !r->rep.valid || r->cert.invalid + r->cert.undecided > 0 ? VM_EXIT_CHECK
-                                                                                : VM_EXIT_OK;
+  return r->bad > 0 || !r->rep.valid || r->cert.invalid + r->cert.undecided > 0 || r->shape_moved ||
+                 r->flat > 0
+             ? VM_EXIT_CHECK
+             : VM_EXIT_OK;
 }
 
 static void print_summary(const vm_cli *cli, const args *a, const outcome *r, int rc) {
@@ -238,6 +264,29 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
             "vm-volume: slip boundary: largest distance of a boundary vertex from the "
             "input's boundary surface %.3e\n",
             r->slip_dist);
+  if (!isnan(r->shape_dist) && !cli->quiet && !r->shape_moved)
+    fprintf(stderr,
+            "vm-volume: the boundary moved by at most %.3e (Hausdorff), %.3g %% of its "
+            "diagonal, within --boundary-tolerance %g\n",
+            r->shape_dist, 100 * r->shape_dist / r->shape_diag, a->boundary_tol);
+  /* the shape and flatness verdicts are on a finished run's result only */
+  if (rc == VM_EXIT_INTERRUPTED) return;
+  if (r->shape_moved)
+    vm_cli_error(cli,
+                 "%s: the boundary moved by %.3e (Hausdorff distance to the input's boundary, "
+                 "largest near (%.6g, %.6g, %.6g)), %.3g %% of its diagonal, beyond "
+                 "--boundary-tolerance %g: the shape is not kept%s",
+                 a->out, r->shape_dist, r->shape_at[0], r->shape_at[1], r->shape_at[2],
+                 100 * r->shape_dist / r->shape_diag, a->boundary_tol,
+                 a->free_boundary ? "; --slip-boundary keeps it on the surface"
+                                  : "; a smaller --feature-angle keeps more of its edges and "
+                                    "corners");
+  if (r->flat > 0)
+    vm_cli_error(cli,
+                 "%s: %lld elements are flat (scaled Jacobian below --min-sj %g): the worst, "
+                 "element %lld near (%.6g, %.6g, %.6g), has %.3e",
+                 a->out, (long long)r->flat, a->min_sj, (long long)r->flat_worst, r->flat_at[0],
+                 r->flat_at[1], r->flat_at[2], r->flat_sj);
 }
 
 static void print_json(const args *a, const outcome *r, int rc) {
@@ -267,6 +316,14 @@ static void print_json(const args *a, const outcome *r, int rc) {
     printf(", \"slip_max_distance\": ");
     vm_json_double(stdout, r->slip_dist);
   }
+  if (!isnan(r->shape_dist)) {
+    printf(", \"boundary_deviation\": ");
+    vm_json_double(stdout, r->shape_dist);
+    printf(", \"boundary_deviation_rel\": ");
+    vm_json_double(stdout, r->shape_dist / r->shape_diag);
+    printf(", \"boundary_moved\": %s", r->shape_moved ? "true" : "false");
+  }
+  printf(", \"flat_elements\": %lld", (long long)r->flat);
   printf(", \"corner_valid\": %s, \"certified_cells\": %lld, \"certified_invalid\": %lld, "
          "\"certified_undecided\": %lld, \"repair_cells_init\": %lld, \"iter_repair\": %d, "
          "\"time_certified\": %.3f",
@@ -289,14 +346,16 @@ static void print_json(const args *a, const outcome *r, int rc) {
 typedef struct {
   vm_mesh *m, *before; /* before: a copy of the input for --report */
   vm_volume_slip *slip;
-  uint8_t *vflag0; /* the file's own flags, written back unchanged: the */
-  int32_t *vsurf0; /* stage's boundary conditions are for this run only */
+  vm_volume_shape *shape; /* free or sliding boundary: the input's boundary */
+  uint8_t *vflag0;        /* the file's own flags, written back unchanged: the */
+  int32_t *vsurf0;        /* stage's boundary conditions are for this run only */
   vm_report *report;
   vm_report_history *hist;
 } stage;
 
 static void stage_free(vm_ctx *ctx, stage *s) {
   vm_volume_slip_destroy(&s->slip);
+  vm_volume_shape_destroy(&s->shape);
   if (s->vflag0) vm_free(ctx, s->vflag0);
   if (s->vsurf0) vm_free(ctx, s->vsurf0);
   vm_report_destroy(&s->report);
@@ -331,6 +390,45 @@ static int open_report(vm_cli *cli, const args *a, stage *s) {
   return rc;
 }
 
+/* Flat elements left by the run: of the top dimension, with a vertex the
+ * stage could move, and a scaled Jacobian below --min-sj (elements whose
+ * vertices are all fixed are the input's). */
+static int flat_elements(vm_cli *cli, const args *a, const vm_mesh *m, outcome *r) {
+  r->flat = 0;
+  r->flat_worst = -1;
+  r->flat_sj = INFINITY;
+  if (!(a->min_sj > 0)) return VM_EXIT_OK;
+  double *sj = vm_alloc_array(cli->ctx, (size_t)m->ne + 1, sizeof *sj);
+  if (!sj || vm_mesh_element_quality(m, NULL, NULL, sj, NULL) < 0) {
+    vm_free(cli->ctx, sj);
+    return vm_cli_input_error(cli, NULL);
+  }
+  for (int64_t e = 0; e < m->ne; e++) {
+    /* inverted elements (sj < 0) are counted as such, not as flat */
+    if (isnan(sj[e]) || !(sj[e] >= 0 && sj[e] < a->min_sj)) continue;
+    int movable = 0;
+    for (int64_t i = m->eoff[e]; i < m->eoff[e + 1]; i++)
+      movable |= m->vflag[m->conn[i]] != VM_VERTEX_FIXED;
+    if (!movable) continue;
+    r->flat++;
+    if (sj[e] < r->flat_sj) {
+      r->flat_sj = sj[e];
+      r->flat_worst = e;
+    }
+  }
+  vm_free(cli->ctx, sj);
+  if (r->flat_worst >= 0) {
+    int64_t e = r->flat_worst, n = m->eoff[e + 1] - m->eoff[e];
+    for (int k = 0; k < 3; k++) {
+      double c = 0;
+      for (int64_t i = m->eoff[e]; i < m->eoff[e + 1]; i++)
+        c += m->xyz[3 * (int64_t)m->conn[i] + k];
+      r->flat_at[k] = c / (double)n;
+    }
+  }
+  return VM_EXIT_OK;
+}
+
 /* An independent check of the result: every corner simplex (and the
  * geometric rule's simplices if that rule was used), the distance from the
  * slip surface. */
@@ -344,7 +442,13 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
   if (vm_mesh_jacobian_certify(s->m, &r->cert, NULL) < 0) return vm_cli_input_error(cli, NULL);
   if (s->slip && vm_volume_slip_distance(s->slip, s->m, &r->slip_dist) < 0)
     return vm_cli_input_error(cli, NULL);
-  return VM_EXIT_OK;
+  r->shape_dist = NAN;
+  if (s->shape && (a->free_boundary || a->slip_boundary)) {
+    if (vm_volume_shape_deviation(s->shape, s->m, &r->shape_dist, &r->shape_diag, r->shape_at) < 0)
+      return vm_cli_input_error(cli, NULL);
+    r->shape_moved = r->shape_dist > a->boundary_tol * r->shape_diag;
+  }
+  return flat_elements(cli, a, s->m, r);
 }
 
 /* The options of one schedule: staged (hexahedra) or direct; `fallback`:
@@ -391,6 +495,15 @@ static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
   return n;
 }
 
+/* An impossible problem: the input written unchanged to OUT (its own flags
+ * back), exit 3. */
+static int write_unchanged(vm_cli *cli, const args *a, stage *s) {
+  memcpy(s->m->vflag, s->vflag0, (size_t)s->m->nv);
+  memcpy(s->m->vsurf, s->vsurf0, (size_t)s->m->nv * sizeof *s->vsurf0);
+  return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0 ? vm_cli_input_error(cli, NULL)
+                                                                    : VM_EXIT_CHECK;
+}
+
 /* Merge the report of a fallback run into the first one's. */
 static void merge_reports(vm_volume_report *r, const vm_volume_report *first) {
   r->M_init = first->M_init;
@@ -414,7 +527,9 @@ int main(int argc, char **argv) {
             .every = 10,
             .method = -1,
             .feature_deg = 40,
-            .corner_deg = 60};
+            .corner_deg = 60,
+            .boundary_tol = 0.01,
+            .min_sj = 1e-5};
   a.o.eps_inner = 0; /* not given: the default, or --staged's, below */
   a.o.theta_untangle = NAN;
   stage s = {0};
@@ -442,6 +557,12 @@ int main(int argc, char **argv) {
       (rc = boundary_conditions(&cli, &a, s.m, &s.slip)) != VM_EXIT_OK ||
       (a.report_dir && (rc = open_report(&cli, &a, &s)) != VM_EXIT_OK))
     goto done;
+  /* the input's boundary: to measure how far a free or sliding one moved,
+   * and to find fixed vertices outside a fixed or sliding one */
+  if (vm_volume_shape_create(cli.ctx, s.m, &s.shape) < 0 && (a.free_boundary || a.slip_boundary)) {
+    rc = vm_cli_input_error(&cli, a.in);
+    goto done;
+  }
   {
     int64_t first, nimp = impossible_elements(s.m, &first);
     if (nimp > 0) {
@@ -451,10 +572,25 @@ int main(int argc, char **argv) {
                    "such elements): no motion of the others can untangle it; --slip-boundary "
                    "lets boundary vertices slide (--free-boundary move); %s written unchanged",
                    a.in, (long long)first, vm_elem_name(s.m->etype[first]), (long long)nimp, a.out);
-      memcpy(s.m->vflag, s.vflag0, (size_t)s.m->nv);
-      memcpy(s.m->vsurf, s.vsurf0, (size_t)s.m->nv * sizeof *s.vsurf0);
-      rc = vm_mesh_write(cli.ctx, s.m, a.out, a.fout, &a.wo) < 0 ? vm_cli_input_error(&cli, NULL)
-                                                                 : VM_EXIT_CHECK;
+      rc = write_unchanged(&cli, &a, &s);
+      goto done;
+    }
+    /* a pre-check only: where it cannot answer (geometry beyond what the
+     * AABB tree takes, e.g. coordinates near overflow) the run goes on and
+     * says what is wrong itself */
+    int64_t nout = 0;
+    if (s.shape && !a.free_boundary &&
+        vm_volume_shape_fixed_outside(s.shape, s.m, &nout, &first) < 0)
+      nout = 0;
+    if (nout > 0) {
+      const double *x = s.m->xyz + 3 * first;
+      vm_cli_error(&cli,
+                   "%s: fixed vertex %lld at (%.6g, %.6g, %.6g) lies outside the %s boundary "
+                   "(%lld such vertices): no motion of the others can untangle the mesh; "
+                   "--free-boundary lets the boundary move; %s written unchanged",
+                   a.in, (long long)first, x[0], x[1], x[2], a.slip_boundary ? "sliding" : "fixed",
+                   (long long)nout, a.out);
+      rc = write_unchanged(&cli, &a, &s);
       goto done;
     }
   }

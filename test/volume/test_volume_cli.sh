@@ -55,6 +55,72 @@ check 'grep -q "\"slip_max_distance\": 0" "$dir/slip.json" || grep -q "\"slip_ma
   "boundary vertices stay on the boundary surface"
 "$vol" --slip-boundary --free-boundary "$dir/slip.vtk" "$dir/x.vtk" 2>/dev/null
 check '[ $? -eq 2 ]' "--slip-boundary with --free-boundary is a usage error"
+check 'grep -q "\"boundary_moved\": false" "$dir/slip.json" && grep -q "\"flat_elements\": 0" "$dir/slip.json"' \
+  "a slip run keeps the shape and leaves no flat element"
+
+# a boundary folded by tangled boundary hexes (the SOS-hex bunny's case):
+# the unit cube, n = 6, with a top-face vertex pushed in x past its
+# neighbour (the quads there fold over) and a vertex of the edge y = 0,
+# z = 1 pushed along that edge past its neighbour. The folds' edges and the
+# edge's turn back are not features, so those vertices slide back; before,
+# they made 16 feature lines and 16 corners (fixed) and the run stalled.
+fold_cube() { # $1: output
+  awk -v n=6 'BEGIN {
+    N = (n + 1) ^ 3
+    print "# vtk DataFile Version 3.0"; print "folded cube"; print "ASCII"
+    print "DATASET UNSTRUCTURED_GRID"; print "POINTS " N " double"
+    for (k = 0; k <= n; k++) for (j = 0; j <= n; j++) for (i = 0; i <= n; i++) {
+      x = i / n; y = j / n; z = k / n
+      if (k == n && j == n / 2 && i == n / 2) x += 1.6 / n
+      if (k == n && j == 0 && i == 2) x += 1.6 / n
+      printf "%.17g %.17g %.17g\n", x, y, z
+    }
+    print "CELLS " n ^ 3 " " 9 * n ^ 3
+    for (k = 0; k < n; k++) for (j = 0; j < n; j++) for (i = 0; i < n; i++) {
+      a = k * (n + 1) ^ 2 + j * (n + 1) + i; b = a + (n + 1) ^ 2
+      print 8, a, a + 1, a + n + 2, a + n + 1, b, b + 1, b + n + 2, b + n + 1
+    }
+    print "CELL_TYPES " n ^ 3
+    for (c = 0; c < n ^ 3; c++) print 12
+  }' >"$1"
+}
+fold_cube "$dir/fold.vtk"
+"$qual" --require-valid "$dir/fold.vtk" >/dev/null 2>&1
+check '[ $? -eq 3 ]' "the folded cube is tangled"
+"$vol" --slip-boundary --time-limit 60 --json "$dir/fold.vtk" "$dir/fold-out.vtk" >"$dir/fold.json" 2>"$dir/fold.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/fold.json" && grep -q "\"boundary_moved\": false" "$dir/fold.json"' \
+  "--slip-boundary unfolds a folded boundary, the shape kept (got $rc)"
+check 'grep -q "slip boundary: 218 boundary vertices: .* along 12 sharp edge lines, 8 corners" "$dir/fold.err" &&
+  grep -q "sharp edges and line turns where the input.s boundary folds back" "$dir/fold.err"' \
+  "the cube's own 12 lines and 8 corners, the folds said and left out"
+
+# a free or sliding boundary that does not keep the shape fails (exit 3,
+# the mesh written): the 3pi/4 cube with a free boundary turns as a whole
+# with its fixed inner cube (every cell valid, the corners 0.2 away)
+"$gen" rotcube --n 6 --angle 3pi/4 --free-boundary "$dir/turn.vtk"
+"$vol" --free-boundary --json "$dir/turn.vtk" "$dir/turn-out.vtk" >"$dir/turn.json" 2>"$dir/turn.err"
+rc=$?
+check '[ $rc -eq 3 ] && [ -s "$dir/turn-out.vtk" ] && grep -q "\"valid\": false" "$dir/turn.json" &&
+  grep -q "\"boundary_moved\": true" "$dir/turn.json" && grep -q "\"certified_invalid\": 0, \"certified_undecided\": 0" "$dir/turn.json"' \
+  "--free-boundary that turns the shape: exit 3, valid cells, the shape not kept (got $rc)"
+check 'grep -q "error: .*turn-out.vtk: the boundary moved by 2.0[0-9]*e-01 .*12 % of its diagonal, beyond --boundary-tolerance 0.01.*--slip-boundary" "$dir/turn.err"' \
+  "one line: how far, where, the tolerance, the option that keeps it"
+"$vol" --free-boundary --boundary-tolerance 0.5 "$dir/turn.vtk" "$dir/turn-out.vtk" 2>"$dir/turn2.err"
+check '[ $? -eq 0 ] && grep -q "boundary moved by at most 2.0[0-9]*e-01" "$dir/turn2.err"' \
+  "within a tolerance the user gives, the same run exits 0 and says how far it moved"
+# sliding without features: the cube's edges and corners are rounded off
+"$vol" --slip-boundary --feature-angle 179 --max-iter 2000 --json "$dir/slip.vtk" "$dir/round.vtk" >"$dir/round.json" 2>"$dir/round.err"
+rc=$?
+check '[ $rc -eq 3 ] && grep -q "\"boundary_moved\": true" "$dir/round.json" && grep -q "smaller --feature-angle" "$dir/round.err"' \
+  "a slide across the cube's unmarked edges fails, naming --feature-angle (got $rc)"
+# flat elements: the threshold is the user's; cells whose vertices are all
+# fixed (the inner cube's) are not the stage's to answer for
+"$vol" --slip-boundary --min-sj 0.5 --json "$dir/slip.vtk" "$dir/flat.vtk" >"$dir/flat.json" 2>"$dir/flat.err"
+rc=$?
+nflat=$(sed -n 's/.*"flat_elements": \([0-9]*\).*/\1/p' "$dir/flat.json")
+check '[ $rc -eq 3 ] && [ "${nflat:-0}" -gt 0 ] && [ "$nflat" -lt 512 ] && grep -q "elements are flat (scaled Jacobian below --min-sj 0.5): the worst, element [0-9]* near (" "$dir/flat.err"' \
+  "elements below --min-sj fail the run, the worst one named ($nflat flat, rc $rc)"
 
 # impossible: a fixed inverted hex (every vertex fixed by the 'fixed' field)
 cat >"$dir/bad.vtk" <<'VTK'

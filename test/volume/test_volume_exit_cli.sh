@@ -3,9 +3,10 @@
 # an inverted hex whose vertices are all fixed ends at once with exit 3,
 # naming the element and --slip-boundary, the input written; vm-quality
 # --require-valid and --verify refuse a mesh whose corner tets are all
-# positive but whose hex is not certified (det J < 0 inside).
+# positive but whose hex is not certified (det J < 0 inside); fixed
+# vertices outside the fixed (or sliding) boundary end at once too.
 set -u
-vol=$1 qual=$2
+vol=$1 qual=$2 gen=$3
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -41,6 +42,31 @@ check '[ -s "$dir/bad_out.vtk" ]' \
   "the input is written to OUT"
 "$qual" -q "$dir/bad_out.vtk" >/dev/null
 check '[ $? -eq 0 ]' "and it is readable"
+
+# the rotated cube's inner cube turned through the outer one: 3pi/4 about
+# z with half-size 0.45 puts its corners at 0.566 > 0.5 (204 fixed
+# vertices outside); about (1,1,1) fewer poke out (18); a free boundary may
+# still try
+"$gen" rotcube --n 20 --angle 3pi/4 --inner 0.45 "$dir/out.vmsh"
+"$gen" rotcube --n 20 --angle 3pi/4 --inner 0.45 --axis 1,1,1 "$dir/out111.vmsh"
+"$gen" rotcube --n 20 --angle 3pi/4 --inner 0.4 "$dir/in04.vmsh"
+start=$(date +%s)
+"$vol" --time-limit 60 "$dir/out.vmsh" "$dir/out_res.vmsh" 2>"$dir/out.err"
+rc=$?
+took=$(($(date +%s) - start))
+check '[ $rc -eq 3 ] && [ $took -le 2 ]' "fixed vertices outside the boundary: exit 3 at once (got $rc after $took s)"
+check 'grep -q "error: .*out.vmsh: fixed vertex [0-9]* at (0.565685, .*) lies outside the fixed boundary (204 such vertices).*--free-boundary" "$dir/out.err"' \
+  "naming a vertex, where it is, how many and the option that helps"
+check 'cmp -s "$dir/out.vmsh" "$dir/out_res.vmsh"' "the input written unchanged"
+"$vol" --time-limit 60 --slip-boundary "$dir/out111.vmsh" "$dir/out_res.vmsh" 2>"$dir/out111.err"
+rc=$?
+check '[ $rc -eq 3 ] && grep -q "lies outside the sliding boundary (18 such vertices)" "$dir/out111.err"' \
+  "about (1,1,1), with a sliding boundary: the same (got $rc)"
+"$vol" --time-limit 1 -q --free-boundary "$dir/out.vmsh" "$dir/out_res.vmsh" 2>"$dir/free.err"
+check '! grep -q "lies outside" "$dir/free.err"' "a free boundary is not refused"
+"$vol" --time-limit 1 -q "$dir/in04.vmsh" "$dir/out_res.vmsh" 2>"$dir/in04.err"
+check '! grep -q "lies outside" "$dir/in04.err"' \
+  "half-size 0.4: the turned fixed vertices stay inside (0.495 < 0.5), not refused"
 
 # hex 283 of the n = 16 pi cube after the staged schedule without the
 # repair (scaled): all 8 corner tets positive, det J < 0 inside

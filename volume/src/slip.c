@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "varmesh/features.h"
+#include "varmesh/quality.h"
 #include "varmesh/project.h"
 #include "varmesh/repair.h"
 #include "varmesh/topology.h"
@@ -128,6 +129,175 @@ static int find_patches(vm_ctx *ctx, const vm_mesh *b, const vm_surface_features
   return VM_OK;
 }
 
+/* The unit normal of face e of the surface b at its corner v (the cross
+ * product of the two edges there; zero if v is not a vertex of e or the
+ * corner is degenerate). A fold inside a quad (a bow tie) shows as
+ * opposite corner normals, where the face's mean normal hides it. */
+static void corner_normal(const vm_mesh *b, int64_t e, int32_t v, double nrm[3]) {
+  int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+  nrm[0] = nrm[1] = nrm[2] = 0;
+  for (int64_t i = 0; i < n; i++) {
+    if (b->conn[o + i] != v) continue;
+    const double *p = b->xyz + 3 * (int64_t)v;
+    const double *q = b->xyz + 3 * (int64_t)b->conn[o + (i + 1) % n];
+    const double *r = b->xyz + 3 * (int64_t)b->conn[o + (i + n - 1) % n];
+    double a[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    double c[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    nrm[0] = a[1] * c[2] - a[2] * c[1];
+    nrm[1] = a[2] * c[0] - a[0] * c[2];
+    nrm[2] = a[0] * c[1] - a[1] * c[0];
+  }
+  double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+  for (int k = 0; k < 3 && l > 0; k++) nrm[k] /= l;
+}
+
+/* Feature edges made by a fold, not by the shape: where the input's
+ * boundary elements are tangled (vt[v]: surface vertex v belongs to a
+ * volume element with a corner tet not positive), the boundary surface
+ * folds back on itself and its faces meet at nearly 180 degrees. Edges with
+ * both ends in such elements and a dihedral angle of at least
+ * SLIP_FOLD_DEG are dropped from f (rebuilt with corner_deg): otherwise the
+ * fold's edges become feature lines and its turns fixed corners, and the
+ * vertices that must move to unfold it cannot (the SOS-hex bunny of issue
+ * 23: 183 such corners). So are the turns of a feature line by
+ * SLIP_FOLD_DEG or more at such vertices. *ndropped: how many edges and
+ * turns. */
+#define SLIP_FOLD_DEG 150.0
+static int drop_fold_edges(vm_ctx *ctx, const vm_mesh *b, const uint8_t *vt, double corner_deg,
+                           vm_surface_features *f, int64_t *ndropped) {
+  *ndropped = 0;
+  int64_t nfe = b->eoff[b->ne];
+  face_edge *fe = vm_alloc_array(ctx, (size_t)nfe + 1, sizeof *fe);
+  int32_t *keep = vm_alloc_array(ctx, (size_t)f->nedge + 1, 2 * sizeof *keep);
+  int32_t *deg = NULL, *nb2 = NULL;
+  uint8_t *corner = NULL;
+  int st = VM_OK;
+  if (!fe || !keep) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t k = 0;
+  for (int64_t e = 0; e < b->ne; e++) {
+    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+    for (int64_t i = 0; i < n; i++) {
+      int32_t u = b->conn[o + i], w = b->conn[o + (i + 1) % n];
+      if (!vt[u] || !vt[w]) continue;
+      fe[k].a = u < w ? u : w;
+      fe[k].b = u < w ? w : u;
+      fe[k].face = (int32_t)e;
+      k++;
+    }
+  }
+  qsort(fe, (size_t)k, sizeof *fe, cmp_face_edge);
+  const double cthr = cos(SLIP_FOLD_DEG * 3.14159265358979323846 / 180.0);
+  int64_t nk = 0;
+  for (int64_t i = 0; i < f->nedge; i++) {
+    int32_t u = f->edge[2 * i], w = f->edge[2 * i + 1];
+    int fold = 0;
+    if (vt[u] && vt[w]) {
+      face_edge key = {u < w ? u : w, u < w ? w : u, -1};
+      /* the first entry of this edge: cmp orders by face last */
+      size_t lo = 0, hi = (size_t)k;
+      while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        if (cmp_face_edge(&fe[mid], &key) < 0)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      if (lo + 1 < (size_t)k && fe[lo].a == key.a && fe[lo].b == key.b && fe[lo + 1].a == key.a &&
+          fe[lo + 1].b == key.b) {
+        /* the corner normals of the two faces at the edge's ends */
+        double nn[4][3];
+        corner_normal(b, fe[lo].face, u, nn[0]);
+        corner_normal(b, fe[lo].face, w, nn[1]);
+        corner_normal(b, fe[lo + 1].face, u, nn[2]);
+        corner_normal(b, fe[lo + 1].face, w, nn[3]);
+        for (int x = 0; x < 2; x++)
+          for (int y = 2; y < 4; y++)
+            fold |= nn[x][0] * nn[y][0] + nn[x][1] * nn[y][1] + nn[x][2] * nn[y][2] <= cthr;
+      }
+    }
+    if (fold) continue;
+    keep[2 * nk] = u;
+    keep[2 * nk + 1] = w;
+    nk++;
+  }
+  *ndropped = f->nedge - nk;
+  /* a feature line folded back on itself (a vertex pushed along a sharp
+   * edge past its neighbour) turns by nearly 180 degrees at tangled
+   * vertices: those turns are not corners either; the corners are given
+   * explicitly (every other turn beyond corner_deg) and the rebuild turns
+   * none itself */
+  if (!(deg = vm_calloc(ctx, (size_t)b->nv + 1, sizeof *deg)) ||
+      !(nb2 = vm_alloc_array(ctx, (size_t)b->nv + 1, 2 * sizeof *nb2)) ||
+      !(corner = vm_calloc(ctx, (size_t)b->nv + 1, 1))) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t i = 0; i < nk; i++)
+    for (int j = 0; j < 2; j++) {
+      int32_t v = keep[2 * i + j];
+      if (deg[v] < 2) nb2[2 * v + deg[v]] = keep[2 * i + 1 - j];
+      deg[v]++;
+    }
+  int64_t unturned = 0;
+  for (int64_t v = 0; v < b->nv; v++) {
+    if (deg[v] != 2) continue;
+    const double *p = b->xyz + 3 * v, *a = b->xyz + 3 * (int64_t)nb2[2 * v],
+                 *c = b->xyz + 3 * (int64_t)nb2[2 * v + 1];
+    double da[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+    double dc[3] = {c[0] - p[0], c[1] - p[1], c[2] - p[2]};
+    double la = sqrt(da[0] * da[0] + da[1] * da[1] + da[2] * da[2]);
+    double lc = sqrt(dc[0] * dc[0] + dc[1] * dc[1] + dc[2] * dc[2]);
+    double cs = la > 0 && lc > 0 ? (da[0] * dc[0] + da[1] * dc[1] + da[2] * dc[2]) / (la * lc) : -1;
+    double turn = acos(cs > 1 ? 1 : cs < -1 ? -1 : cs) * 180.0 / 3.14159265358979323846;
+    if (!(turn > corner_deg)) continue;
+    if (vt[v] && turn >= SLIP_FOLD_DEG)
+      unturned++;
+    else
+      corner[v] = 1;
+  }
+  *ndropped += unturned;
+  if (*ndropped > 0) {
+    vm_surface_features g;
+    memset(&g, 0, sizeof g);
+    if ((st = vm_surface_features_from_edges(b, nk, keep, corner, 180, &g)) < 0) goto done;
+    vm_surface_features_free(ctx, f);
+    *f = g;
+  }
+done:
+  vm_free(ctx, fe);
+  vm_free(ctx, keep);
+  vm_free(ctx, deg);
+  vm_free(ctx, nb2);
+  vm_free(ctx, corner);
+  return st;
+}
+
+/* Surface vertices (of b, bvert: their volume vertices) that belong to a
+ * volume element of m with a corner tet not positive. */
+static int tangled_vertices(vm_ctx *ctx, const vm_mesh *m, const int32_t *bvert, int64_t nb,
+                            uint8_t **out, int64_t *ntangled) {
+  *out = NULL;
+  *ntangled = 0;
+  double *sj = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *sj);
+  uint8_t *vt = vm_calloc(ctx, (size_t)m->nv + 1, 1), *bt = vm_calloc(ctx, (size_t)nb + 1, 1);
+  int st = !sj || !vt || !bt ? VM_ERR_NOMEM : vm_mesh_element_quality(m, NULL, NULL, sj, NULL);
+  if (st >= 0) {
+    for (int64_t e = 0; e < m->ne; e++)
+      if (!isnan(sj[e]) && sj[e] <= 0)
+        for (int64_t i = m->eoff[e]; i < m->eoff[e + 1]; i++) vt[m->conn[i]] = 1;
+    for (int64_t i = 0; i < nb; i++) *ntangled += bt[i] = vt[bvert[i]];
+    *out = bt;
+    bt = NULL;
+  }
+  vm_free(ctx, sj);
+  vm_free(ctx, vt);
+  vm_free(ctx, bt);
+  return st;
+}
+
 /* The faces of patch p of b as a mesh of their own. */
 static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int32_t p, int32_t *g2l,
                       vm_mesh **out) {
@@ -158,16 +328,18 @@ static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int3
 }
 
 /* The boundary faces of m as a surface mesh on the boundary vertices only
- * (local numbering; g2l maps volume -> surface vertices, -1 elsewhere). */
-static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, vm_mesh **bout, int32_t **bvert,
-                            int64_t *nb) {
+ * (local numbering; g2l maps volume -> surface vertices, -1 elsewhere).
+ * strict: faces shared by more than two elements are an error (else they
+ * are not boundary faces and are left out). */
+static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, int strict, vm_mesh **bout,
+                            int32_t **bvert, int64_t *nb) {
   int64_t nface = 0, nonman = 0;
   int32_t *fv = NULL, *g2l = NULL, *bv = NULL;
   uint8_t *fnv = NULL;
   vm_mesh *b = NULL;
   int st = vm_mesh_boundary(m, &nface, &fv, &fnv, NULL, &nonman);
   if (st < 0) return st;
-  if (nonman > 0) {
+  if (nonman > 0 && strict) {
     st = vm_error(ctx, VM_ERR_ARG,
                   "slip boundary: %lld faces are shared by more than two "
                   "elements (non-manifold mesh)",
@@ -235,9 +407,13 @@ int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double co
   vm_surface_features f;
   memset(&f, 0, sizeof f);
   int32_t *vsurf = NULL, *fpatch = NULL, *vpatch = NULL;
-  int st = boundary_surface(ctx, m, &b, &s->bvert, &s->nb);
+  uint8_t *vt = NULL;
+  int64_t ntangled = 0, nfold = 0;
+  int st = boundary_surface(ctx, m, 1, &b, &s->bvert, &s->nb);
   if (st < 0) goto fail;
   if ((st = vm_surface_detect_features(b, feature_deg, corner_deg, &f)) < 0) goto fail;
+  if ((st = tangled_vertices(ctx, m, s->bvert, s->nb, &vt, &ntangled)) < 0) goto fail;
+  if (ntangled > 0 && (st = drop_fold_edges(ctx, b, vt, corner_deg, &f, &nfold)) < 0) goto fail;
   if ((st = vm_surface_projector_create(ctx, b, &f, &s->proj)) < 0) goto fail;
   vsurf = vm_alloc_array(ctx, (size_t)s->nb, sizeof *vsurf);
   fpatch = vm_alloc_array(ctx, (size_t)b->ne, sizeof *fpatch);
@@ -288,7 +464,9 @@ int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double co
     }
   }
   inf.patches = s->npatch;
+  inf.fold_edges = nfold;
   if (info) *info = inf;
+  vm_free(ctx, vt);
   vm_free(ctx, vsurf);
   vm_free(ctx, fpatch);
   vm_free(ctx, vpatch);
@@ -297,6 +475,7 @@ int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double co
   *out = s;
   return VM_OK;
 fail:
+  vm_free(ctx, vt);
   vm_free(ctx, vsurf);
   vm_free(ctx, fpatch);
   vm_free(ctx, vpatch);
@@ -323,5 +502,140 @@ int vm_volume_slip_distance(vm_volume_slip *s, const vm_mesh *m, double *maxdist
   }
   vm_free(s->ctx, pts);
   vm_free(s->ctx, d);
+  return st;
+}
+
+struct vm_volume_shape {
+  vm_ctx *ctx;
+  vm_mesh *b;     /* the recorded boundary surface */
+  int32_t *bvert; /* its vertices in the volume mesh */
+  int64_t nb;
+  double diag;
+};
+
+void vm_volume_shape_destroy(vm_volume_shape **p) {
+  if (!p || !*p) return;
+  vm_volume_shape *s = *p;
+  vm_mesh_destroy(&s->b);
+  vm_free(s->ctx, s->bvert);
+  vm_free(s->ctx, s);
+  *p = NULL;
+}
+
+int vm_volume_shape_create(vm_ctx *ctx, const vm_mesh *m, vm_volume_shape **out) {
+  if (!ctx || !m || !out) return VM_ERR_ARG;
+  *out = NULL;
+  vm_volume_shape *s = vm_calloc(ctx, 1, sizeof *s);
+  if (!s) return VM_ERR_NOMEM;
+  s->ctx = ctx;
+  int st = boundary_surface(ctx, m, 0, &s->b, &s->bvert, &s->nb);
+  if (st < 0) {
+    vm_volume_shape_destroy(&s);
+    return st;
+  }
+  double lo[3], hi[3];
+  s->diag = vm_mesh_bounds(s->b, lo, hi);
+  *out = s;
+  return VM_OK;
+}
+
+int vm_volume_shape_deviation(vm_volume_shape *s, const vm_mesh *m, double *dist, double *diag,
+                              double at[3]) {
+  if (!s || !m) return VM_ERR_ARG;
+  for (int64_t i = 0; i < s->nb; i++)
+    if (s->bvert[i] >= m->nv) return vm_error(s->ctx, VM_ERR_ARG, "shape: not the recorded mesh");
+  vm_mesh *now = NULL;
+  int st = vm_mesh_clone(s->b, &now);
+  if (st < 0) return st;
+  for (int64_t i = 0; i < s->nb; i++)
+    memcpy(now->xyz + 3 * i, m->xyz + 3 * (int64_t)s->bvert[i], 3 * sizeof(double));
+  double ab = 0, ba = 0, ab_at[3] = {0, 0, 0}, ba_at[3] = {0, 0, 0};
+  st = vm_surface_hausdorff_at(s->b, now, s->diag / 200, &ab, &ba, ab_at, ba_at);
+  vm_mesh_destroy(&now);
+  if (st < 0) return st;
+  if (dist) *dist = fmax(ab, ba);
+  if (diag) *diag = s->diag;
+  if (at) memcpy(at, ab >= ba ? ab_at : ba_at, 3 * sizeof(double));
+  return VM_OK;
+}
+
+static int cmp_u64(const void *x, const void *y) {
+  uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+  return a < b ? -1 : a > b;
+}
+
+/* Whether every edge of the surface b is shared by exactly two faces. */
+static int surface_closed(vm_ctx *ctx, const vm_mesh *b, int *closed) {
+  int64_t ne = b->eoff[b->ne];
+  uint64_t *key = vm_alloc_array(ctx, (size_t)ne + 1, sizeof *key);
+  if (!key) return VM_ERR_NOMEM;
+  int64_t k = 0;
+  for (int64_t e = 0; e < b->ne; e++) {
+    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+    for (int64_t i = 0; i < n; i++) {
+      uint32_t p = (uint32_t)b->conn[o + i], q = (uint32_t)b->conn[o + (i + 1) % n];
+      key[k++] = p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p;
+    }
+  }
+  qsort(key, (size_t)k, sizeof *key, cmp_u64);
+  int ok = k > 0;
+  for (int64_t i = 0; i < k && ok;) {
+    int64_t j = i;
+    while (j < k && key[j] == key[i]) j++;
+    ok = j - i == 2;
+    i = j;
+  }
+  vm_free(ctx, key);
+  *closed = ok;
+  return VM_OK;
+}
+
+int vm_volume_shape_fixed_outside(vm_volume_shape *s, const vm_mesh *m, int64_t *count,
+                                  int64_t *first) {
+  if (!s || !m || !count || !first) return VM_ERR_ARG;
+  *count = 0;
+  *first = -1;
+  uint8_t *onb = vm_calloc(s->ctx, (size_t)m->nv + 1, 1);
+  if (!onb) return VM_ERR_NOMEM;
+  for (int64_t i = 0; i < s->nb; i++)
+    if (s->bvert[i] < m->nv) onb[s->bvert[i]] = 1;
+  int64_t n = 0;
+  for (int64_t v = 0; v < m->nv; v++) n += !onb[v] && m->vflag[v] == VM_VERTEX_FIXED;
+  int32_t *ids = NULL;
+  double *pts = NULL, *d = NULL;
+  int8_t *in = NULL;
+  vm_surface_projector *proj = NULL;
+  int st = VM_OK, closed = 0;
+  /* the inside of an open or non-manifold boundary is not defined */
+  if (n == 0 || (st = surface_closed(s->ctx, s->b, &closed)) < 0 || !closed) goto done;
+  ids = vm_alloc_array(s->ctx, (size_t)n, sizeof *ids);
+  pts = vm_alloc_array(s->ctx, (size_t)n, 3 * sizeof *pts);
+  d = vm_alloc_array(s->ctx, (size_t)n, sizeof *d);
+  in = vm_alloc_array(s->ctx, (size_t)n, sizeof *in);
+  if (!ids || !pts || !d || !in) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  n = 0;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (!onb[v] && m->vflag[v] == VM_VERTEX_FIXED) {
+      ids[n] = (int32_t)v;
+      memcpy(pts + 3 * n++, m->xyz + 3 * v, 3 * sizeof(double));
+    }
+  if ((st = vm_surface_inside(s->b, n, pts, in)) < 0 ||
+      (st = vm_surface_projector_create(s->ctx, s->b, NULL, &proj)) < 0 ||
+      (st = vm_surface_projector_distance(proj, n, pts, d)) < 0)
+    goto done;
+  /* on the surface or within rounding of it: not counted (the parity of a
+   * ray from there says nothing) */
+  for (int64_t i = 0; i < n; i++)
+    if (!in[i] && d[i] > 1e-9 * s->diag && !(*count)++) *first = ids[i];
+done:
+  vm_surface_projector_destroy(&proj);
+  vm_free(s->ctx, in);
+  vm_free(s->ctx, d);
+  vm_free(s->ctx, pts);
+  vm_free(s->ctx, ids);
+  vm_free(s->ctx, onb);
   return st;
 }

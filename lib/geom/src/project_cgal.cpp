@@ -4,6 +4,7 @@
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/Ray_3.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
 
@@ -355,8 +356,9 @@ extern "C" int vm_surface_projector_interpolate(vm_surface_projector *p, const d
 namespace {
 
 // Largest distance from samples of `from` to the surface `to`.
-double one_sided(const std::vector<Triangle> &from, const TriTree &to, double spacing) {
-  double worst = 0;
+double one_sided(const std::vector<Triangle> &from, const TriTree &to, double spacing,
+                 double *where) {
+  double worst = -1;
   for (const Triangle &t : from) {
     double lmax =
         std::sqrt(std::max({(t[1] - t[0]).squared_length(), (t[2] - t[1]).squared_length(),
@@ -367,16 +369,24 @@ double one_sided(const std::vector<Triangle> &from, const TriTree &to, double sp
       for (int j = 0; i + j <= n; j++) {
         double a = static_cast<double>(i) / n, b = static_cast<double>(j) / n;
         Point q = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);
-        worst = std::max(worst, to.squared_distance(q));
+        double d = to.squared_distance(q);
+        if (d > worst) {
+          worst = d;
+          if (where) {
+            where[0] = q.x();
+            where[1] = q.y();
+            where[2] = q.z();
+          }
+        }
       }
   }
-  return std::sqrt(worst);
+  return std::sqrt(std::max(worst, 0.0));
 }
 
 } // namespace
 
-extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
-                                    double *ba) {
+extern "C" int vm_surface_hausdorff_at(const vm_mesh *a, const vm_mesh *b, double spacing,
+                                       double *ab, double *ba, double ab_at[3], double ba_at[3]) {
   if (!a || !b) return VM_ERR_ARG;
   vm_ctx *ctx = a->ctx;
   VM_CXX_BEGIN
@@ -392,8 +402,49 @@ extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double s
                             (bb.zmax() - bb.zmin()) * (bb.zmax() - bb.zmin()));
     spacing = diag / 100;
   }
-  if (ab) *ab = one_sided(sa.tri, *sb.tree, spacing);
-  if (ba) *ba = one_sided(sb.tri, *sa.tree, spacing);
+  if (ab || ab_at) {
+    double d = one_sided(sa.tri, *sb.tree, spacing, ab_at);
+    if (ab) *ab = d;
+  }
+  if (ba || ba_at) {
+    double d = one_sided(sb.tri, *sa.tree, spacing, ba_at);
+    if (ba) *ba = d;
+  }
   return VM_OK;
   VM_CXX_END(ctx, "hausdorff")
+}
+
+extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
+                                    double *ba) {
+  return vm_surface_hausdorff_at(a, b, spacing, ab, ba, NULL, NULL);
+}
+
+extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts,
+                                 int8_t *inside) {
+  if (!surf || n < 0 || (n > 0 && (!pts || !inside))) return VM_ERR_ARG;
+  vm_ctx *ctx = surf->ctx;
+  VM_CXX_BEGIN
+  TriSurface s;
+  s.build(surf);
+  if (s.tri.empty()) {
+    for (int64_t i = 0; i < n; i++) inside[i] = 0;
+    return VM_OK;
+  }
+  // three directions in no special relation to the axes or to each other:
+  // a ray grazing an edge or a vertex miscounts its crossings, and the
+  // majority of three rays is wrong only if two of them graze
+  static const double dir[3][3] = {{0.5773502691896258, 0.6172133998483676, 0.5345224838248488},
+                                   {-0.4082482904638630, 0.7071067811865475, -0.5773502691896258},
+                                   {0.2672612419124244, -0.5345224838248488, 0.8017837257372732}};
+  for (int64_t i = 0; i < n; i++) {
+    Point p(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
+    int votes = 0;
+    for (int k = 0; k < 3; k++) {
+      K::Ray_3 ray(p, Vector(dir[k][0], dir[k][1], dir[k][2]));
+      votes += static_cast<int>(s.tree->number_of_intersected_primitives(ray) & 1);
+    }
+    inside[i] = votes >= 2;
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "inside")
 }
