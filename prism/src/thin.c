@@ -68,24 +68,54 @@ int vm_prism_thin(vm_prism *p) {
       q0[t] = pr_prism_quality(x);
     }
   }
+  /* pass 0 halves the columns of the prisms poor in a round. Where that
+   * leaves prisms poor after every round (a graded mesh's needles: the last
+   * chordwise panel of a sharp trailing edge, 150 times shorter than the
+   * spanwise edges, whose tops tilt when one column is halved beside
+   * unchanged ones, so that the halvings chase each other along the edge),
+   * pass 1 goes on from there, halving the neighbours too and keeping no
+   * column more than half an edge above a neighbour. A wall the first pass
+   * serves is left exactly as it was. */
   int64_t nbad = 0;
-  for (int round = 0; round < p->k.thin_rounds; round++) {
-    pr_set_top(p, hv, p->dir);
-    memset(bad, 0, (size_t)nw);
-    nbad = 0;
-    for (int64_t t = 0; t < nt; t++) {
-      double x[18];
-      const int32_t *c = m->conn + 6 * t;
-      for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
-      double share = p->k.thin_quality_share * q0[t];
-      double lim = share < p->k.thin_quality_cap ? share : p->k.thin_quality_cap;
-      if (pr_prism_quality(x) > lim && lim > 0) continue;
-      nbad++;
-      for (int i = 0; i < 3; i++) bad[c[i]] = 1;
+  for (int pass = 0, round = 0; pass < 2; pass++, round = 0) {
+    if (pass == 1) {
+      if (!nbad) break;
+      vm_log(ctx, VM_LOG_INFO,
+             "prism: thin layer: %lld prisms still poor after %d halvings; halving their "
+             "neighbourhoods, the columns graded",
+             (long long)nbad, p->k.thin_rounds);
     }
-    if (!nbad) break;
-    for (int64_t v = 0; v < nw; v++)
-      if (bad[v]) hv[v] *= p->k.thin_shrink;
+    for (; round < p->k.thin_rounds; round++) {
+      pr_set_top(p, hv, p->dir);
+      memset(bad, 0, (size_t)nw);
+      nbad = 0;
+      for (int64_t t = 0; t < nt; t++) {
+        double x[18];
+        const int32_t *c = m->conn + 6 * t;
+        for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)c[i], 3 * sizeof *x);
+        double share = p->k.thin_quality_share * q0[t];
+        double lim = share < p->k.thin_quality_cap ? share : p->k.thin_quality_cap;
+        if (pr_prism_quality(x) > lim && lim > 0) continue;
+        nbad++;
+        for (int i = 0; i < 3; i++) bad[c[i]] = 1;
+      }
+      if (!nbad) break;
+      if (pass == 1)
+        for (int64_t v = 0; v < nw; v++)
+          if (bad[v] == 1)
+            for (int64_t i = p->vv_off[v]; i < p->vv_off[v + 1]; i++)
+              if (!bad[p->vv[i]]) bad[p->vv[i]] = 2;
+      for (int64_t v = 0; v < nw; v++)
+        if (bad[v]) hv[v] *= p->k.thin_shrink;
+      if (pass == 1) /* in index order: deterministic */
+        for (int sweep = 0; sweep < 2; sweep++)
+          for (int64_t v = 0; v < nw; v++)
+            for (int64_t i = p->vv_off[v]; i < p->vv_off[v + 1]; i++) {
+              int32_t u = p->vv[i];
+              double lim = hv[u] + 0.5 * vm_dist3(p->wall + 3 * v, p->wall + 3 * (int64_t)u);
+              if (hv[v] > lim) hv[v] = lim;
+            }
+    }
   }
   double hmin = INFINITY, hmax = 0;
   for (int64_t v = 0; v < nw; v++) {

@@ -84,6 +84,42 @@ static void test_sizes_and_closure(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The wing: sizes, closed and consistently oriented, outward (positive
+ * enclosed volume, close to the NACA section's area 0.6851 t c^2 integrated
+ * over the span: the cosine-spaced polygon's area), its trailing edge sharp
+ * (one vertex per station) and its planform M6's. */
+static void test_wing(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  int nc = 40, ns = 6;
+  CHECK(vm_gen_wing(m, nc, ns, 0.1, 30) == 0, "wing");
+  CHECK(m->nv == 2 * nc * (ns + 1) && m->ne == 4 * nc * ns + 4 * (nc - 1), "wing sizes %lld %lld",
+        (long long)m->nv, (long long)m->ne);
+  CHECK(vm_mesh_check(m) == 0 && unpaired_edges(m, 0) == 0, "wing: closed, oriented");
+  double vol = 0, lo[3], hi[3];
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *t = m->conn + m->eoff[e];
+    const double *a = m->xyz + 3 * (int64_t)t[0], *b = m->xyz + 3 * (int64_t)t[1],
+                 *c = m->xyz + 3 * (int64_t)t[2];
+    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0])) /
+           6;
+  }
+  /* the chord is linear in y: the integral of c^2 over the semispan */
+  double cr = 0.806, ct = 0.455, sp = 1.196;
+  double expect = 0.6851 * 0.1 * sp * (cr * cr + cr * ct + ct * ct) / 3;
+  CHECK(vol > 0 && fabs(vol - expect) < 0.01 * expect, "wing volume %g, expected about %g", vol,
+        expect);
+  vm_mesh_bounds(m, lo, hi);
+  CHECK(fabs(hi[1] - 1.196) < 1e-12 && fabs(lo[1]) < 1e-12 && fabs(lo[0]) < 1e-12 &&
+            fabs(hi[0] - (1.196 * tan(30 * 3.14159265358979323846 / 180) + 0.455)) < 1e-12,
+        "wing planform %g..%g x %g..%g", lo[0], hi[0], lo[1], hi[1]);
+  CHECK(m->xyz[2] == 0 && m->xyz[3 * (2 * nc * ns) + 2] == 0, "sharp trailing edge");
+  CHECK(vm_gen_wing(m, 3, 6, 0.1, 30) == VM_ERR_ARG && vm_gen_wing(m, 40, 6, 0, 30) == VM_ERR_ARG,
+        "wing: bad arguments");
+  vm_mesh_destroy(&m);
+}
+
 static void test_bad_args(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_mesh_create(ctx, &m);
@@ -133,6 +169,7 @@ int main(void) {
   vm_ctx_create(&ctx);
   test_sizes_and_closure(ctx);
   test_bad_args(ctx);
+  test_wing(ctx);
   test_alloc_failures(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));
   vm_ctx_destroy(&ctx);

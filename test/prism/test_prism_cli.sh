@@ -11,6 +11,20 @@ trap 'rm -rf "$dir"' EXIT
 fail=0
 check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
 
+# a graded wing (vm-gen wing: cosine chordwise spacing, trailing-edge
+# triangles 1,500 times longer than wide, as CAD meshes of wings have):
+# its thin layer used to be refused ("12 thin prisms stay degenerate",
+# exit 1) while Gmsh extrudes it; the second halving pass takes it
+"$gen" wing "$dir/w.stl" >/dev/null
+"${prism[@]}" -t 0.05 -n 3 --json "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/w.json" && grep -q "\"intersecting_pairs\": 0," "$dir/w.json"' \
+  "a graded wing's needles: a valid layer (got $rc)"
+check 'grep -q "thin layer: [0-9]* prisms still poor after 60 halvings; halving their neighbourhoods" "$dir/w.err"' \
+  "the second pass is said"
+"$qual" -q --verify "$dir/w.vmsh" >/dev/null 2>&1
+check '[ $? -eq 0 ]' "and vm-quality --verify accepts it"
+
 "$gen" aircraft --resolution 1 "$dir/a.stl" >/dev/null
 check '[ -s "$dir/a.stl" ]' "vm-gen aircraft writes the wall"
 "${prism[@]}" -t 0.05 -n 4 --json "$dir/a.stl" "$dir/a.msh" >"$dir/a.json" 2>"$dir/a.err"

@@ -233,6 +233,78 @@ int vm_gen_cylinder(vm_mesh *m, double r, double h, int na, int nz, const vm_gen
   return st ? rollback(m, nv0, ne0, st) : VM_OK;
 }
 
+/* ---- an isolated wing ---- */
+
+int vm_gen_wing(vm_mesh *m, int nc, int ns, double thickness, double sweep_deg) {
+  vm_ctx *ctx = m->ctx;
+  if (nc < 4 || ns < 1 || nc > 100000 || ns > 100000 ||
+      2 * (int64_t)nc * (ns + 1) > INT32_MAX - m->nv || !(thickness > 0 && thickness <= 0.5) ||
+      !(sweep_deg >= 0 && sweep_deg <= 60))
+    return vm_error(ctx, VM_ERR_ARG, "wing: chordwise %d spanwise %d thickness %g sweep %g", nc, ns,
+                    thickness, sweep_deg);
+  const double root = 0.806, tip = 0.455, span = 1.196;
+  const double tsw = tan(sweep_deg * M_PI / 180);
+  int64_t nv0 = m->nv, ne0 = m->ne, np = 2 * (int64_t)nc;
+  int st = VM_OK;
+  /* section point i of 2 nc: 0 the trailing edge, 1..nc the upper side to
+   * the leading edge (x_k, k = nc - i), nc + 1..2 nc - 1 the lower side */
+  for (int j = 0; j <= ns && !st; j++) {
+    double s = (double)j / ns, c = root + (tip - root) * s, y = span * s, x0 = y * tsw;
+    for (int64_t i = 0; i < np && !st; i++) {
+      int64_t k = i <= nc ? nc - i : i - nc;
+      double x = 0.5 * (1 - cos(M_PI * (double)k / nc)), t = thickness;
+      double z = k == nc ? 0
+                         : 5 * t *
+                               (0.2969 * sqrt(x) - 0.1260 * x - 0.3516 * x * x +
+                                0.2843 * x * x * x - 0.1036 * x * x * x * x);
+      st = vm_mesh_add_vertex(m, x0 + c * x, y, i <= nc ? c * z : -c * z, NULL);
+    }
+  }
+#define WV(j, i) (nv0 + (int64_t)(j)*np + ((i) % np))
+  for (int j = 0; j < ns && !st; j++)
+    for (int64_t i = 0; i < np && !st; i++) {
+      st = add_tri(m, WV(j, i), WV(j, i + 1), WV(j + 1, i + 1));
+      if (!st) st = add_tri(m, WV(j, i), WV(j + 1, i + 1), WV(j + 1, i));
+    }
+  /* the caps: strips between the upper and lower point of each x_k; the
+   * root cap runs against the sides' edges there, the tip cap the other
+   * way */
+  for (int cap = 0; cap < 2 && !st; cap++) {
+    int j = cap ? ns : 0;
+    for (int64_t k = 0; k < nc && !st; k++) {
+      int64_t u0 = WV(j, nc - k), u1 = WV(j, nc - k - 1), l0 = WV(j, nc + k),
+              l1 = WV(j, nc + k + 1);
+      if (k + 1 == nc) l1 = u1; /* the trailing edge: one point */
+      if (k == 0) {
+        st = cap ? add_tri(m, u0, l1, u1) : add_tri(m, u0, u1, l1);
+      } else if (k + 1 == nc) {
+        st = cap ? add_tri(m, u0, l0, u1) : add_tri(m, u0, u1, l0);
+      } else {
+        st = cap ? add_tri(m, u0, l1, u1) : add_tri(m, u0, u1, l1);
+        if (!st) st = cap ? add_tri(m, u0, l0, l1) : add_tri(m, u0, l1, l0);
+      }
+    }
+  }
+#undef WV
+  if (st) return rollback(m, nv0, ne0, st);
+  /* outward: the enclosed volume positive, else every triangle turned */
+  double vol = 0;
+  for (int64_t e = ne0; e < m->ne; e++) {
+    const int32_t *t = m->conn + m->eoff[e];
+    const double *a = m->xyz + 3 * (int64_t)t[0], *b = m->xyz + 3 * (int64_t)t[1],
+                 *c = m->xyz + 3 * (int64_t)t[2];
+    vol += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+           a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  if (vol < 0)
+    for (int64_t e = ne0; e < m->ne; e++) {
+      int32_t *t = m->conn + m->eoff[e], x = t[1];
+      t[1] = t[2];
+      t[2] = x;
+    }
+  return VM_OK;
+}
+
 /* ---- cube and box ---- */
 
 /* The two triangles of the lattice square v[0..3] (counter-clockwise seen

@@ -51,6 +51,18 @@ enum {
 int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int level, unsigned flags,
                      const vm_gen_jitter *jitter);
 
+/* An isolated, closed swept wing with the ONERA M6 planform (root chord
+ * 0.806, tip chord 0.455, semispan 1.196 along y, leading edge swept by
+ * sweep_deg, z up) and symmetric NACA 00xx sections of thickness ratio
+ * `thickness` with a sharp trailing edge, closed by flat root and tip caps.
+ * The sections are graded as a CAD mesher grades them: nc chordwise
+ * intervals per side with cosine spacing (fine at the leading and the
+ * trailing edge: the last panel is about 1 - cos(pi / nc) / 2 of the
+ * chord), ns spanwise intervals, so at nc = 160, ns = 8 a trailing-edge
+ * triangle is about 1,500 times longer than wide. 2 nc (ns + 1) vertices,
+ * 4 nc ns + 4 (nc - 1) triangles, oriented outward. */
+int vm_gen_wing(vm_mesh *m, int nc, int ns, double thickness, double sweep_deg);
+
 /* vm_gen_torus cells. */
 enum {
   VM_GEN_TORUS_TRI = 0,     /* each grid cell split along the same diagonal */
