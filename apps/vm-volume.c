@@ -191,10 +191,9 @@ static int boundary_conditions(vm_cli *cli, const args *a, vm_mesh *m, vm_volume
     if (si.fold_edges > 0 && !cli->quiet)
       fprintf(stderr,
               "vm-volume: slip boundary: %lld sharp edges and line turns where the input's "
-              "boundary folds back "
-              "over tangled elements (150 degrees or more) are not features: their vertices "
-              "slide\n",
-              (long long)si.fold_edges);
+              "boundary folds back over tangled elements (%g degrees or more) are not "
+              "features: their vertices slide\n",
+              (long long)si.fold_edges, VM_SLIP_FOLD_DEG);
   } else if (!a->free_boundary && vm_mesh_mark_boundary(m, VM_VERTEX_FIXED, &nbnd) < 0) {
     return vm_cli_input_error(cli, NULL);
   }
@@ -390,19 +389,15 @@ static int open_report(vm_cli *cli, const args *a, stage *s) {
   return rc;
 }
 
-/* Flat elements left by the run: of the top dimension, with a vertex the
- * stage could move, and a scaled Jacobian below --min-sj (elements whose
- * vertices are all fixed are the input's). */
-static int flat_elements(vm_cli *cli, const args *a, const vm_mesh *m, outcome *r) {
+/* Flat elements left by the run (sj: the scaled Jacobian of every
+ * element): of the top dimension, with a vertex the stage could move, and a
+ * scaled Jacobian below --min-sj (elements whose vertices are all fixed are
+ * the input's). */
+static void flat_elements(const args *a, const vm_mesh *m, const double *sj, outcome *r) {
   r->flat = 0;
   r->flat_worst = -1;
   r->flat_sj = INFINITY;
-  if (!(a->min_sj > 0)) return VM_EXIT_OK;
-  double *sj = vm_alloc_array(cli->ctx, (size_t)m->ne + 1, sizeof *sj);
-  if (!sj || vm_mesh_element_quality(m, NULL, NULL, sj, NULL) < 0) {
-    vm_free(cli->ctx, sj);
-    return vm_cli_input_error(cli, NULL);
-  }
+  if (!(a->min_sj > 0)) return;
   for (int64_t e = 0; e < m->ne; e++) {
     /* inverted elements (sj < 0) are counted as such, not as flat */
     if (isnan(sj[e]) || !(sj[e] >= 0 && sj[e] < a->min_sj)) continue;
@@ -416,7 +411,6 @@ static int flat_elements(vm_cli *cli, const args *a, const vm_mesh *m, outcome *
       r->flat_worst = e;
     }
   }
-  vm_free(cli->ctx, sj);
   if (r->flat_worst >= 0) {
     int64_t e = r->flat_worst, n = m->eoff[e + 1] - m->eoff[e];
     for (int k = 0; k < 3; k++) {
@@ -426,7 +420,6 @@ static int flat_elements(vm_cli *cli, const args *a, const vm_mesh *m, outcome *
       r->flat_at[k] = c / (double)n;
     }
   }
-  return VM_EXIT_OK;
 }
 
 /* An independent check of the result: every corner simplex (and the
@@ -435,7 +428,13 @@ static int flat_elements(vm_cli *cli, const args *a, const vm_mesh *m, outcome *
 static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) {
   vm_quality qg;
   vm_quality_opts qo = {VM_RULE_CORNER, a->o.target_size};
-  vm_mesh_quality(s->m, &qo, &r->q);
+  double *sj = vm_alloc_array(cli->ctx, (size_t)s->m->ne + 1, sizeof *sj);
+  if (!sj || vm_mesh_element_quality(s->m, &qo, &r->q, sj, NULL) < 0) {
+    vm_free(cli->ctx, sj);
+    return vm_cli_input_error(cli, NULL);
+  }
+  flat_elements(a, s->m, sj, r);
+  vm_free(cli->ctx, sj);
   qo.rule = VM_RULE_GEOMETRIC;
   vm_mesh_quality(s->m, &qo, &qg);
   r->bad = r->q.all.inverted_nodes + (a->o.rule == VM_RULE_GEOMETRIC ? qg.all.inverted_nodes : 0);
@@ -448,7 +447,7 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
       return vm_cli_input_error(cli, NULL);
     r->shape_moved = r->shape_dist > a->boundary_tol * r->shape_diag;
   }
-  return flat_elements(cli, a, s->m, r);
+  return VM_EXIT_OK;
 }
 
 /* The options of one schedule: staged (hexahedra) or direct; `fallback`:
@@ -495,11 +494,16 @@ static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
   return n;
 }
 
+/* The file's own flags back on the mesh before it is written. */
+static void restore_flags(stage *s) {
+  memcpy(s->m->vflag, s->vflag0, (size_t)s->m->nv);
+  memcpy(s->m->vsurf, s->vsurf0, (size_t)s->m->nv * sizeof *s->vsurf0);
+}
+
 /* An impossible problem: the input written unchanged to OUT (its own flags
  * back), exit 3. */
 static int write_unchanged(vm_cli *cli, const args *a, stage *s) {
-  memcpy(s->m->vflag, s->vflag0, (size_t)s->m->nv);
-  memcpy(s->m->vsurf, s->vsurf0, (size_t)s->m->nv * sizeof *s->vsurf0);
+  restore_flags(s);
   return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0 ? vm_cli_input_error(cli, NULL)
                                                                     : VM_EXIT_CHECK;
 }
@@ -642,8 +646,7 @@ int main(int argc, char **argv) {
     goto done;
   }
   if ((rc = check_result(&cli, &a, &s, &r)) != VM_EXIT_OK) goto done;
-  memcpy(s.m->vflag, s.vflag0, (size_t)s.m->nv);
-  memcpy(s.m->vsurf, s.vsurf0, (size_t)s.m->nv * sizeof *s.vsurf0);
+  restore_flags(&s);
   if (vm_mesh_write(cli.ctx, s.m, a.out, a.fout, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;

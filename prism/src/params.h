@@ -94,6 +94,10 @@ typedef struct pr_params {
                                 limit quality ... */
   double thin_quality_cap;   /* 0.3: ... or this quality, whichever is less */
   double thin_shrink;        /* 0.5: height factor at a poor prism's columns */
+  double thin_grade;         /* 0.5: second pass (prisms still poor after
+                                thin_rounds): no column higher than a
+                                neighbour's plus this share of their edge */
+  int thin_grade_sweeps;     /* 2: sweeps of that limit after each halving */
 
   /* the layer's solves (solve.c) */
   double budget_step_share; /* 0.25: a solve past its budget goes on while its
@@ -257,6 +261,8 @@ static inline pr_params pr_params_default(void) {
       .thin_quality_share = 0.5,
       .thin_quality_cap = 0.3,
       .thin_shrink = 0.5,
+      .thin_grade = 0.5,
+      .thin_grade_sweeps = 2,
       .budget_step_share = 0.25,
       .rel_decrease_tol = 1e-5,
       .rel_decrease_count = 2,

@@ -74,7 +74,7 @@ int vm_prism_thin(vm_prism *p) {
    * spanwise edges, whose tops tilt when one column is halved beside
    * unchanged ones, so that the halvings chase each other along the edge),
    * pass 1 goes on from there, halving the neighbours too and keeping no
-   * column more than half an edge above a neighbour. A wall the first pass
+   * column more than thin_grade of an edge above a neighbour. A wall the first pass
    * serves is left exactly as it was. */
   int64_t nbad = 0;
   for (int pass = 0, round = 0; pass < 2; pass++, round = 0) {
@@ -108,11 +108,12 @@ int vm_prism_thin(vm_prism *p) {
       for (int64_t v = 0; v < nw; v++)
         if (bad[v]) hv[v] *= p->k.thin_shrink;
       if (pass == 1) /* in index order: deterministic */
-        for (int sweep = 0; sweep < 2; sweep++)
+        for (int sweep = 0; sweep < p->k.thin_grade_sweeps; sweep++)
           for (int64_t v = 0; v < nw; v++)
             for (int64_t i = p->vv_off[v]; i < p->vv_off[v + 1]; i++) {
               int32_t u = p->vv[i];
-              double lim = hv[u] + 0.5 * vm_dist3(p->wall + 3 * v, p->wall + 3 * (int64_t)u);
+              double lim =
+                  hv[u] + p->k.thin_grade * vm_dist3(p->wall + 3 * v, p->wall + 3 * (int64_t)u);
               if (hv[v] > lim) hv[v] = lim;
             }
     }

@@ -74,6 +74,26 @@ static int32_t uf_find(int32_t *par, int32_t x) {
   return x;
 }
 
+/* The edges of the faces of b, once per face (smaller vertex first), into
+ * fe (room for every face corner), sorted; with `only`, just the edges
+ * whose two ends are marked in it. Their number. */
+static int64_t face_edges(const vm_mesh *b, const uint8_t *only, face_edge *fe) {
+  int64_t k = 0;
+  for (int64_t e = 0; e < b->ne; e++) {
+    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
+    for (int64_t i = 0; i < n; i++) {
+      int32_t u = b->conn[o + i], w = b->conn[o + (i + 1) % n];
+      if (only && (!only[u] || !only[w])) continue;
+      fe[k].a = u < w ? u : w;
+      fe[k].b = u < w ? w : u;
+      fe[k].face = (int32_t)e;
+      k++;
+    }
+  }
+  qsort(fe, (size_t)k, sizeof *fe, cmp_face_edge);
+  return k;
+}
+
 /* Patches of the surface b: faces connected across non-feature edges.
  * fpatch[face] in 0..*npatch-1 (numbered by their first face). */
 static int find_patches(vm_ctx *ctx, const vm_mesh *b, const vm_surface_features *f,
@@ -88,19 +108,8 @@ static int find_patches(vm_ctx *ctx, const vm_mesh *b, const vm_surface_features
     vm_free(ctx, par);
     return VM_ERR_NOMEM;
   }
-  int64_t k = 0;
-  for (int64_t e = 0; e < b->ne; e++) {
-    par[e] = (int32_t)e;
-    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
-    for (int64_t i = 0; i < n; i++) {
-      int32_t u = b->conn[o + i], w = b->conn[o + (i + 1) % n];
-      fe[k].a = u < w ? u : w;
-      fe[k].b = u < w ? w : u;
-      fe[k].face = (int32_t)e;
-      k++;
-    }
-  }
-  qsort(fe, (size_t)k, sizeof *fe, cmp_face_edge);
+  for (int64_t e = 0; e < b->ne; e++) par[e] = (int32_t)e;
+  int64_t k = face_edges(b, NULL, fe);
   for (int64_t i = 0; i < f->nedge; i++) {
     int32_t u = f->edge[2 * i], w = f->edge[2 * i + 1];
     feat[i].a = u < w ? u : w;
@@ -156,69 +165,48 @@ static void corner_normal(const vm_mesh *b, int64_t e, int32_t v, double nrm[3])
  * volume element with a corner tet not positive), the boundary surface
  * folds back on itself and its faces meet at nearly 180 degrees. Edges with
  * both ends in such elements and a dihedral angle of at least
- * SLIP_FOLD_DEG are dropped from f (rebuilt with corner_deg): otherwise the
+ * VM_SLIP_FOLD_DEG are dropped from f (rebuilt with corner_deg): otherwise the
  * fold's edges become feature lines and its turns fixed corners, and the
  * vertices that must move to unfold it cannot (the SOS-hex bunny of issue
  * 23: 183 such corners). So are the turns of a feature line by
- * SLIP_FOLD_DEG or more at such vertices. *ndropped: how many edges and
+ * VM_SLIP_FOLD_DEG or more at such vertices. *ndropped: how many edges and
  * turns. */
-#define SLIP_FOLD_DEG 150.0
 static int drop_fold_edges(vm_ctx *ctx, const vm_mesh *b, const uint8_t *vt, double corner_deg,
                            vm_surface_features *f, int64_t *ndropped) {
   *ndropped = 0;
-  int64_t nfe = b->eoff[b->ne];
-  face_edge *fe = vm_alloc_array(ctx, (size_t)nfe + 1, sizeof *fe);
+  face_edge *fe = vm_alloc_array(ctx, (size_t)b->eoff[b->ne] + 1, sizeof *fe);
   int32_t *keep = vm_alloc_array(ctx, (size_t)f->nedge + 1, 2 * sizeof *keep);
-  int32_t *deg = NULL, *nb2 = NULL;
-  uint8_t *corner = NULL;
+  int32_t *deg = vm_calloc(ctx, (size_t)b->nv + 1, sizeof *deg);
+  int32_t *nb2 = vm_alloc_array(ctx, (size_t)b->nv + 1, 2 * sizeof *nb2);
+  uint8_t *corner = vm_calloc(ctx, (size_t)b->nv + 1, 1);
   int st = VM_OK;
-  if (!fe || !keep) {
+  if (!fe || !keep || !deg || !nb2 || !corner) {
     st = VM_ERR_NOMEM;
     goto done;
   }
-  int64_t k = 0;
-  for (int64_t e = 0; e < b->ne; e++) {
-    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
-    for (int64_t i = 0; i < n; i++) {
-      int32_t u = b->conn[o + i], w = b->conn[o + (i + 1) % n];
-      if (!vt[u] || !vt[w]) continue;
-      fe[k].a = u < w ? u : w;
-      fe[k].b = u < w ? w : u;
-      fe[k].face = (int32_t)e;
-      k++;
-    }
+  /* the folds: edges between tangled vertices whose two faces' corner
+   * normals at the edge's ends turn by VM_SLIP_FOLD_DEG or more (kept in fe's
+   * first nfold entries, sorted) */
+  int64_t k = face_edges(b, vt, fe), nfold = 0;
+  const double cthr = cos(VM_SLIP_FOLD_DEG * 3.14159265358979323846 / 180.0);
+  for (int64_t i = 0; i + 1 < k; i++) {
+    if (fe[i].a != fe[i + 1].a || fe[i].b != fe[i + 1].b) continue;
+    double nn[4][3];
+    corner_normal(b, fe[i].face, fe[i].a, nn[0]);
+    corner_normal(b, fe[i].face, fe[i].b, nn[1]);
+    corner_normal(b, fe[i + 1].face, fe[i].a, nn[2]);
+    corner_normal(b, fe[i + 1].face, fe[i].b, nn[3]);
+    int fold = 0;
+    for (int x = 0; x < 2; x++)
+      for (int y = 2; y < 4; y++)
+        fold |= nn[x][0] * nn[y][0] + nn[x][1] * nn[y][1] + nn[x][2] * nn[y][2] <= cthr;
+    if (fold) fe[nfold++] = (face_edge){fe[i].a, fe[i].b, 0};
   }
-  qsort(fe, (size_t)k, sizeof *fe, cmp_face_edge);
-  const double cthr = cos(SLIP_FOLD_DEG * 3.14159265358979323846 / 180.0);
   int64_t nk = 0;
   for (int64_t i = 0; i < f->nedge; i++) {
     int32_t u = f->edge[2 * i], w = f->edge[2 * i + 1];
-    int fold = 0;
-    if (vt[u] && vt[w]) {
-      face_edge key = {u < w ? u : w, u < w ? w : u, -1};
-      /* the first entry of this edge: cmp orders by face last */
-      size_t lo = 0, hi = (size_t)k;
-      while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        if (cmp_face_edge(&fe[mid], &key) < 0)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      if (lo + 1 < (size_t)k && fe[lo].a == key.a && fe[lo].b == key.b && fe[lo + 1].a == key.a &&
-          fe[lo + 1].b == key.b) {
-        /* the corner normals of the two faces at the edge's ends */
-        double nn[4][3];
-        corner_normal(b, fe[lo].face, u, nn[0]);
-        corner_normal(b, fe[lo].face, w, nn[1]);
-        corner_normal(b, fe[lo + 1].face, u, nn[2]);
-        corner_normal(b, fe[lo + 1].face, w, nn[3]);
-        for (int x = 0; x < 2; x++)
-          for (int y = 2; y < 4; y++)
-            fold |= nn[x][0] * nn[y][0] + nn[x][1] * nn[y][1] + nn[x][2] * nn[y][2] <= cthr;
-      }
-    }
-    if (fold) continue;
+    face_edge key = {u < w ? u : w, u < w ? w : u, 0};
+    if (nfold && bsearch(&key, fe, (size_t)nfold, sizeof *fe, cmp_face_edge)) continue;
     keep[2 * nk] = u;
     keep[2 * nk + 1] = w;
     nk++;
@@ -229,12 +217,6 @@ static int drop_fold_edges(vm_ctx *ctx, const vm_mesh *b, const uint8_t *vt, dou
    * vertices: those turns are not corners either; the corners are given
    * explicitly (every other turn beyond corner_deg) and the rebuild turns
    * none itself */
-  if (!(deg = vm_calloc(ctx, (size_t)b->nv + 1, sizeof *deg)) ||
-      !(nb2 = vm_alloc_array(ctx, (size_t)b->nv + 1, 2 * sizeof *nb2)) ||
-      !(corner = vm_calloc(ctx, (size_t)b->nv + 1, 1))) {
-    st = VM_ERR_NOMEM;
-    goto done;
-  }
   for (int64_t i = 0; i < nk; i++)
     for (int j = 0; j < 2; j++) {
       int32_t v = keep[2 * i + j];
@@ -244,16 +226,9 @@ static int drop_fold_edges(vm_ctx *ctx, const vm_mesh *b, const uint8_t *vt, dou
   int64_t unturned = 0;
   for (int64_t v = 0; v < b->nv; v++) {
     if (deg[v] != 2) continue;
-    const double *p = b->xyz + 3 * v, *a = b->xyz + 3 * (int64_t)nb2[2 * v],
-                 *c = b->xyz + 3 * (int64_t)nb2[2 * v + 1];
-    double da[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-    double dc[3] = {c[0] - p[0], c[1] - p[1], c[2] - p[2]};
-    double la = sqrt(da[0] * da[0] + da[1] * da[1] + da[2] * da[2]);
-    double lc = sqrt(dc[0] * dc[0] + dc[1] * dc[1] + dc[2] * dc[2]);
-    double cs = la > 0 && lc > 0 ? (da[0] * dc[0] + da[1] * dc[1] + da[2] * dc[2]) / (la * lc) : -1;
-    double turn = acos(cs > 1 ? 1 : cs < -1 ? -1 : cs) * 180.0 / 3.14159265358979323846;
+    double turn = vm_surface_turning_deg(b->xyz, (int32_t)v, nb2[2 * v], nb2[2 * v + 1]);
     if (!(turn > corner_deg)) continue;
-    if (vt[v] && turn >= SLIP_FOLD_DEG)
+    if (vt[v] && turn >= VM_SLIP_FOLD_DEG)
       unturned++;
     else
       corner[v] = 1;
@@ -559,33 +534,19 @@ int vm_volume_shape_deviation(vm_volume_shape *s, const vm_mesh *m, double *dist
   return VM_OK;
 }
 
-static int cmp_u64(const void *x, const void *y) {
-  uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-  return a < b ? -1 : a > b;
-}
-
 /* Whether every edge of the surface b is shared by exactly two faces. */
 static int surface_closed(vm_ctx *ctx, const vm_mesh *b, int *closed) {
-  int64_t ne = b->eoff[b->ne];
-  uint64_t *key = vm_alloc_array(ctx, (size_t)ne + 1, sizeof *key);
-  if (!key) return VM_ERR_NOMEM;
-  int64_t k = 0;
-  for (int64_t e = 0; e < b->ne; e++) {
-    int64_t o = b->eoff[e], n = b->eoff[e + 1] - o;
-    for (int64_t i = 0; i < n; i++) {
-      uint32_t p = (uint32_t)b->conn[o + i], q = (uint32_t)b->conn[o + (i + 1) % n];
-      key[k++] = p < q ? (uint64_t)p << 32 | q : (uint64_t)q << 32 | p;
-    }
-  }
-  qsort(key, (size_t)k, sizeof *key, cmp_u64);
+  face_edge *fe = vm_alloc_array(ctx, (size_t)b->eoff[b->ne] + 1, sizeof *fe);
+  if (!fe) return VM_ERR_NOMEM;
+  int64_t k = face_edges(b, NULL, fe);
   int ok = k > 0;
   for (int64_t i = 0; i < k && ok;) {
     int64_t j = i;
-    while (j < k && key[j] == key[i]) j++;
+    while (j < k && fe[j].a == fe[i].a && fe[j].b == fe[i].b) j++;
     ok = j - i == 2;
     i = j;
   }
-  vm_free(ctx, key);
+  vm_free(ctx, fe);
   *closed = ok;
   return VM_OK;
 }
@@ -602,17 +563,15 @@ int vm_volume_shape_fixed_outside(vm_volume_shape *s, const vm_mesh *m, int64_t 
   int64_t n = 0;
   for (int64_t v = 0; v < m->nv; v++) n += !onb[v] && m->vflag[v] == VM_VERTEX_FIXED;
   int32_t *ids = NULL;
-  double *pts = NULL, *d = NULL;
+  double *pts = NULL;
   int8_t *in = NULL;
-  vm_surface_projector *proj = NULL;
   int st = VM_OK, closed = 0;
   /* the inside of an open or non-manifold boundary is not defined */
   if (n == 0 || (st = surface_closed(s->ctx, s->b, &closed)) < 0 || !closed) goto done;
   ids = vm_alloc_array(s->ctx, (size_t)n, sizeof *ids);
   pts = vm_alloc_array(s->ctx, (size_t)n, 3 * sizeof *pts);
-  d = vm_alloc_array(s->ctx, (size_t)n, sizeof *d);
   in = vm_alloc_array(s->ctx, (size_t)n, sizeof *in);
-  if (!ids || !pts || !d || !in) {
+  if (!ids || !pts || !in) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -622,18 +581,12 @@ int vm_volume_shape_fixed_outside(vm_volume_shape *s, const vm_mesh *m, int64_t 
       ids[n] = (int32_t)v;
       memcpy(pts + 3 * n++, m->xyz + 3 * v, 3 * sizeof(double));
     }
-  if ((st = vm_surface_inside(s->b, n, pts, in)) < 0 ||
-      (st = vm_surface_projector_create(s->ctx, s->b, NULL, &proj)) < 0 ||
-      (st = vm_surface_projector_distance(proj, n, pts, d)) < 0)
-    goto done;
-  /* on the surface or within rounding of it: not counted (the parity of a
-   * ray from there says nothing) */
+  /* on the surface or within rounding of it (-1): not counted */
+  if ((st = vm_surface_inside(s->b, n, pts, 1e-9 * s->diag, in)) < 0) goto done;
   for (int64_t i = 0; i < n; i++)
-    if (!in[i] && d[i] > 1e-9 * s->diag && !(*count)++) *first = ids[i];
+    if (in[i] == 0 && !(*count)++) *first = ids[i];
 done:
-  vm_surface_projector_destroy(&proj);
   vm_free(s->ctx, in);
-  vm_free(s->ctx, d);
   vm_free(s->ctx, pts);
   vm_free(s->ctx, ids);
   vm_free(s->ctx, onb);

@@ -29,8 +29,7 @@ static int cmp_u64(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 
-/* Turning angle (degrees) of a polyline at v between neighbours a and b. */
-static double turning_deg(const double *xyz, int32_t v, int32_t a, int32_t b) {
+double vm_surface_turning_deg(const double *xyz, int32_t v, int32_t a, int32_t b) {
   double da[3], db[3];
   vm_sub3(xyz + 3 * (int64_t)v, xyz + 3 * (int64_t)a, da); /* incoming direction a -> v */
   vm_sub3(xyz + 3 * (int64_t)b, xyz + 3 * (int64_t)v, db); /* outgoing direction v -> b */
@@ -103,7 +102,7 @@ int vm_surface_features_from_edges(const vm_mesh *m, int64_t nedge, const int32_
       int64_t e0 = adj_e[rp[v]], e1 = adj_e[rp[v] + 1];
       int32_t a = f->edge[2 * e0] == v ? f->edge[2 * e0 + 1] : f->edge[2 * e0];
       int32_t b = f->edge[2 * e1] == v ? f->edge[2 * e1 + 1] : f->edge[2 * e1];
-      if (turning_deg(m->xyz, (int32_t)v, a, b) > corner_deg) c = VM_FEATURE_CORNER;
+      if (vm_surface_turning_deg(m->xyz, (int32_t)v, a, b) > corner_deg) c = VM_FEATURE_CORNER;
     }
     f->vclass[v] = (uint8_t)c;
     f->vline[v] = c == VM_FEATURE_CORNER ? -1 : 0;

@@ -419,7 +419,7 @@ extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double s
   return vm_surface_hausdorff_at(a, b, spacing, ab, ba, NULL, NULL);
 }
 
-extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts,
+extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts, double tol,
                                  int8_t *inside) {
   if (!surf || n < 0 || (n > 0 && (!pts || !inside))) return VM_ERR_ARG;
   vm_ctx *ctx = surf->ctx;
@@ -438,6 +438,10 @@ extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *p
                                    {0.2672612419124244, -0.5345224838248488, 0.8017837257372732}};
   for (int64_t i = 0; i < n; i++) {
     Point p(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
+    if (s.tree->squared_distance(p) <= tol * tol) {
+      inside[i] = -1;
+      continue;
+    }
     int votes = 0;
     for (int k = 0; k < 3; k++) {
       K::Ray_3 ray(p, Vector(dir[k][0], dir[k][1], dir[k][2]));

@@ -17,6 +17,10 @@ extern "C" {
 
 typedef struct vm_volume_slip vm_volume_slip;
 
+/* Degrees: a sharp edge or a feature line's turn of this much or more
+ * between vertices of tangled elements is a fold of the boundary. */
+#define VM_SLIP_FOLD_DEG 150.0
+
 typedef struct vm_volume_slip_info {
   int64_t nboundary;   /* boundary vertices */
   int64_t nsurface;    /* of them sliding on the surface */
@@ -25,7 +29,8 @@ typedef struct vm_volume_slip_info {
   int64_t nkept_fixed; /* already fixed (flag or 'fixed' field): left fixed */
   int32_t lines;       /* feature lines */
   int32_t patches;     /* surface patches bounded by the feature lines */
-  int64_t fold_edges;  /* sharp edges left out as folds of tangled boundary elements */
+  int64_t fold_edges;  /* sharp edges and line turns left out as folds of tangled
+                          boundary elements */
 } vm_volume_slip_info;
 
 /* Make every boundary vertex of the volume mesh m that is not FIXED a SLIP
@@ -36,8 +41,9 @@ typedef struct vm_volume_slip_info {
  * dihedral angle >= feature_deg (in (0, 180]); a feature line turning by
  * more than corner_deg at a vertex makes it a corner. The returned object
  * Where boundary elements are tangled, sharp edges of nearly 180 degrees
- * (150 or more) between their vertices are the boundary's folds, not its
- * shape, and are not features (info->fold_edges). The returned object
+ * (VM_SLIP_FOLD_DEG or more) between their vertices, and feature lines
+ * turning back as much there, are the boundary's folds, not its shape, and
+ * are not features (info->fold_edges). The returned object
  * supplies the projector (vm_volume_slip_ops) for vm_volume_run and must
  * outlive it. info may be NULL. Returns VM_OK, VM_ERR_ARG (no volume
  * elements, bad angles, non-manifold boundary), VM_ERR_NOMEM,

@@ -60,6 +60,12 @@ int vm_surface_features_from_edges(const vm_mesh *m, int64_t nedge, const int32_
 
 void vm_surface_features_free(vm_ctx *ctx, vm_surface_features *f);
 
+/* Turning angle (degrees, 0 straight, 180 back) of a polyline through the
+ * points xyz at vertex v between its neighbours a and b: the angle between
+ * a -> v and v -> b (180 if either is degenerate). The corner test of the
+ * functions above. */
+double vm_surface_turning_deg(const double *xyz, int32_t v, int32_t a, int32_t b);
+
 /* Vertex classes for the minimizer: SMOOTH -> VM_VERTEX_SLIP on surface 0,
  * LINE on line k -> VM_VERTEX_SLIP on surface line_map ? line_map[k] : k,
  * CORNER -> VM_VERTEX_FIXED. Vertices already FIXED stay fixed, vertices

@@ -102,9 +102,10 @@ int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, dou
  * be NULL. */
 /* Whether each of n points (3*n) lies inside the closed triangle/quad
  * surface surf (inside[i] = 1) or outside (0), by the parity of a ray's
- * crossings, the majority of three rays. Points on or within rounding of
- * the surface may go either way: callers keep them out. */
-int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts, int8_t *inside);
+ * crossings, the majority of three rays; -1 for a point within distance tol
+ * of the surface, where the parity says nothing. */
+int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts, double tol,
+                      int8_t *inside);
 int vm_surface_hausdorff_at(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
                             double *ba, double ab_at[3], double ba_at[3]);
 
