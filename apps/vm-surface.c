@@ -31,7 +31,8 @@ static void progress(void *user, const vm_adapt_progress *p) {
 
 typedef struct {
   const char *in, *out, *report_dir;
-  int json, fout, every;
+  int json, fout, every, edge_length_given;
+  int size;            /* -1: not given */
   double c_abs, c_rel; /* --c, --c-rel: < 0 if not given */
   vm_surface_opts so;
   vm_write_opts wo;
@@ -42,12 +43,14 @@ static int opt_edge_length(vm_cli *cli, const vm_opt *opt, const char *val, void
   if (vm_cli_double(cli, opt->name, val, 0, 1e300, &x)) return VM_EXIT_USAGE;
   if (!(x > 0)) return vm_cli_usage_error(cli, "%s must be positive", opt->name);
   ((args *)a)->so.remesh_opts.target_edge_length = x;
+  ((args *)a)->edge_length_given = 1;
   return VM_EXIT_OK;
 }
 
 #define A(f) offsetof(args, f)
 static const char *const steps[] = {"all", "repair", "remesh", "curvature", "adapt", NULL};
 static const char *const tri[] = {"auto", "yes", "no", NULL};
+static const char *const sizes[] = {"input", "uniform", NULL};
 static const vm_opt opts[] = {
     {"--repair", NULL, VM_OPT_CHOICE, A(so.repair), NULL,
      "repair the input (auto: for .stl .obj .off .ply inputs, and always for the steps all, "
@@ -58,12 +61,19 @@ static const vm_opt opts[] = {
     {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections), NULL,
      "skip the self-intersection check of the repair", .ival = 0},
     {"--remesh", NULL, VM_OPT_CHOICE, A(so.remesh), NULL,
-     "uniform remeshing in 'all' (auto: if the smallest angle is below --sliver-angle)",
-     .choices = tri},
+     "remeshing in 'all' (auto: if the smallest angle is below --sliver-angle)", .choices = tri},
+    {"--size", NULL, VM_OPT_CHOICE, A(size), NULL,
+     "what the remeshing keeps: input (default: the input's vertices and grading, slivers "
+     "removed by edge flips and collapses) or uniform (isotropic remeshing to one edge length, "
+     "then the same sliver removal; the default with --target-edge-length)",
+     .choices = sizes},
+    {"--cone-angle", NULL, VM_OPT_DOUBLE, A(so.adapt.cone_angle), "DEG",
+     "angle deficit of a cone point (a tip), kept like a corner (default 60; 360: none)",
+     .lo = 1e-6, .hi = 360},
     {"--sliver-angle", NULL, VM_OPT_DOUBLE, A(so.sliver_angle), "DEG", "(default 15)", .lo = 1e-6,
      .hi = 180},
     {"--target-edge-length", NULL, VM_OPT_CALL, 0, "L",
-     "remeshing edge length (default: the mean edge length)", .fn = opt_edge_length},
+     "uniform remeshing edge length (default: the mean edge length)", .fn = opt_edge_length},
     {"--remesh-iter", NULL, VM_OPT_INT, A(so.remesh_opts.iterations), "N",
      "remeshing iterations (default 5)", .lo = 1, .hi = 1e8},
     {"--feature-angle", NULL, VM_OPT_DOUBLE, A(so.adapt.feature_angle), "DEG",
@@ -110,7 +120,7 @@ static const vm_cli_spec spec = {
     "The surface stage. STEP is one of\n"
     "  all        (default) repair -> remesh (if needed) -> curvature -> adapt\n"
     "  repair     repair only\n"
-    "  remesh     repair -> isotropic remeshing\n"
+    "  remesh     repair -> slivers removed (--size uniform: isotropic remeshing first)\n"
     "  curvature  mean curvature fields only\n"
     "  adapt      curvature -> curvature-adapted node movement (no remeshing)\n"
     "OUT is written in the format of its extension (.vmsh keeps the curvature fields\n"
@@ -152,10 +162,31 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     vm_json_double(stdout, rr->volume);
     printf("}");
   }
-  printf(", \"remeshed\": %s", s->remeshed ? "true" : "false");
+  printf(", \"size\": \"%s\", \"remeshed\": %s",
+         a->so.size == VM_SURFACE_SIZE_UNIFORM ? "uniform" : "input",
+         s->remeshed ? "true" : "false");
   if (s->remeshed) {
     printf(", \"target_edge_length\": ");
     vm_json_double(stdout, s->target_edge_length);
+  }
+  if (s->cleaned) {
+    const vm_cleanup_report *c = &s->cleanup;
+    printf(", \"slivers\": {\"flips\": %lld, \"collapses\": %lld, \"vertices_in\": %lld, "
+           "\"vertices\": %lld, \"faces_in\": %lld, \"faces\": %lld, \"below_in\": %lld, "
+           "\"below\": %lld, \"cones\": %lld, \"min_angle_in\": ",
+           (long long)c->flips, (long long)c->collapses, (long long)c->nv_in, (long long)c->nv,
+           (long long)c->nf_in, (long long)c->nf, (long long)c->below_in, (long long)c->below,
+           (long long)s->cones);
+    vm_json_double(stdout, c->min_angle_in);
+    printf(", \"min_angle\": ");
+    vm_json_double(stdout, c->min_angle);
+    printf(", \"min_angle_free_in\": ");
+    vm_json_double(stdout, c->min_angle_free_in);
+    printf(", \"min_angle_free\": ");
+    vm_json_double(stdout, c->min_angle_free);
+    printf(", \"max_dev\": ");
+    vm_json_double(stdout, c->max_dev);
+    printf("}");
   }
   if (s->curvature) {
     printf(", \"curvature\": {\"min\": ");
@@ -192,10 +223,15 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     vm_json_double(stdout, ar->min_angle_after);
     printf(", \"max_distance\": ");
     vm_json_double(stdout, ar->max_distance);
+    printf(", \"angle_floor\": ");
+    vm_json_double(stdout, s->angle_floor);
+    printf(", \"held_back_vertices\": %lld", (long long)s->angle_restored);
     printf(", \"time\": ");
     vm_json_double(stdout, ar->elapsed);
     printf("}");
   }
+  printf(", \"opposing\": %lld, \"remesh_lost_corners\": %lld, \"remesh_opposing\": %lld",
+         (long long)s->opposing, (long long)s->remesh_lost_corners, (long long)s->remesh_opposing);
   printf(", \"self_intersections\": %lld, \"remesh_refused_pairs\": %lld, "
          "\"folds_found\": %lld, \"backed_off_vertices\": %lld",
          (long long)s->self_intersections, (long long)s->remesh_refused, (long long)s->folds_found,
@@ -227,8 +263,19 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        (long long)rr->stitched, rr->border_edges ? "open" : "closed",
                        (long long)rr->components, (long long)rr->self_intersections);
   if (st >= 0 && s->remeshed)
-    st = vm_report_row(*report, "remeshed", "target edge length %g, %lld -> %lld vertices",
-                       s->target_edge_length, (long long)s->nv_before_remesh, (long long)m->nv);
+    st = vm_report_row(*report, "remeshed", "uniform, target edge length %g, %lld -> %lld vertices",
+                       s->target_edge_length, (long long)s->nv_before_remesh,
+                       (long long)s->cleanup.nv_in);
+  if (st >= 0 && s->cleaned)
+    st =
+        vm_report_row(*report, "slivers removed",
+                      "%lld flips, %lld collapses; triangles under %g deg %lld -> %lld; smallest "
+                      "angle %.2f -> %.2f deg (away from feature corners %.2f -> %.2f); %lld "
+                      "cone points kept",
+                      (long long)s->cleanup.flips, (long long)s->cleanup.collapses,
+                      a->so.sliver_angle, (long long)s->cleanup.below_in,
+                      (long long)s->cleanup.below, s->cleanup.min_angle_in, s->cleanup.min_angle,
+                      s->cleanup.min_angle_free_in, s->cleanup.min_angle_free, (long long)s->cones);
   if (st >= 0 && s->adapted)
     st = vm_report_row(*report, "adaptation",
                        "%d iterations in %d rounds (%s), F %.6e -> %.6e; c %g; %lld flipped; "
@@ -262,7 +309,8 @@ int main(int argc, char **argv) {
             .fout = VM_FMT_AUTO,
             .every = 20,
             .c_abs = -1,
-            .c_rel = -1};
+            .c_rel = -1,
+            .size = -1};
   vm_mesh *m = NULL;
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
@@ -276,6 +324,12 @@ int main(int argc, char **argv) {
   rc = VM_EXIT_OK;
   if (a.c_rel >= 0) a.so.adapt.c = -a.c_rel;
   if (a.c_abs >= 0) a.so.adapt.c = a.c_abs;
+  a.so.size = a.size >= 0           ? a.size
+              : a.edge_length_given ? VM_SURFACE_SIZE_UNIFORM
+                                    : VM_SURFACE_SIZE_INPUT;
+  if (a.size == VM_SURFACE_SIZE_INPUT && a.edge_length_given)
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "--target-edge-length has no effect with --size input (it is the uniform size)");
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO)
     a.fout = vm_format_from_path(a.in);
   if (a.report_dir) { /* made (or refused) before the run */

@@ -16,6 +16,7 @@
 #include <time.h>
 
 #include "varmesh/adapt.h"
+#include "varmesh/cleanup.h"
 #include "varmesh/curvature.h"
 #include "varmesh/features.h"
 #include "varmesh/io.h"
@@ -267,6 +268,47 @@ int main(int argc, char **argv) {
     printf("  Spearman vs the input's unsmoothed |H| %.4f, vs the mesh's own |H| %.4f, smoothed "
            "twice %.4f\n",
            fe.spearman_input_unsmoothed, fe.spearman_own, fe.spearman_own_smoothed);
+    /* corners and tips of the input (feature corners, cone points): how
+     * far the nearest vertex of the result is, relative to the mean
+     * length of the input's edges there */
+    {
+      vm_surface_features fc;
+      vm_surface_detect_features(input, ao.feature_angle, ao.corner_angle, &fc);
+      int64_t ncone = vm_surface_mark_cones(input, &fc, ao.cone_angle);
+      double worst = 0, worst_rel = 0;
+      int64_t moved = 0;
+      for (int64_t v = 0; v < input->nv; v++) {
+        if (fc.vclass[v] != VM_FEATURE_CORNER) continue;
+        const double *p = input->xyz + 3 * v;
+        double best = INFINITY;
+        for (int64_t w = 0; w < r->nv; w++) {
+          const double *q = r->xyz + 3 * w;
+          double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                          (p[2] - q[2]) * (p[2] - q[2]));
+          if (d < best) best = d;
+        }
+        double len = 0;
+        int nl = 0;
+        for (int64_t e = 0; e < input->ne; e++) {
+          const int32_t *c = input->conn + 3 * e;
+          for (int a = 0; a < 3; a++)
+            if (c[a] == v) {
+              const double *q = input->xyz + 3 * (int64_t)c[(a + 1) % 3];
+              len += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                          (p[2] - q[2]) * (p[2] - q[2]));
+              nl++;
+            }
+        }
+        double rel = nl && len > 0 ? best / (len / nl) : 0;
+        if (best > 0) moved++;
+        if (best > worst) worst = best;
+        if (rel > worst_rel) worst_rel = rel;
+      }
+      printf("  corners and tips of the input: %lld (%lld cone points), %lld without a vertex of "
+             "the result on them; farthest %.4g = %.3f of the local edge length\n",
+             (long long)fc.ncorner, (long long)ncone, (long long)moved, worst, worst_rel);
+      vm_surface_features_free(ctx, &fc);
+    }
     int ok = fe.spearman_raw <= -0.5 && fe.hausdorff <= 1e-3 * diag && fe.opposing == 0 &&
              fe.min_angle >= 15;
     printf("  targets: %s\n", ok ? "all met" : "NOT all met");

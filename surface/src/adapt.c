@@ -5,10 +5,12 @@
 
 #include <math.h>
 #include <omp.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "varmesh/surface_mesh.h"
 #include "vec3.h"
+#include "varmesh/cleanup.h"
 #include "varmesh/features.h"
 #include "varmesh/minimize.h"
 #include "varmesh/problem.h"
@@ -26,6 +28,7 @@ vm_adapt_opts vm_adapt_opts_default(void) {
   o.filter.smooth = 2;
   o.feature_angle = 20.0;
   o.corner_angle = 50.0;
+  o.cone_angle = 60.0;
   o.theta = 0.8;
   o.max_iter = 200;
   o.rounds = 5;
@@ -256,6 +259,13 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
 
   /* features and the surfaces the vertices stay on */
   if ((st = vm_surface_detect_features(m, o.feature_angle, o.corner_angle, &f))) goto done;
+  if (o.cone_angle < 360) {
+    int64_t nc = vm_surface_mark_cones(m, &f, o.cone_angle);
+    if (nc < 0) {
+      st = (int)nc;
+      goto done;
+    }
+  }
   if ((st = vm_surface_projector_create(ctx, m, &f, &own))) goto done;
   hproj = own;
   vm_surface_ops ops = vm_surface_projector_ops(ref ? ref : own);
@@ -278,7 +288,7 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   if ((st = vm_curvature_filter_apply(m, &filt, Href))) goto done;
 
   /* vertex classes: the reference line each feature vertex lies on */
-  if ((st = vm_surface_projector_assign(ref ? ref : own, m, &f, 0.1 * h, vs))) goto done;
+  if ((st = vm_surface_projector_assign(ref ? ref : own, m, &f, 1e-3 * h, vs))) goto done;
   flags_set = 1;
   for (int64_t v = 0; v < nv; v++) {
     if (m->vflag[v] == VM_VERTEX_FIXED) continue;

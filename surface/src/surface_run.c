@@ -2,6 +2,7 @@
  * remeshing, curvature, adaptation) behind one call, vm_surface_run. */
 #include "varmesh/surface.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,6 +17,8 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.repair = VM_SURFACE_AUTO;
   o.remesh = VM_SURFACE_AUTO;
   o.sliver_angle = 15;
+  o.size = VM_SURFACE_SIZE_INPUT;
+  o.cleanup_opts = vm_cleanup_opts_default();
   o.repair_opts = vm_repair_opts_default();
   o.remesh_opts = vm_remesh_opts_default();
   o.adapt = vm_adapt_opts_default();
@@ -81,27 +84,182 @@ static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   return VM_OK;
 }
 
-/* Isotropic remeshing of m; *input keeps m as it was (the reference surface
- * of the adaptation). */
+static int all_triangles(const vm_mesh *m);
+
+/* The features of m for the remeshing: by dihedral angle, and cone points
+ * as corners. */
+static int features(vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
+                    vm_surface_features *f) {
+  int st = vm_surface_detect_features(m, o->adapt.feature_angle, o->adapt.corner_angle, f);
+  if (st) return st;
+  int64_t nc = o->adapt.cone_angle < 360 ? vm_surface_mark_cones(m, f, o->adapt.cone_angle) : 0;
+  if (nc < 0) return (int)nc;
+  s->cones = nc;
+  return VM_OK;
+}
+
+/* Slivers removed by flips and collapses (f: m's features, updated). */
+static int clean(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
+                 vm_surface_features *f) {
+  vm_cleanup_opts co = o->cleanup_opts;
+  co.angle = o->sliver_angle < 59 ? o->sliver_angle : 59;
+  if (!all_triangles(m)) {
+    vm_log(ctx, VM_LOG_INFO, "remesh: slivers not removed: the surface has quads");
+    return VM_OK;
+  }
+  int st = vm_surface_cleanup(m, f, &co, &s->cleanup);
+  if (st) return st;
+  const vm_cleanup_report *c = &s->cleanup;
+  s->cleaned = 1;
+  vm_log(ctx, VM_LOG_INFO,
+         "remesh: slivers: %lld flips, %lld collapses: %lld -> %lld vertices, %lld -> %lld "
+         "triangles under %g deg; smallest angle %.2f -> %.2f deg (%.2f -> %.2f away from %lld "
+         "feature corners, %lld of them cone points); surface moved <= %.3g",
+         (long long)c->flips, (long long)c->collapses, (long long)c->nv_in, (long long)c->nv,
+         (long long)c->below_in, (long long)c->below, co.angle, c->min_angle_in, c->min_angle,
+         c->min_angle_free_in, c->min_angle_free, (long long)f->ncorner, (long long)s->cones,
+         c->max_dev);
+  return VM_OK;
+}
+
+static int cmp_xyz(const void *a, const void *b) {
+  const double *p = a, *q = b;
+  for (int r = 0; r < 3; r++)
+    if (p[r] != q[r]) return p[r] < q[r] ? -1 : 1;
+  return 0;
+}
+
+/* How many of the n points (3 n coordinates) are not vertices of m, bit
+ * for bit; *first: the first of them. A negative status on failure. */
+static int64_t lost_points(vm_ctx *ctx, const vm_mesh *m, const double *pts, int64_t n,
+                           int64_t *first) {
+  double *sorted = vm_alloc_array(ctx, 3 * (size_t)(m->nv > 0 ? m->nv : 1), sizeof *sorted);
+  if (!sorted) return VM_ERR_NOMEM;
+  memcpy(sorted, m->xyz, 3 * (size_t)m->nv * sizeof *sorted);
+  qsort(sorted, (size_t)m->nv, 3 * sizeof *sorted, cmp_xyz);
+  int64_t lost = 0;
+  for (int64_t i = 0; i < n; i++)
+    if (!bsearch(pts + 3 * i, sorted, (size_t)m->nv, 3 * sizeof *sorted, cmp_xyz)) {
+      if (!lost) *first = i;
+      lost++;
+    }
+  vm_free(ctx, sorted);
+  return lost;
+}
+
+/* Triangles of m whose normal opposes (dot <= 0) the normal of ref at the
+ * closest point of their centroid: turned over against the surface they
+ * lie on (a fold the intersection test does not see). *at: the first
+ * one's centroid. A negative status on failure. */
+static int64_t count_opposing(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, double at[3]) {
+  vm_surface_projector *p = NULL;
+  int st = vm_surface_projector_create(ctx, ref, NULL, &p);
+  if (st) return st;
+  vm_surface_ops ops = vm_surface_projector_ops(p);
+  int64_t k = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_TRI) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    const double *a = m->xyz + 3 * (int64_t)c[0], *b = m->xyz + 3 * (int64_t)c[1],
+                 *d = m->xyz + 3 * (int64_t)c[2];
+    double u[3], w[3], n[3], ctr[3], q[3], nr[9];
+    vm_sub3(b, a, u);
+    vm_sub3(d, a, w);
+    vm_cross3(u, w, n);
+    for (int r = 0; r < 3; r++) ctr[r] = (a[r] + b[r] + d[r]) / 3;
+    int nn = ops.project(ops.user, 0, ctr, q, nr);
+    if (nn < 0) {
+      k = nn;
+      break;
+    }
+    if (vm_dot3(n, nr) <= 0) {
+      if (!k && at) memcpy(at, ctr, sizeof ctr);
+      k++;
+    }
+  }
+  vm_surface_projector_destroy(&p);
+  return k;
+}
+
+/* The remeshing step: with size INPUT the input's own vertices, slivers
+ * removed by flips and collapses; with size UNIFORM CGAL's isotropic
+ * remeshing first, then the same. Features, and cone points as corners,
+ * are kept. *input keeps m as it was (the reference surface of the
+ * adaptation). */
 static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
                   vm_mesh **input) {
   vm_remesh_opts mo = o->remesh_opts;
-  if (mo.target_edge_length <= 0) mo.target_edge_length = vm_surface_mean_edge(m);
+  int uniform = o->size == VM_SURFACE_SIZE_UNIFORM;
+  if (uniform && mo.target_edge_length <= 0) mo.target_edge_length = vm_surface_mean_edge(m);
   s->nv_before_remesh = m->nv;
   vm_surface_features f;
   memset(&f, 0, sizeof f);
+  vm_mesh *m2 = NULL;
   int st = vm_mesh_clone(m, input);
-  if (!st) st = vm_surface_detect_features(m, o->adapt.feature_angle, o->adapt.corner_angle, &f);
-  if (!st) st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
+  if (!st) st = features(m, o, s, &f);
+  if (!st) s->min_angle_free_input = vm_surface_min_angle_free(m, &f, NULL);
+  double *keep = NULL; /* the corners' coordinates: the remeshing must keep them */
+  int64_t nkeep = 0;
+  if (!st && uniform) {
+    keep = vm_alloc_array(ctx, 3 * (size_t)(f.ncorner + 1), sizeof *keep);
+    if (!keep) st = VM_ERR_NOMEM;
+    for (int64_t v = 0; !st && v < m->nv; v++)
+      if (f.vclass[v] == VM_FEATURE_CORNER && nkeep < f.ncorner)
+        memcpy(keep + 3 * nkeep++, m->xyz + 3 * v, 3 * sizeof *keep);
+  }
+  if (!st && uniform) {
+    st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
+    int64_t lost = 0, first = -1, opposing = 0;
+    double at[3] = {0, 0, 0};
+    if (!st) lost = lost_points(ctx, m, keep, nkeep, &first);
+    if (lost < 0) st = (int)lost;
+    if (!st && lost == 0) opposing = count_opposing(ctx, m, *input, at);
+    if (opposing < 0) st = (int)opposing;
+    if (!st && (lost > 0 || opposing > 0)) {
+      /* CGAL 5.5 can collapse a constrained tip, or fold a triangle over
+       * where details are far smaller than the edge length: the input's
+       * vertices then */
+      if (lost > 0) {
+        const double *p = keep + 3 * first;
+        vm_log(ctx, VM_LOG_WARN,
+               "remesh: the uniform remeshing lost %lld of %lld corners and tips, e.g. at (%g, "
+               "%g, %g); going on with the input's own vertices (--size input)",
+               (long long)lost, (long long)nkeep, p[0], p[1], p[2]);
+      } else
+        vm_log(ctx, VM_LOG_WARN,
+               "remesh: the uniform remeshing turned %lld triangles over against the input "
+               "(folds), e.g. near (%g, %g, %g); going on with the input's own vertices (--size "
+               "input)",
+               (long long)opposing, at[0], at[1], at[2]);
+      s->remesh_lost_corners = lost;
+      s->remesh_opposing = opposing;
+      vm_surface_features_free(ctx, &f);
+      vm_mesh_destroy(&m2);
+      st = vm_mesh_clone(*input, &m2);
+      if (!st) {
+        vm_mesh tmp = *m;
+        *m = *m2;
+        *m2 = tmp;
+        st = features(m, o, s, &f);
+      }
+      uniform = 0;
+    }
+    if (!st && uniform) {
+      s->remeshed = 1;
+      s->target_edge_length = mo.target_edge_length;
+      vm_log(ctx, VM_LOG_INFO,
+             "remesh: uniform, target edge length %g: %lld -> %lld vertices, smallest angle "
+             "%.2f -> %.2f deg",
+             mo.target_edge_length, (long long)s->nv_before_remesh, (long long)m->nv,
+             s->min_angle_input, vm_surface_min_angle(m));
+    }
+  }
+  if (!st && vm_ctx_interrupted(ctx)) st = VM_ERR_INTERRUPTED;
+  if (!st) st = clean(ctx, m, o, s, &f);
   vm_surface_features_free(ctx, &f);
-  if (st < 0) return st;
-  s->remeshed = 1;
-  s->target_edge_length = mo.target_edge_length;
-  vm_log(ctx, VM_LOG_INFO,
-         "remesh: target edge length %g: %lld -> %lld vertices, smallest angle %.2f -> %.2f deg",
-         mo.target_edge_length, (long long)s->nv_before_remesh, (long long)m->nv,
-         s->min_angle_input, vm_surface_min_angle(m));
-  return VM_OK;
+  vm_free(ctx, keep);
+  vm_mesh_destroy(&m2);
+  return st < 0 ? st : VM_OK;
 }
 
 /* The curvature fields alone, filtered as the adaptation would. */
@@ -298,6 +456,93 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   return VM_OK;
 }
 
+/* Smallest corner angle (degrees) of 2D element e with coordinates x. */
+static double elem_min_deg(const vm_mesh *m, const double *x, int64_t e) {
+  int k = vm_elem_nverts(m->etype[e]);
+  const int32_t *c = m->conn + m->eoff[e];
+  double mn = 180;
+  for (int a = 0; a < k; a++) {
+    double u[3], w[3], cr[3];
+    vm_sub3(x + 3 * (int64_t)c[(a + 1) % k], x + 3 * (int64_t)c[a], u);
+    vm_sub3(x + 3 * (int64_t)c[(a + k - 1) % k], x + 3 * (int64_t)c[a], w);
+    vm_cross3(u, w, cr);
+    double d = atan2(vm_norm3(cr), vm_dot3(u, w)) * (180.0 / 3.14159265358979323846);
+    if (d < mn) mn = d;
+  }
+  return mn;
+}
+
+/* The adaptation may not make the smallest angle worse than `floor`:
+ * around the elements whose smallest angle fell below min(floor, their
+ * own before), the adaptation's displacement (x - x0) is scaled down
+ * smoothly: by 0 at their vertices, d / R at graph distance d < R, not
+ * at all further away; R doubles (1, 2, 4, ..., 64) and the seeds
+ * gather while elements are left below; then every vertex goes back to
+ * x0. *restored: vertices whose displacement was scaled down. */
+static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *restored) {
+  vm_ctx *ctx = m->ctx;
+  const int64_t nv = m->nv;
+  const size_t n1 = (size_t)(nv > 0 ? nv : 1);
+  *restored = 0;
+  uint8_t *seed = vm_calloc(ctx, n1, 1);
+  int32_t *dist = vm_alloc_array(ctx, n1, sizeof *dist);
+  double *xa = vm_alloc_array(ctx, 3 * n1, sizeof *xa);
+  if (!seed || !dist || !xa) {
+    vm_free(ctx, seed);
+    vm_free(ctx, dist);
+    vm_free(ctx, xa);
+    return VM_ERR_NOMEM;
+  }
+  memcpy(xa, m->xyz, 3 * (size_t)nv * sizeof *xa);
+  int R = 1, bad = 1;
+  for (int round = 0; round < 9 && bad; round++) {
+    bad = 0;
+    for (int64_t e = 0; e < m->ne; e++) {
+      if (vm_elem_dim(m->etype[e]) != 2) continue;
+      double now = elem_min_deg(m, m->xyz, e);
+      if (now >= floor || now >= elem_min_deg(m, x0, e)) continue;
+      bad++;
+      const int32_t *c = m->conn + m->eoff[e];
+      for (int a = 0; a < vm_elem_nverts(m->etype[e]); a++) seed[c[a]] = 1;
+    }
+    vm_log(ctx, VM_LOG_DEBUG, "adapt: angle guard round %d: %d elements below %.3f deg", round, bad,
+           floor);
+    if (!bad) break;
+    if (round == 8) { /* the last resort: the surface before the adaptation */
+      memcpy(m->xyz, x0, 3 * (size_t)nv * sizeof *x0);
+      *restored = nv;
+      break;
+    }
+    /* graph distance from the seeds, up to R, by sweeps over the elements */
+    for (int64_t v = 0; v < nv; v++) dist[v] = seed[v] ? 0 : R;
+    for (int d = 0; d + 1 < R; d++) {
+      int grew = 0;
+      for (int64_t e = 0; e < m->ne; e++) {
+        const int32_t *c = m->conn + m->eoff[e];
+        int k = vm_elem_nverts(m->etype[e]), near = 0;
+        for (int a = 0; a < k; a++) near |= dist[c[a]] == d;
+        if (near)
+          for (int a = 0; a < k; a++)
+            if (dist[c[a]] > d + 1) dist[c[a]] = d + 1, grew = 1;
+      }
+      if (!grew) break;
+    }
+    *restored = 0;
+    for (int64_t v = 0; v < nv; v++) {
+      double t = (double)dist[v] / R;
+      if (t < 1) ++*restored;
+      for (int r = 0; r < 3; r++)
+        m->xyz[3 * v + r] =
+            t >= 1 ? xa[3 * v + r] : x0[3 * v + r] + t * (xa[3 * v + r] - x0[3 * v + r]);
+    }
+    R *= 2;
+  }
+  vm_free(ctx, seed);
+  vm_free(ctx, dist);
+  vm_free(ctx, xa);
+  return VM_OK;
+}
+
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    vm_surface_summary *summary) {
   vm_surface_summary local;
@@ -332,7 +577,7 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
   if (st >= 0 && vm_ctx_interrupted(ctx)) st = VM_ERR_INTERRUPTED;
   /* the remeshed surface checked exactly: one that intersects itself is
    * given up for the repaired input, as the remeshing found it */
-  if (st >= 0 && s->remeshed && all_triangles(m) && all_triangles(input)) {
+  if (st >= 0 && (s->remeshed || s->cleaned) && all_triangles(m) && all_triangles(input)) {
     int64_t n = 0, n0 = 0;
     double at[3] = {0, 0, 0};
     st = count_pairs(m, &n, NULL, at);
@@ -347,7 +592,27 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
       *input = tmp;
       vm_mesh_destroy(&input);
       s->remeshed = 0;
+      s->cleaned = 0;
       s->remesh_refused = n;
+      /* the input's own vertices, its slivers removed, instead */
+      if (st >= 0 && n0 == 0 && o.size == VM_SURFACE_SIZE_UNIFORM) {
+        vm_surface_features f;
+        memset(&f, 0, sizeof f);
+        vm_mesh *keep = NULL;
+        int64_t n2 = 0;
+        st = vm_mesh_clone(m, &keep);
+        if (st >= 0) st = features(m, &o, s, &f);
+        if (st >= 0) st = clean(ctx, m, &o, s, &f);
+        vm_surface_features_free(ctx, &f);
+        if (st >= 0) st = count_pairs(m, &n2, NULL, NULL);
+        if (st >= 0 && n2 > 0) { /* not expected: then the input as it came */
+          vm_mesh tmp2 = *m;
+          *m = *keep;
+          *keep = tmp2;
+          s->cleaned = 0;
+        }
+        vm_mesh_destroy(&keep);
+      }
     }
     if (st >= 0) s->self_intersections = s->remesh_refused ? n0 : n;
   }
@@ -360,13 +625,54 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
   if (st >= 0 && o.step == VM_SURFACE_CURVATURE) st = curvature(ctx, m, &o, s);
   if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT))
     st = adapt(ctx, m, input ? input : m, &o, s);
-  /* the adapted surface checked exactly, folds taken back locally */
+  /* the adapted surface's angles: never below the smaller of the
+   * surface's before the adaptation and 20 degrees where the adaptation
+   * made them so; then checked exactly, folds taken back locally (and the
+   * angles once more if that moved anything) */
   if ((st >= 0 || st == VM_ERR_INTERRUPTED) && s->adapted && x0) {
-    int keep = st, b = vm_surface_unfold(m, x0, s);
+    double floor = s->adapt.min_angle_before < 20 ? s->adapt.min_angle_before : 20;
+    int64_t r1 = 0, r2 = 0;
+    int keep = st, b = keep_angles(m, x0, floor, &r1);
+    if (b >= 0) b = vm_surface_unfold(m, x0, s);
+    if (b >= 0 && s->adapt_backed_off > 0) b = keep_angles(m, x0, floor, &r2);
+    s->angle_floor = floor;
+    s->angle_restored = r1 > r2 ? r1 : r2;
     if (b < 0)
       st = b;
     else if (keep >= 0)
       st = s->self_intersections > 0 || s->adapt.flipped > 0 ? VM_WARN_INVERTED : VM_OK;
+    if (b >= 0 && s->angle_restored > 0)
+      vm_log(ctx, VM_LOG_INFO,
+             "adapt: the displacement of %lld vertices scaled back where the adaptation made an "
+             "angle smaller than "
+             "%.2f deg; smallest angle now %.2f deg",
+             (long long)s->angle_restored, floor, vm_surface_min_angle(m));
+  }
+  /* and, independently, against the repaired input's normals */
+  if (st >= 0 && all_triangles(m) && (input || x0)) {
+    vm_mesh *ref = input;
+    vm_mesh *tmp = NULL;
+    int b = VM_OK;
+    if (!ref) {
+      b = vm_mesh_clone(m, &tmp);
+      if (!b) memcpy(tmp->xyz, x0, 3 * (size_t)m->nv * sizeof *x0);
+      ref = tmp;
+    }
+    double at[3] = {0, 0, 0};
+    int64_t k = b ? b : count_opposing(ctx, m, ref, at);
+    vm_mesh_destroy(&tmp);
+    if (k < 0)
+      st = (int)k;
+    else {
+      s->opposing = k;
+      if (k > 0) {
+        vm_log(ctx, VM_LOG_WARN,
+               "%lld triangles are turned over against the input surface (their normal opposes "
+               "the input's at their centroid), e.g. near (%g, %g, %g)",
+               (long long)k, at[0], at[1], at[2]);
+        st = VM_WARN_INVERTED;
+      }
+    }
   }
   vm_free(ctx, x0);
   vm_mesh_destroy(&input);

@@ -1,6 +1,6 @@
 /* test/surface/gen_shape.c: writes the generated test surfaces of varmesh/shapes.h
  * (and broken variants) to a file, for the vm-surface CLI tests.
- * usage: gen_shape lens|sphere|cube|open|fin|flipped|needle OUT */
+ * usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle OUT */
 #include <stdio.h>
 #include <string.h>
 
@@ -9,7 +9,8 @@
 
 int main(int argc, char **argv) {
   if (argc != 3) {
-    fprintf(stderr, "usage: gen_shape lens|sphere|cube|open|fin|flipped|needle OUT\n");
+    fprintf(stderr,
+            "usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle OUT\n");
     return 2;
   }
   vm_ctx *ctx = NULL;
@@ -22,6 +23,8 @@ int main(int argc, char **argv) {
   int st = 0;
   if (!strcmp(k, "lens")) {
     st = vm_gen_lens(m, 1.0, 0.5, 0.1);
+  } else if (!strcmp(k, "spindle")) {
+    st = vm_gen_spindle(m, 48, 0.001);
   } else if (!strcmp(k, "cube") || !strcmp(k, "fin")) {
     st = vm_gen_cube(m, 3);
     if (!st && !strcmp(k, "fin")) { /* a third face on the edge of face 0 */
@@ -33,6 +36,12 @@ int main(int argc, char **argv) {
   } else {
     st = vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
     if (!st && !strcmp(k, "open")) m->ne -= 2;
+    if (!st && !strcmp(k, "inward")) /* every triangle reversed */
+      for (int64_t e = 0; e < m->ne; e++) {
+        int32_t *c = m->conn + 3 * e, s = c[1];
+        c[1] = c[2];
+        c[2] = s;
+      }
     if (!st && !strcmp(k, "flipped"))
       for (int64_t e = 10; e < 13; e++) {
         int32_t *c = m->conn + 3 * e, s = c[1];

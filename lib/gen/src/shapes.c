@@ -490,3 +490,36 @@ done:
   vm_free(ctx, off);
   return st ? rollback(m, nv0, ne0, st) : VM_OK;
 }
+
+int vm_gen_spindle(vm_mesh *m, int ns, double gap) {
+  if (!m || ns < 3 || !(gap > 0 && gap < 0.2)) return VM_ERR_ARG;
+  const double z[] = {-0.8, -0.6, -0.35, -0.1, 0, 0.2, 0.45, 0.45 + gap, 0.7, 0.85};
+  const int nz = (int)(sizeof z / sizeof z[0]);
+  int st = vm_mesh_set_vertices(m, 2 + (int64_t)nz * ns);
+  if (st) return st;
+  m->dim = 3;
+  m->xyz[0] = 0, m->xyz[1] = 0, m->xyz[2] = -1;
+  m->xyz[3] = 0, m->xyz[4] = 0, m->xyz[5] = 1;
+  for (int k = 0; k < nz; k++)
+    for (int s = 0; s < ns; s++) {
+      double r = 0.5 * (1 - fabs(z[k])), a = 2 * M_PI * s / ns;
+      double *p = m->xyz + 3 * (2 + (int64_t)k * ns + s);
+      p[0] = r * cos(a), p[1] = r * sin(a), p[2] = z[k];
+    }
+  for (int s = 0; s < ns && !st; s++) {
+    int32_t a = 2 + s, b = 2 + (s + 1) % ns;
+    int32_t t[3] = {0, b, a};
+    st = vm_mesh_add_element(m, VM_TRI, t);
+    int32_t c = 2 + (nz - 1) * ns + s, d = 2 + (nz - 1) * ns + (s + 1) % ns;
+    int32_t u[3] = {1, c, d};
+    if (!st) st = vm_mesh_add_element(m, VM_TRI, u);
+  }
+  for (int k = 0; k + 1 < nz && !st; k++)
+    for (int s = 0; s < ns && !st; s++) {
+      int32_t a = 2 + k * ns + s, b = 2 + k * ns + (s + 1) % ns, c = a + ns, d = b + ns;
+      int32_t t0[3] = {a, b, d}, t1[3] = {a, d, c};
+      st = vm_mesh_add_element(m, VM_TRI, t0);
+      if (!st) st = vm_mesh_add_element(m, VM_TRI, t1);
+    }
+  return st;
+}

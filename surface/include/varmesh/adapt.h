@@ -43,6 +43,8 @@ typedef struct vm_adapt_opts {
   double feature_angle; /* dihedral angle of sharp edges, degrees (default 20: the
                            creases of a faceted STL model are kept exactly) */
   double corner_angle;  /* turning angle of a feature line at a corner (default 50) */
+  double cone_angle;    /* angle deficit (degrees) of a cone point, a tip kept fixed like a
+                           corner (vm_surface_mark_cones; default 60; >= 360: none) */
   double theta;         /* balanced measure weight (default 0.8) */
   int max_iter;         /* minimizer iterations in all (default 200) */
   int rounds;           /* the metric is re-evaluated at the moved vertices and the

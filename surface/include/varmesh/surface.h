@@ -10,6 +10,7 @@
 #include "varmesh/adapt.h"
 #include "varmesh/curvature.h"
 #include "varmesh/mesh.h"
+#include "varmesh/cleanup.h"
 #include "varmesh/repair.h"
 
 #ifdef __cplusplus
@@ -19,22 +20,31 @@ extern "C" {
 typedef enum {
   VM_SURFACE_ALL = 0,   /* repair -> remesh (if needed) -> curvature -> adapt */
   VM_SURFACE_REPAIR,    /* repair only */
-  VM_SURFACE_REMESH,    /* repair -> isotropic remeshing */
+  VM_SURFACE_REMESH,    /* repair -> slivers removed (size UNIFORM: isotropic remeshing first) */
   VM_SURFACE_CURVATURE, /* the mean curvature fields only */
   VM_SURFACE_ADAPT      /* curvature -> adaptation (no remeshing) */
 } vm_surface_step;
+
+/* The sizing of the remeshing step. */
+enum { VM_SURFACE_SIZE_INPUT = 0, VM_SURFACE_SIZE_UNIFORM = 1 };
 
 /* Whether to run an optional step. */
 enum { VM_SURFACE_AUTO = 0, VM_SURFACE_YES = 1, VM_SURFACE_NO = 2 };
 
 typedef struct vm_surface_opts {
-  vm_surface_step step; /* default VM_SURFACE_ALL */
-  int repair;           /* AUTO (default): if `soup`, and always for the steps
-                           all, repair and remesh; the step repair always repairs */
-  int soup;             /* the input came as a polygon soup (.stl .obj .off .ply) */
-  int remesh;           /* in step all; AUTO (default): if the smallest angle
-                           is below sliver_angle */
-  double sliver_angle;  /* degrees (default 15) */
+  vm_surface_step step;         /* default VM_SURFACE_ALL */
+  int repair;                   /* AUTO (default): if `soup`, and always for the steps
+                                   all, repair and remesh; the step repair always repairs */
+  int soup;                     /* the input came as a polygon soup (.stl .obj .off .ply) */
+  int remesh;                   /* in step all; AUTO (default): if the smallest angle
+                                   is below sliver_angle */
+  double sliver_angle;          /* degrees (default 15) */
+  int size;                     /* what "remesh" means: VM_SURFACE_SIZE_INPUT (default):
+                                   the input's own vertices and grading, slivers removed
+                                   by flips and collapses (vm_surface_cleanup);
+                                   VM_SURFACE_SIZE_UNIFORM: isotropic remeshing to one
+                                   edge length (CGAL), then the same cleanup */
+  vm_cleanup_opts cleanup_opts; /* its angle is sliver_angle */
   vm_repair_opts repair_opts;
   vm_remesh_opts remesh_opts; /* target_edge_length <= 0 (default): the mean
                                  edge length of the (repaired) input */
@@ -52,7 +62,16 @@ typedef struct vm_surface_summary {
   int remeshed;
   double target_edge_length; /* of the remeshing */
   int64_t nv_before_remesh;
-  int curvature; /* the step curvature ran */
+  int cleaned;                 /* the sliver cleanup ran */
+  vm_cleanup_report cleanup;   /* its figures */
+  int64_t cones;               /* cone points kept as corners */
+  int64_t remesh_lost_corners; /* corners and tips the uniform remeshing lost, */
+  int64_t remesh_opposing;     /* ... or triangles it turned over against the input:
+                                  it was then given up for the input's vertices */
+  int64_t opposing;            /* triangles of the result turned over against the
+                                  (repaired) input: checked at the end */
+  double min_angle_free_input; /* smallest angle not at a feature corner, after the repair */
+  int curvature;               /* the step curvature ran */
   vm_curvature_stats curvature_stats;
   double threshold, cap; /* step curvature: the filter used */
   int adapted;
@@ -66,6 +85,9 @@ typedef struct vm_surface_summary {
                                repaired input (0: kept or not remeshed) */
   int64_t folds_found;      /* pairs the adaptation made, before backing off */
   int64_t adapt_backed_off; /* vertices put back where the adaptation folded */
+  double angle_floor;       /* the adaptation's smallest angle may not go below this:
+                               min(the smallest angle before it, 20 degrees) */
+  int64_t angle_restored;   /* vertices put back where it did */
   double fold_at[3];        /* a point of the first pair found */
 } vm_surface_summary;
 

@@ -63,6 +63,15 @@ int vm_gen_icosphere(vm_mesh *m, const double centre[3], double radius, int leve
  * 4 nc ns + 4 (nc - 1) triangles, oriented outward. */
 int vm_gen_wing(vm_mesh *m, int nc, int ns, double thickness, double sweep_deg);
 
+/* A spindle: two cones base to base along z, tips (cone points of half
+ * angle atan 0.5, angle deficit 199 degrees) at z = -1 and 1 as vertices 0
+ * and 1, radius 0.5 at z = 0 (a sharp ring), ns sectors and rings at z =
+ * -0.8, -0.6, -0.35, -0.1, 0, 0.2, 0.45, 0.45 + gap, 0.7, 0.85: a row of
+ * needles between the two close rings (gap 0.001: about 1.8 degrees at 48
+ * sectors). Closed, oriented outward, 2 + 10 ns vertices. ns >= 3, gap in
+ * (0, 0.2). */
+int vm_gen_spindle(vm_mesh *m, int ns, double gap);
+
 /* vm_gen_torus cells. */
 enum {
   VM_GEN_TORUS_TRI = 0,     /* each grid cell split along the same diagonal */

@@ -1,0 +1,79 @@
+/* varmesh/cleanup.h: sliver removal on a triangle surface without
+ * remeshing it: edge flips and edge collapses, each taken only where it
+ * raises the smallest angle of the triangles it touches and keeps the
+ * shape within a tolerance; no vertex moves and none is added, so the
+ * input's grading, its vertices (bit for bit) and its sharp features
+ * stay. Also the cone points (tips) a feature detection by dihedral angle
+ * does not see. */
+#ifndef VARMESH_CLEANUP_H
+#define VARMESH_CLEANUP_H
+
+#include <stdint.h>
+
+#include "varmesh/features.h"
+#include "varmesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct vm_cleanup_opts {
+  double angle;       /* triangles with a smaller angle (degrees) are worked on (default 15) */
+  double max_dev;     /* a move may change the surface by at most this much (absolute;
+                         <= 0: 2.5e-4 of the bounding-box diagonal, the default) ... */
+  double max_dev_rel; /* ... and by at most this fraction of the edge it works on
+                         (default 0.05) */
+  int rounds;         /* passes over the bad triangles (default 20) */
+} vm_cleanup_opts;
+
+vm_cleanup_opts vm_cleanup_opts_default(void);
+
+typedef struct vm_cleanup_report {
+  int64_t nv_in, nf_in, nv, nf;
+  int64_t flips, collapses;
+  int64_t below_in, below; /* triangles with an angle below opts.angle */
+  double min_angle_in, min_angle;
+  /* the same, not counting the angles at corners of the features (where
+   * the input's own corner angle bounds what any triangulation can do) */
+  double min_angle_free_in, min_angle_free;
+  double max_dev; /* the largest change of the surface the accepted moves made,
+                     added up where they follow each other */
+  int rounds;
+} vm_cleanup_report;
+
+/* Remove slivers (needles and caps) of the closed or open manifold
+ * triangle mesh m in place. f (features of m, not NULL) is respected:
+ * feature edges are never flipped and their vertices (corners, line
+ * vertices) and border vertices are never removed, so the features keep
+ * their shape exactly; only smooth vertices are collapsed away. A move is taken only if
+ * the smallest angle of the triangles it replaces rises, no triangle
+ * turns over (its normal stays within 60 degrees of the surface it
+ * replaces) and the surface moves by at most the tolerances, counting
+ * what the earlier moves around the same vertices changed (so a chain of
+ * collapses cannot walk away from the input). Vertices
+ * that stay keep their coordinates bit for bit and their order; vertex
+ * fields, flags and surface ids follow them; element fields follow the
+ * triangles if no flip was made, else they are dropped with a warning. On
+ * return f holds the features of the new mesh. Deterministic. Returns
+ * VM_OK, VM_ERR_ARG (not a triangle mesh, features of another mesh),
+ * VM_ERR_NOMEM. */
+int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts *o,
+                       vm_cleanup_report *r);
+
+/* Smallest angle (degrees) of the triangles of m, and the smallest not at a
+ * corner of f (f may be NULL: no corners). */
+double vm_surface_min_angle_free(const vm_mesh *m, const vm_surface_features *f, double *min_all);
+
+/* Cone points: an inner vertex that is not a corner of f and whose angle
+ * deficit |360 - sum of its triangle angles| is at least `cone_deg`
+ * degrees (a tip, a spinner, a tail cone: a cone of half-angle a has
+ * 360 (1 - sin a); a plane, a cylinder or a ridge has 0) becomes a corner
+ * of f (lines keep their numbers; a line vertex made a corner ends its
+ * line there for the operations that read vclass). Returns the number of
+ * vertices marked, or a negative status. */
+int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double cone_deg);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

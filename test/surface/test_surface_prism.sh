@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# test/surface/test_surface_prism.sh: what vm-surface writes with its
+# defaults, vm-prism takes, on surfaces built to be hard: a spindle (two
+# cone points, a row of 1.8-degree needles, a sharp ring), an icosphere
+# oriented inwards, and a graded wing with a sharp trailing edge
+# (vm-gen wing: needles 1,500 times longer than wide). The spindle's tips
+# stay vertices, bit for bit, its row of needles goes, and the wing's
+# grading stays (no remeshing to one edge length).
+set -u
+gen=$1 surf=$2 prism=$3 vmgen=$4 conv=$5
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+fail=0
+check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
+
+"$gen" spindle "$dir/sp.stl"
+"$surf" -q --json "$dir/sp.stl" "$dir/sp.vmsh" >"$dir/sp.json" 2>"$dir/sp.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"size\": \"input\"" "$dir/sp.json" && grep -q "\"cones\": 2," "$dir/sp.json"' \
+  "spindle: exit 0, input size, two cone points (got $rc: $(cat "$dir/sp.err"))"
+below_in=$(sed -n 's/.*"below_in": \([0-9]*\).*/\1/p' "$dir/sp.json")
+below=$(sed -n 's/.*"below": \([0-9]*\).*/\1/p' "$dir/sp.json")
+check '[ -n "$below" ] && [ "$below" -lt "$below_in" ]' "spindle: fewer slivers ($below_in -> $below)"
+"$conv" -q "$dir/sp.vmsh" "$dir/sp.off"
+check 'grep -qx "0 0 1" "$dir/sp.off" && grep -qx "0 0 -1" "$dir/sp.off"' "spindle: both tips still vertices, bit for bit"
+amin=$(sed -n 's/.*"slivers": {[^}]*"min_angle": \([0-9.e+-]*\),.*/\1/p' "$dir/sp.json")
+check 'awk -v a="$amin" "BEGIN { exit !(a > 3) }"' "spindle: the row of 1.8-degree needles is gone (smallest angle $amin)"
+"$prism" -q --json -t 0.05 -n 5 "$dir/sp.vmsh" "$dir/spp.vmsh" >"$dir/spp.json" 2>"$dir/spp.err"
+check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/spp.json"' "spindle: vm-prism takes it ($(tail -n 1 "$dir/spp.err"))"
+
+"$gen" inward "$dir/in.stl"
+"$surf" -q --json --iter 20 "$dir/in.stl" "$dir/in.vmsh" >"$dir/in.json" 2>&1
+check '[ $? -eq 0 ] && grep -q "\"reoriented\": 1280" "$dir/in.json"' "inward sphere: vm-surface turns it"
+"$prism" -q --json -t 0.05 -n 5 "$dir/in.vmsh" "$dir/inp.vmsh" >"$dir/inp.json" 2>"$dir/inp.err"
+check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/inp.json"' "inward sphere: vm-prism takes vm-surface's result"
+
+"$vmgen" wing "$dir/w.stl" >/dev/null
+"$surf" -q --json --iter 40 "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
+rc=$?
+nf=$(sed -n 's/.*"faces": \([0-9]*\), "repair".*/\1/p' "$dir/w.json")
+check '[ $rc -eq 0 ] && [ -n "$nf" ] && [ "$nf" -ge 4000 ]' \
+  "graded wing: exit 0, grading kept (5,756 triangles in, $nf out; uniform remeshing gave 430)"
+check 'grep -q "\"self_intersections\": 0," "$dir/w.json"' "graded wing: no intersecting pair"
+"$prism" -q --json -t 0.05 -n 3 "$dir/w.vmsh" "$dir/wp.vmsh" >"$dir/wp.json" 2>"$dir/wp.err"
+check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wp.json"' "graded wing: vm-prism takes vm-surface's result ($(tail -n 1 "$dir/wp.err"))"
+
+# the uniform remeshing (CGAL) of the wing folds triangles over where its
+# details are far finer than the edge length: caught, and the run goes on
+# with the input's vertices
+"$surf" -q --json --iter 10 --size uniform "$dir/w.stl" "$dir/wu.vmsh" >"$dir/wu.json" 2>"$dir/wu.err"
+rc=$?
+ro=$(sed -n 's/.*"remesh_opposing": \([0-9]*\).*/\1/p' "$dir/wu.json")
+check '[ $rc -eq 0 ] && grep -q "\"opposing\": 0," "$dir/wu.json" && [ -n "$ro" ]' \
+  "graded wing, --size uniform: exit 0, nothing turned over in the result (got $rc)"
+if [ "${ro:-0}" -gt 0 ]; then
+  check 'grep -q "turned $ro triangles over against the input" "$dir/wu.err" && grep -q "\"remeshed\": false" "$dir/wu.json"' \
+    "graded wing, --size uniform: the remeshing's $ro folds are said and it is given up"
+fi
+
+exit $fail
