@@ -22,6 +22,7 @@
 #include "varmesh/io.h"
 #include "varmesh/project.h"
 #include "varmesh/repair.h"
+#include "varmesh/surface_mesh.h"
 
 typedef struct {
   double v;
@@ -111,21 +112,6 @@ static void tri_normal(const vm_mesh *m, int64_t e, double n[3], double ctr[3]) 
   n[2] = u[0] * v[1] - u[1] * v[0];
 }
 
-/* Triangles of m whose normal opposes (dot <= 0) the input's normal at
- * the closest input point of their centroid: inverted with respect to
- * the surface they lie on. An independent check of "no flipped triangle". */
-static int64_t count_opposing(const vm_mesh *m, vm_surface_projector *pin) {
-  vm_surface_ops ops = vm_surface_projector_ops(pin);
-  int64_t k = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    double n[3], ctr[3], q[3], nr[9];
-    tri_normal(m, e, n, ctr);
-    if (ops.project(ops.user, 0, ctr, q, nr) < 0) return -1;
-    k += n[0] * nr[0] + n[1] * nr[1] + n[2] * nr[2] <= 0;
-  }
-  return k;
-}
-
 /* Triangles whose orientation reversed between a and b (same connectivity). */
 static int64_t count_reversed(const vm_mesh *a, const vm_mesh *b) {
   int64_t k = 0;
@@ -181,7 +167,7 @@ static figures measure(const vm_mesh *m, const vm_mesh *input, vm_surface_projec
   vm_surface_hausdorff(m, input, spacing, &ab, &ba);
   f.hausdorff = fmax(ab, ba);
   f.min_angle = vm_surface_min_angle(m);
-  f.opposing = count_opposing(m, pin);
+  f.opposing = vm_surface_count_opposing(m, pin, NULL);
   free(L);
   free(H);
   return f;
@@ -273,8 +259,11 @@ int main(int argc, char **argv) {
      * length of the input's edges there */
     {
       vm_surface_features fc;
-      vm_surface_detect_features(input, ao.feature_angle, ao.corner_angle, &fc);
-      int64_t ncone = vm_surface_mark_cones(input, &fc, ao.cone_angle);
+      int64_t ncone = 0;
+      vm_surface_detect_features_cones(input, ao.feature_angle, ao.corner_angle, ao.cone_angle, &fc,
+                                       &ncone);
+      vm_surf_edges E;
+      vm_surf_edges_build(ctx, input, &E);
       double worst = 0, worst_rel = 0;
       int64_t moved = 0;
       for (int64_t v = 0; v < input->nv; v++) {
@@ -288,16 +277,11 @@ int main(int argc, char **argv) {
           if (d < best) best = d;
         }
         double len = 0;
-        int nl = 0;
-        for (int64_t e = 0; e < input->ne; e++) {
-          const int32_t *c = input->conn + 3 * e;
-          for (int a = 0; a < 3; a++)
-            if (c[a] == v) {
-              const double *q = input->xyz + 3 * (int64_t)c[(a + 1) % 3];
-              len += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                          (p[2] - q[2]) * (p[2] - q[2]));
-              nl++;
-            }
+        int64_t nl = E.rowptr[v + 1] - E.rowptr[v];
+        for (int64_t j = E.rowptr[v]; j < E.rowptr[v + 1]; j++) {
+          const double *q = input->xyz + 3 * (int64_t)E.adj[j];
+          len += sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                      (p[2] - q[2]) * (p[2] - q[2]));
         }
         double rel = nl && len > 0 ? best / (len / nl) : 0;
         if (best > 0) moved++;
@@ -308,6 +292,7 @@ int main(int argc, char **argv) {
              "the result on them; farthest %.4g = %.3f of the local edge length\n",
              (long long)fc.ncorner, (long long)ncone, (long long)moved, worst, worst_rel);
       vm_surface_features_free(ctx, &fc);
+      vm_surf_edges_free(ctx, &E);
     }
     int ok = fe.spearman_raw <= -0.5 && fe.hausdorff <= 1e-3 * diag && fe.opposing == 0 &&
              fe.min_angle >= 15;

@@ -5,7 +5,6 @@
 
 #include <math.h>
 #include <omp.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "varmesh/surface_mesh.h"
@@ -36,26 +35,14 @@ vm_adapt_opts vm_adapt_opts_default(void) {
 }
 
 double vm_surface_min_angle(const vm_mesh *m) {
-  double cmax = -1; /* largest cosine = smallest angle */
+  double mn = 180.0;
   for (int64_t e = 0; e < m->ne; e++) {
     int t = m->etype[e];
     if (t != VM_TRI && t != VM_QUAD) continue;
-    int k = vm_elem_nverts(t);
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int a = 0; a < k; a++) {
-      const double *p = m->xyz + 3 * (int64_t)c[a];
-      const double *q = m->xyz + 3 * (int64_t)c[(a + 1) % k];
-      const double *r = m->xyz + 3 * (int64_t)c[(a + k - 1) % k];
-      double u[3], v[3];
-      vm_sub3(q, p, u);
-      vm_sub3(r, p, v);
-      double lu = vm_norm3(u), lv = vm_norm3(v);
-      double cs = lu > 0 && lv > 0 ? vm_dot3(u, v) / (lu * lv) : 1.0;
-      if (cs > cmax) cmax = cs;
-    }
+    double a = vm_surface_elem_min_angle(m, m->xyz, e);
+    if (a < mn) mn = a;
   }
-  if (cmax < -1) return 180.0;
-  return acos(cmax > 1 ? 1 : cmax) * 180.0 / M_PI;
+  return mn;
 }
 
 double vm_surface_mean_edge(const vm_mesh *m) {
@@ -258,14 +245,9 @@ int vm_surface_adapt(vm_mesh *m, vm_surface_projector *ref, const vm_adapt_opts 
   element_normals(m, m->xyz, en0);
 
   /* features and the surfaces the vertices stay on */
-  if ((st = vm_surface_detect_features(m, o.feature_angle, o.corner_angle, &f))) goto done;
-  if (o.cone_angle < 360) {
-    int64_t nc = vm_surface_mark_cones(m, &f, o.cone_angle);
-    if (nc < 0) {
-      st = (int)nc;
-      goto done;
-    }
-  }
+  if ((st = vm_surface_detect_features_cones(m, o.feature_angle, o.corner_angle, o.cone_angle, &f,
+                                             NULL)))
+    goto done;
   if ((st = vm_surface_projector_create(ctx, m, &f, &own))) goto done;
   hproj = own;
   vm_surface_ops ops = vm_surface_projector_ops(ref ? ref : own);

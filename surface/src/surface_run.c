@@ -3,6 +3,7 @@
 #include "varmesh/surface.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -85,17 +86,14 @@ static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
 }
 
 static int all_triangles(const vm_mesh *m);
+static int count_pairs(vm_mesh *m, int64_t *count, int32_t **pairs, double *where);
 
 /* The features of m for the remeshing: by dihedral angle, and cone points
  * as corners. */
 static int features(vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
                     vm_surface_features *f) {
-  int st = vm_surface_detect_features(m, o->adapt.feature_angle, o->adapt.corner_angle, f);
-  if (st) return st;
-  int64_t nc = o->adapt.cone_angle < 360 ? vm_surface_mark_cones(m, f, o->adapt.cone_angle) : 0;
-  if (nc < 0) return (int)nc;
-  s->cones = nc;
-  return VM_OK;
+  return vm_surface_detect_features_cones(m, o->adapt.feature_angle, o->adapt.corner_angle,
+                                          o->adapt.cone_angle, f, &s->cones);
 }
 
 /* Slivers removed by flips and collapses (f: m's features, updated). */
@@ -147,36 +145,12 @@ static int64_t lost_points(vm_ctx *ctx, const vm_mesh *m, const double *pts, int
   return lost;
 }
 
-/* Triangles of m whose normal opposes (dot <= 0) the normal of ref at the
- * closest point of their centroid: turned over against the surface they
- * lie on (a fold the intersection test does not see). *at: the first
- * one's centroid. A negative status on failure. */
+/* vm_surface_count_opposing against the surface ref. */
 static int64_t count_opposing(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, double at[3]) {
   vm_surface_projector *p = NULL;
   int st = vm_surface_projector_create(ctx, ref, NULL, &p);
   if (st) return st;
-  vm_surface_ops ops = vm_surface_projector_ops(p);
-  int64_t k = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    if (m->etype[e] != VM_TRI) continue;
-    const int32_t *c = m->conn + m->eoff[e];
-    const double *a = m->xyz + 3 * (int64_t)c[0], *b = m->xyz + 3 * (int64_t)c[1],
-                 *d = m->xyz + 3 * (int64_t)c[2];
-    double u[3], w[3], n[3], ctr[3], q[3], nr[9];
-    vm_sub3(b, a, u);
-    vm_sub3(d, a, w);
-    vm_cross3(u, w, n);
-    for (int r = 0; r < 3; r++) ctr[r] = (a[r] + b[r] + d[r]) / 3;
-    int nn = ops.project(ops.user, 0, ctr, q, nr);
-    if (nn < 0) {
-      k = nn;
-      break;
-    }
-    if (vm_dot3(n, nr) <= 0) {
-      if (!k && at) memcpy(at, ctr, sizeof ctr);
-      k++;
-    }
-  }
+  int64_t k = vm_surface_count_opposing(m, p, at);
   vm_surface_projector_destroy(&p);
   return k;
 }
@@ -197,7 +171,6 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   vm_mesh *m2 = NULL;
   int st = vm_mesh_clone(m, input);
   if (!st) st = features(m, o, s, &f);
-  if (!st) s->min_angle_free_input = vm_surface_min_angle_free(m, &f, NULL);
   double *keep = NULL; /* the corners' coordinates: the remeshing must keep them */
   int64_t nkeep = 0;
   if (!st && uniform) {
@@ -209,30 +182,39 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   }
   if (!st && uniform) {
     st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
-    int64_t lost = 0, first = -1, opposing = 0;
+    /* CGAL 5.5 can collapse a constrained tip, fold a triangle over where
+     * details are far smaller than the edge length, or make the surface
+     * intersect itself: the input's own vertices then */
+    int64_t lost = 0, first = -1, opposing = 0, pairs = 0, pairs0 = 0;
     double at[3] = {0, 0, 0};
     if (!st) lost = lost_points(ctx, m, keep, nkeep, &first);
     if (lost < 0) st = (int)lost;
     if (!st && lost == 0) opposing = count_opposing(ctx, m, *input, at);
     if (opposing < 0) st = (int)opposing;
-    if (!st && (lost > 0 || opposing > 0)) {
-      /* CGAL 5.5 can collapse a constrained tip, or fold a triangle over
-       * where details are far smaller than the edge length: the input's
-       * vertices then */
-      if (lost > 0) {
-        const double *p = keep + 3 * first;
-        vm_log(ctx, VM_LOG_WARN,
-               "remesh: the uniform remeshing lost %lld of %lld corners and tips, e.g. at (%g, "
-               "%g, %g); going on with the input's own vertices (--size input)",
-               (long long)lost, (long long)nkeep, p[0], p[1], p[2]);
-      } else
-        vm_log(ctx, VM_LOG_WARN,
-               "remesh: the uniform remeshing turned %lld triangles over against the input "
-               "(folds), e.g. near (%g, %g, %g); going on with the input's own vertices (--size "
-               "input)",
-               (long long)opposing, at[0], at[1], at[2]);
+    if (!st && lost == 0 && opposing == 0 && all_triangles(*input)) {
+      st = count_pairs(m, &pairs, NULL, at);
+      if (st >= 0 && pairs > 0) st = count_pairs(*input, &pairs0, NULL, NULL);
+      if (pairs <= pairs0) pairs = 0;
+    }
+    if (!st && (lost > 0 || opposing > 0 || pairs > 0)) {
+      const double *p = lost > 0 ? keep + 3 * first : at;
+      char why[128];
+      if (lost > 0)
+        snprintf(why, sizeof why, "lost %lld of %lld corners and tips, e.g. at", (long long)lost,
+                 (long long)nkeep);
+      else if (opposing > 0)
+        snprintf(why, sizeof why, "turned %lld triangles over against the input (folds), e.g. near",
+                 (long long)opposing);
+      else
+        snprintf(why, sizeof why, "intersects itself (%lld triangle pairs), e.g. near",
+                 (long long)pairs);
+      vm_log(ctx, VM_LOG_WARN,
+             "remesh: the uniform remeshing %s (%g, %g, %g); going on with the input's own "
+             "vertices (--size input)",
+             why, p[0], p[1], p[2]);
       s->remesh_lost_corners = lost;
       s->remesh_opposing = opposing;
+      s->remesh_refused = pairs;
       vm_surface_features_free(ctx, &f);
       vm_mesh_destroy(&m2);
       st = vm_mesh_clone(*input, &m2);
@@ -456,22 +438,6 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   return VM_OK;
 }
 
-/* Smallest corner angle (degrees) of 2D element e with coordinates x. */
-static double elem_min_deg(const vm_mesh *m, const double *x, int64_t e) {
-  int k = vm_elem_nverts(m->etype[e]);
-  const int32_t *c = m->conn + m->eoff[e];
-  double mn = 180;
-  for (int a = 0; a < k; a++) {
-    double u[3], w[3], cr[3];
-    vm_sub3(x + 3 * (int64_t)c[(a + 1) % k], x + 3 * (int64_t)c[a], u);
-    vm_sub3(x + 3 * (int64_t)c[(a + k - 1) % k], x + 3 * (int64_t)c[a], w);
-    vm_cross3(u, w, cr);
-    double d = atan2(vm_norm3(cr), vm_dot3(u, w)) * (180.0 / 3.14159265358979323846);
-    if (d < mn) mn = d;
-  }
-  return mn;
-}
-
 /* The adaptation may not make the smallest angle worse than `floor`:
  * around the elements whose smallest angle fell below min(floor, their
  * own before), the adaptation's displacement (x - x0) is scaled down
@@ -499,8 +465,9 @@ static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *rest
     bad = 0;
     for (int64_t e = 0; e < m->ne; e++) {
       if (vm_elem_dim(m->etype[e]) != 2) continue;
-      double now = elem_min_deg(m, m->xyz, e);
-      if (now >= floor || now >= elem_min_deg(m, x0, e)) continue;
+      double now = vm_surface_elem_min_angle(m, m->xyz, e);
+      /* (rounding aside: 1e-9 degrees) */
+      if (now >= floor - 1e-9 || now >= vm_surface_elem_min_angle(m, x0, e) - 1e-9) continue;
       bad++;
       const int32_t *c = m->conn + m->eoff[e];
       for (int a = 0; a < vm_elem_nverts(m->etype[e]); a++) seed[c[a]] = 1;
@@ -575,10 +542,12 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
         (o.remesh == VM_SURFACE_AUTO && s->min_angle_input < o.sliver_angle))))
     st = remesh(ctx, m, &o, s, &input);
   if (st >= 0 && vm_ctx_interrupted(ctx)) st = VM_ERR_INTERRUPTED;
-  /* the remeshed surface checked exactly: one that intersects itself is
-   * given up for the repaired input, as the remeshing found it */
+  /* the remeshed surface checked exactly (the uniform remeshing has been
+   * already): one that intersects itself is given up for the repaired
+   * input, as the remeshing found it */
   if (st >= 0 && (s->remeshed || s->cleaned) && all_triangles(m) && all_triangles(input)) {
     int64_t n = 0, n0 = 0;
+    int refused = 0;
     double at[3] = {0, 0, 0};
     st = count_pairs(m, &n, NULL, at);
     if (st >= 0 && n > 0) st = count_pairs(input, &n0, NULL, NULL);
@@ -594,27 +563,9 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
       s->remeshed = 0;
       s->cleaned = 0;
       s->remesh_refused = n;
-      /* the input's own vertices, its slivers removed, instead */
-      if (st >= 0 && n0 == 0 && o.size == VM_SURFACE_SIZE_UNIFORM) {
-        vm_surface_features f;
-        memset(&f, 0, sizeof f);
-        vm_mesh *keep = NULL;
-        int64_t n2 = 0;
-        st = vm_mesh_clone(m, &keep);
-        if (st >= 0) st = features(m, &o, s, &f);
-        if (st >= 0) st = clean(ctx, m, &o, s, &f);
-        vm_surface_features_free(ctx, &f);
-        if (st >= 0) st = count_pairs(m, &n2, NULL, NULL);
-        if (st >= 0 && n2 > 0) { /* not expected: then the input as it came */
-          vm_mesh tmp2 = *m;
-          *m = *keep;
-          *keep = tmp2;
-          s->cleaned = 0;
-        }
-        vm_mesh_destroy(&keep);
-      }
+      refused = 1;
     }
-    if (st >= 0) s->self_intersections = s->remesh_refused ? n0 : n;
+    if (st >= 0) s->self_intersections = refused ? n0 : n;
   }
   double *x0 = NULL;
   if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT)) {

@@ -134,6 +134,41 @@ static int tris_only(const vm_mesh *m) {
   return m->ne > 0;
 }
 
+double vm_surface_elem_min_angle(const vm_mesh *m, const double *x, int64_t e) {
+  int k = vm_elem_nverts(m->etype[e]);
+  const int32_t *c = m->conn + m->eoff[e];
+  double mn = 180;
+  for (int a = 0; a < k; a++) {
+    double d = corner_deg(x + 3 * (int64_t)c[a], x + 3 * (int64_t)c[(a + 1) % k],
+                          x + 3 * (int64_t)c[(a + k - 1) % k]);
+    if (d < mn) mn = d;
+  }
+  return mn;
+}
+
+int64_t vm_surface_count_opposing(const vm_mesh *m, vm_surface_projector *ref, double at[3]) {
+  if (!m || !ref) return VM_ERR_ARG;
+  vm_surface_ops ops = vm_surface_projector_ops(ref);
+  int64_t k = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_TRI) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    double n[3], ctr[3], q[3], nr[9];
+    tri_normal(m->xyz, c[0], c[1], c[2], n);
+    for (int r = 0; r < 3; r++)
+      ctr[r] = (m->xyz[3 * (int64_t)c[0] + r] + m->xyz[3 * (int64_t)c[1] + r] +
+                m->xyz[3 * (int64_t)c[2] + r]) /
+               3;
+    int nn = ops.project(ops.user, 0, ctr, q, nr);
+    if (nn < 0) return nn;
+    if (vm_dot3(n, nr) <= 0) {
+      if (!k && at) memcpy(at, ctr, sizeof ctr);
+      k++;
+    }
+  }
+  return k;
+}
+
 double vm_surface_min_angle_free(const vm_mesh *m, const vm_surface_features *f, double *min_all) {
   double mf = 180, ma = 180;
   if (m)
@@ -189,6 +224,20 @@ int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double c
   return marked;
 }
 
+int vm_surface_detect_features_cones(const vm_mesh *m, double angle_deg, double corner_deg,
+                                     double cone_deg, vm_surface_features *f, int64_t *ncones) {
+  if (ncones) *ncones = 0;
+  int st = vm_surface_detect_features(m, angle_deg, corner_deg, f);
+  if (st || cone_deg >= 360) return st;
+  int64_t nc = vm_surface_mark_cones(m, f, cone_deg);
+  if (nc < 0) {
+    vm_surface_features_free(m->ctx, f);
+    return (int)nc;
+  }
+  if (ncones) *ncones = nc;
+  return VM_OK;
+}
+
 /* ---- the working mesh ---- */
 
 #define RING_MAX 512
@@ -205,7 +254,6 @@ typedef struct {
   hmap he;     /* directed edge (a, b) -> halfedge 3 f + i */
   hmap fe;     /* feature edges */
   const uint8_t *vclass;
-  const int32_t *vline;
   double tol_abs, tol_rel, thr;
   int64_t bad_keys;
   /* scratch: the rings and neighbours of a collapse */
@@ -514,7 +562,6 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   c.nv = m->nv;
   c.nf = m->ne;
   c.vclass = f->vclass;
-  c.vline = f->vline;
   double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi);
   c.tol_abs = o.max_dev > 0 ? o.max_dev : 2.5e-4 * diag;
   c.tol_rel = o.max_dev_rel;

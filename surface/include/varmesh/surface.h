@@ -70,7 +70,6 @@ typedef struct vm_surface_summary {
                                   it was then given up for the input's vertices */
   int64_t opposing;            /* triangles of the result turned over against the
                                   (repaired) input: checked at the end */
-  double min_angle_free_input; /* smallest angle not at a feature corner, after the repair */
   int curvature;               /* the step curvature ran */
   vm_curvature_stats curvature_stats;
   double threshold, cap; /* step curvature: the filter used */

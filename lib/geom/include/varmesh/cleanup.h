@@ -12,6 +12,7 @@
 
 #include "varmesh/features.h"
 #include "varmesh/mesh.h"
+#include "varmesh/project.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -60,6 +61,17 @@ typedef struct vm_cleanup_report {
 int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts *o,
                        vm_cleanup_report *r);
 
+/* Smallest corner angle (degrees) of the 2D element e of m with the
+ * vertex coordinates x (m->xyz or another position of m's vertices). */
+double vm_surface_elem_min_angle(const vm_mesh *m, const double *x, int64_t e);
+
+/* Triangles of the surface m whose normal opposes (dot <= 0) the normal of
+ * the projector's reference surface at the closest point of their
+ * centroid: turned over against the surface they lie on (a fold the
+ * intersection test does not see). at (may be NULL): the first one's
+ * centroid. A negative status on failure. */
+int64_t vm_surface_count_opposing(const vm_mesh *m, vm_surface_projector *ref, double at[3]);
+
 /* Smallest angle (degrees) of the triangles of m, and the smallest not at a
  * corner of f (f may be NULL: no corners). */
 double vm_surface_min_angle_free(const vm_mesh *m, const vm_surface_features *f, double *min_all);
@@ -72,6 +84,11 @@ double vm_surface_min_angle_free(const vm_mesh *m, const vm_surface_features *f,
  * line there for the operations that read vclass). Returns the number of
  * vertices marked, or a negative status. */
 int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double cone_deg);
+
+/* vm_surface_detect_features, then vm_surface_mark_cones unless cone_deg
+ * >= 360; *ncones (may be NULL): the cone points marked. */
+int vm_surface_detect_features_cones(const vm_mesh *m, double angle_deg, double corner_deg,
+                                     double cone_deg, vm_surface_features *f, int64_t *ncones);
 
 #ifdef __cplusplus
 }
