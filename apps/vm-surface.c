@@ -32,6 +32,7 @@ static void progress(void *user, const vm_adapt_progress *p) {
 typedef struct {
   const char *in, *out, *report_dir;
   int json, fout, every, edge_length_given;
+  int triangles;       /* --triangles, 0: not given */
   int size;            /* -1: not given */
   double c_abs, c_rel; /* --c, --c-rel: < 0 if not given */
   vm_surface_opts so;
@@ -50,7 +51,7 @@ static int opt_edge_length(vm_cli *cli, const vm_opt *opt, const char *val, void
 #define A(f) offsetof(args, f)
 static const char *const steps[] = {"all", "repair", "remesh", "curvature", "adapt", NULL};
 static const char *const tri[] = {"auto", "yes", "no", NULL};
-static const char *const sizes[] = {"input", "uniform", NULL};
+static const char *const sizes[] = {"input", "uniform", "graded", "curvature", NULL};
 static const vm_opt opts[] = {
     {"--repair", NULL, VM_OPT_CHOICE, A(so.repair), NULL,
      "repair the input (auto: for .stl .obj .off .ply inputs, and always for the steps all, "
@@ -64,9 +65,17 @@ static const vm_opt opts[] = {
      "remeshing in 'all' (auto: if the smallest angle is below --sliver-angle)", .choices = tri},
     {"--size", NULL, VM_OPT_CHOICE, A(size), NULL,
      "what the remeshing keeps: input (default: the input's vertices and grading, slivers "
-     "removed by edge flips and collapses) or uniform (isotropic remeshing to one edge length, "
-     "then the same sliver removal; the default with --target-edge-length)",
+     "removed by edge flips and collapses); graded (isotropic remeshing to the input's own "
+     "local edge lengths, grown by at most 25 % per edge length); curvature (isotropic "
+     "remeshing to sizes from the curvature, about the input's number of triangles); uniform "
+     "(isotropic remeshing to one edge length, CGAL; the default with --target-edge-length). "
+     "Every one ends with the same sliver removal; a remeshing that loses a tip, folds or "
+     "intersects is given up for input, with a warning",
      .choices = sizes},
+    {"--triangles", NULL, VM_OPT_INT, A(triangles), "N",
+     "about N triangles: the sizes of graded, curvature and uniform scaled to it (default: "
+     "graded as the input, curvature and uniform the input's count)",
+     .lo = 4, .hi = 2e9},
     {"--cone-angle", NULL, VM_OPT_DOUBLE, A(so.adapt.cone_angle), "DEG",
      "angle deficit of a cone point (a tip), kept like a corner (default 60; 360: none)",
      .lo = 1e-6, .hi = 360},
@@ -163,11 +172,30 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     printf("}");
   }
   printf(", \"size\": \"%s\", \"remeshed\": %s",
-         a->so.size == VM_SURFACE_SIZE_UNIFORM ? "uniform" : "input",
+         a->so.size == VM_SURFACE_SIZE_UNIFORM     ? "uniform"
+         : a->so.size == VM_SURFACE_SIZE_GRADED    ? "graded"
+         : a->so.size == VM_SURFACE_SIZE_CURVATURE ? "curvature"
+                                                   : "input",
          s->remeshed ? "true" : "false");
-  if (s->remeshed) {
+  if (s->remeshed && a->so.size == VM_SURFACE_SIZE_UNIFORM) {
     printf(", \"target_edge_length\": ");
     vm_json_double(stdout, s->target_edge_length);
+  }
+  if (s->remeshed && a->so.size != VM_SURFACE_SIZE_UNIFORM) {
+    const vm_graded_report *g = &s->graded;
+    printf(", \"graded\": {\"vertices_in\": %lld, \"vertices\": %lld, \"faces_in\": %lld, "
+           "\"faces\": %lld, \"splits\": %lld, \"collapses\": %lld, \"flips\": %lld, "
+           "\"moves\": %lld, \"size_min\": ",
+           (long long)g->nv_in, (long long)g->nv, (long long)g->nf_in, (long long)g->nf,
+           (long long)g->splits, (long long)g->collapses, (long long)g->flips, (long long)g->moves);
+    vm_json_double(stdout, g->h_min);
+    printf(", \"size_max\": ");
+    vm_json_double(stdout, g->h_max);
+    printf(", \"min_angle_in\": ");
+    vm_json_double(stdout, g->min_angle_in);
+    printf(", \"min_angle\": ");
+    vm_json_double(stdout, g->min_angle);
+    printf("}");
   }
   if (s->cleaned) {
     const vm_cleanup_report *c = &s->cleanup;
@@ -327,9 +355,20 @@ int main(int argc, char **argv) {
   a.so.size = a.size >= 0           ? a.size
               : a.edge_length_given ? VM_SURFACE_SIZE_UNIFORM
                                     : VM_SURFACE_SIZE_INPUT;
-  if (a.size == VM_SURFACE_SIZE_INPUT && a.edge_length_given)
+  if (a.so.size != VM_SURFACE_SIZE_UNIFORM && a.edge_length_given)
     vm_log(cli.ctx, VM_LOG_WARN,
-           "--target-edge-length has no effect with --size input (it is the uniform size)");
+           "--target-edge-length has no effect with --size %s (it is the uniform size)",
+           sizes[a.so.size]);
+  if (a.triangles > 0) {
+    if (a.so.size == VM_SURFACE_SIZE_INPUT)
+      vm_log(cli.ctx, VM_LOG_WARN, "--triangles has no effect with --size input");
+    a.so.graded_opts.triangles = a.triangles;
+    a.so.triangles = a.triangles;
+  }
+  /* a remeshing asked for by name runs whatever the smallest angle */
+  if (a.so.remesh == VM_SURFACE_AUTO && a.so.size != VM_SURFACE_SIZE_INPUT &&
+      (a.size >= 0 || a.edge_length_given || a.triangles > 0))
+    a.so.remesh = VM_SURFACE_YES;
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO)
     a.fout = vm_format_from_path(a.in);
   if (a.report_dir) { /* made (or refused) before the run */

@@ -10,6 +10,8 @@
 # (vm-surface --json); the input's corners and tips without a vertex of
 # the result on them, and the farthest, relative to the local edge
 # length; CPU seconds (user + system, 1 thread).
+# SIZES="input graded curvature uniform" (environment; default: the
+# defaults only) adds one row per --size for the newer build.
 # Shapes: bench/surface_shapes.py (spindle: cone points and a row of
 # needles; slivers: an icosphere with pulled vertices; inward: reversed),
 # vm-gen wing (graded, sharp trailing edge), vm-gen aircraft (coarse and
@@ -59,10 +61,11 @@ echo "| case | build | triangles in / out | smallest angle in / out | under 15 d
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for c in $cases; do
   read -r nin ain uin <<<"$(angles "$tmp/$c.stl")"
-  for b in ${before:+before} after; do
+  for b in ${before:+before} ${SIZES:-after}; do
     bin=$build/apps; [ "$b" = before ] && bin=$before/apps
+    opts=; case $b in before|after) ;; *) opts="--size $b" ;; esac
     out=$tmp/$c.$b.vmsh
-    /usr/bin/time -f "%U %S" -o "$tmp/time" "$bin/vm-surface" --json -q --threads 1 \
+    /usr/bin/time -f "%U %S" -o "$tmp/time" "$bin/vm-surface" --json -q --threads 1 $opts \
       "$tmp/$c.stl" "$out" >"$tmp/json" 2>"$tmp/err"
     rc=$?
     cpu=$(awk '{printf "%.1f", $1 + $2}' "$tmp/time")

@@ -20,6 +20,7 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.sliver_angle = 15;
   o.size = VM_SURFACE_SIZE_INPUT;
   o.cleanup_opts = vm_cleanup_opts_default();
+  o.graded_opts = vm_graded_opts_default();
   o.repair_opts = vm_repair_opts_default();
   o.remesh_opts = vm_remesh_opts_default();
   o.adapt = vm_adapt_opts_default();
@@ -164,6 +165,19 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
                   vm_mesh **input) {
   vm_remesh_opts mo = o->remesh_opts;
   int uniform = o->size == VM_SURFACE_SIZE_UNIFORM;
+  int graded = o->size == VM_SURFACE_SIZE_GRADED || o->size == VM_SURFACE_SIZE_CURVATURE;
+  const char *how = o->size == VM_SURFACE_SIZE_CURVATURE ? "curvature-sized"
+                    : graded                             ? "graded"
+                                                         : "uniform";
+  vm_graded_opts go = o->graded_opts;
+  go.sizing = o->size == VM_SURFACE_SIZE_CURVATURE ? VM_GRADED_CURVATURE : VM_GRADED_INPUT;
+  if (o->triangles > 0) go.triangles = o->triangles;
+  if (uniform && mo.target_edge_length <= 0 && o->triangles > 0) {
+    /* equilateral triangles of edge L cover the area A with A / (sqrt(3)/4 L^2) */
+    double area = 0;
+    for (int64_t e = 0; e < m->ne; e++) area += vm_surface_elem_area(m, m->xyz, e);
+    mo.target_edge_length = sqrt(area / (0.4330127018922193 * (double)o->triangles));
+  }
   if (uniform && mo.target_edge_length <= 0) mo.target_edge_length = vm_surface_mean_edge(m);
   s->nv_before_remesh = m->nv;
   vm_surface_features f;
@@ -173,15 +187,18 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   if (!st) st = features(m, o, s, &f);
   double *keep = NULL; /* the corners' coordinates: the remeshing must keep them */
   int64_t nkeep = 0;
-  if (!st && uniform) {
+  if (!st && (uniform || graded)) {
     keep = vm_alloc_array(ctx, 3 * (size_t)(f.ncorner + 1), sizeof *keep);
     if (!keep) st = VM_ERR_NOMEM;
     for (int64_t v = 0; !st && v < m->nv; v++)
       if (f.vclass[v] == VM_FEATURE_CORNER && nkeep < f.ncorner)
         memcpy(keep + 3 * nkeep++, m->xyz + 3 * v, 3 * sizeof *keep);
   }
-  if (!st && uniform) {
-    st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
+  if (!st && (uniform || graded)) {
+    if (graded)
+      st = vm_surface_remesh_graded(m, &f, &go, &s->graded);
+    else
+      st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
     /* CGAL 5.5 can collapse a constrained tip, fold a triangle over where
      * details are far smaller than the edge length, or make the surface
      * intersect itself: the input's own vertices then */
@@ -209,9 +226,9 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
         snprintf(why, sizeof why, "intersects itself (%lld triangle pairs), e.g. near",
                  (long long)pairs);
       vm_log(ctx, VM_LOG_WARN,
-             "remesh: the uniform remeshing %s (%g, %g, %g); going on with the input's own "
+             "remesh: the %s remeshing %s (%g, %g, %g); going on with the input's own "
              "vertices (--size input)",
-             why, p[0], p[1], p[2]);
+             how, why, p[0], p[1], p[2]);
       s->remesh_lost_corners = lost;
       s->remesh_opposing = opposing;
       s->remesh_refused = pairs;
@@ -224,7 +241,18 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
         *m2 = tmp;
         st = features(m, o, s, &f);
       }
-      uniform = 0;
+      uniform = graded = 0;
+    }
+    if (!st && graded) {
+      const vm_graded_report *g = &s->graded;
+      s->remeshed = 1;
+      vm_log(ctx, VM_LOG_INFO,
+             "remesh: %s, sizes %g to %g: %lld -> %lld vertices (%lld splits, %lld "
+             "collapses, %lld flips, %lld moves), smallest angle %.2f -> %.2f deg (%.2f -> %.2f "
+             "away from feature corners)",
+             how, g->h_min, g->h_max, (long long)g->nv_in, (long long)g->nv, (long long)g->splits,
+             (long long)g->collapses, (long long)g->flips, (long long)g->moves, g->min_angle_in,
+             g->min_angle, g->min_angle_free_in, g->min_angle_free);
     }
     if (!st && uniform) {
       s->remeshed = 1;
@@ -573,8 +601,18 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
     if (!x0) st = VM_ERR_NOMEM;
     if (x0) memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof *x0);
   }
-  if (st >= 0 && o.step == VM_SURFACE_CURVATURE) st = curvature(ctx, m, &o, s);
-  if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT))
+  /* a graded or curvature-sized remeshing has sized the triangles
+   * already: the adaptation's own sizing would fight it (on the demo
+   * aircraft it folded the wing), so step all stops at the curvature
+   * fields; the step adapt runs it on any surface */
+  int sized = o.step == VM_SURFACE_ALL && s->remeshed &&
+              (o.size == VM_SURFACE_SIZE_GRADED || o.size == VM_SURFACE_SIZE_CURVATURE);
+  if (sized)
+    vm_log(ctx, VM_LOG_INFO,
+           "adapt: not run: the %s remeshing sized the triangles (the step adapt runs it)",
+           o.size == VM_SURFACE_SIZE_GRADED ? "graded" : "curvature-sized");
+  if (st >= 0 && (o.step == VM_SURFACE_CURVATURE || sized)) st = curvature(ctx, m, &o, s);
+  if (st >= 0 && !sized && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT))
     st = adapt(ctx, m, input ? input : m, &o, s);
   /* the adapted surface's angles: never below the smaller of the
    * surface's before the adaptation and 20 degrees where the adaptation

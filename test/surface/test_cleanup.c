@@ -23,6 +23,7 @@
 #include "varmesh/repair.h"
 #include "varmesh/shapes.h"
 #include "varmesh/surface.h"
+#include "support/check_surface.h"
 #include "vmtest.h"
 
 #define N 12
@@ -66,48 +67,6 @@ static vm_mesh *cube(vm_ctx *ctx) {
         vm_mesh_add_element(m, VM_TRI, t1);
       }
   return m;
-}
-
-/* V - E + F, and whether every directed edge is used once and has its
- * twin (closed, manifold, consistently oriented). */
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return x < y ? -1 : x > y;
-}
-
-static int closed_euler(const vm_mesh *m, int64_t *chi) {
-  int64_t n = 3 * m->ne;
-  uint64_t *k = malloc((size_t)n * sizeof *k), *t = malloc((size_t)n * sizeof *t);
-  for (int64_t e = 0; e < m->ne; e++)
-    for (int i = 0; i < 3; i++) {
-      uint32_t a = (uint32_t)m->conn[3 * e + i], b = (uint32_t)m->conn[3 * e + (i + 1) % 3];
-      k[3 * e + i] = (uint64_t)a << 32 | b;
-      t[3 * e + i] = (uint64_t)b << 32 | a;
-    }
-  qsort(k, (size_t)n, sizeof *k, cmp_u64);
-  qsort(t, (size_t)n, sizeof *t, cmp_u64);
-  int ok = 1;
-  for (int64_t i = 0; i < n; i++) {
-    if (i > 0 && k[i] == k[i - 1]) ok = 0;
-    if (k[i] != t[i]) ok = 0;
-  }
-  *chi = m->nv - n / 2 + m->ne;
-  free(k);
-  free(t);
-  return ok;
-}
-
-static double volume(const vm_mesh *m) {
-  double v = 0;
-  for (int64_t e = 0; e < m->ne; e++) {
-    const double *a = m->xyz + 3 * (int64_t)m->conn[3 * e],
-                 *b = m->xyz + 3 * (int64_t)m->conn[3 * e + 1],
-                 *c = m->xyz + 3 * (int64_t)m->conn[3 * e + 2];
-    v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-          a[2] * (b[0] * c[1] - b[1] * c[0])) /
-         6;
-  }
-  return v;
 }
 
 /* Is every vertex of m a vertex of ref, bit for bit? (O(n m), small meshes) */
@@ -155,8 +114,8 @@ static void test_cube(vm_ctx *ctx) {
   CHECK(r.nv >= r.nv_in - pulled && r.nv < r.nv_in, "vertices %lld -> %lld", (long long)r.nv_in,
         (long long)r.nv);
   int64_t chi = 0;
-  CHECK(closed_euler(m, &chi) && chi == 2, "closed manifold, chi %lld", (long long)chi);
-  CHECK_NEAR(volume(m), 1.0, 1e-13, "volume");
+  CHECK(chk_closed_euler(m, &chi) && chi == 2, "closed manifold, chi %lld", (long long)chi);
+  CHECK_NEAR(chk_volume(m), 1.0, 1e-13, "volume");
   CHECK(r.max_dev < 1e-15, "a planar collapse moved the surface by %g", r.max_dev);
   vm_field *g = vm_mesh_find_field(m, "id", VM_FIELD_VERTEX);
   int64_t lost = 0, wrong = 0;
@@ -221,7 +180,7 @@ static void test_sphere(vm_ctx *ctx) {
   CHECK(r.below_in > 0 && r.below <= r.below_in / 10, "slivers %lld -> %lld", (long long)r.below_in,
         (long long)r.below);
   int64_t chi = 0;
-  CHECK(closed_euler(m, &chi) && chi == 2, "closed manifold, chi %lld", (long long)chi);
+  CHECK(chk_closed_euler(m, &chi) && chi == 2, "closed manifold, chi %lld", (long long)chi);
   double ab = 0, ba = 0, tol = 2.5e-4 * 2 * sqrt(3.0);
   CHECK(vm_surface_hausdorff(in, m, 0.01, &ab, &ba) == 0, "hausdorff");
   CHECK(ab <= 2 * tol && ba <= 2 * tol, "moved %g / %g, tolerance %g", ab, ba, tol);
@@ -279,13 +238,9 @@ static vm_mesh *spindle(vm_ctx *ctx) {
 static void test_bowtie(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_mesh_create(ctx, &m);
-  static const double x[7][3] = {{0, 0, 0},  {1, 0, 0},  {0, 1, 0}, {0, 0, 1},
-                                 {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
-  vm_mesh_set_vertices(m, 7);
-  memcpy(m->xyz, x, sizeof x);
-  static const int32_t t[8][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
-                                  {0, 5, 4}, {0, 4, 6}, {0, 6, 5}, {4, 5, 6}};
-  for (int i = 0; i < 8; i++) vm_mesh_add_element(m, VM_TRI, t[i]);
+  chk_bowtie(m);
+  double x[7][3];
+  memcpy(x, m->xyz, sizeof x);
   vm_surface_features f;
   memset(&f, 0, sizeof f);
   f.nv = m->nv;

@@ -5,7 +5,8 @@
 # oriented inwards, and a graded wing with a sharp trailing edge
 # (vm-gen wing: needles 1,500 times longer than wide). The spindle's tips
 # stay vertices, bit for bit, its row of needles goes, and the wing's
-# grading stays (no remeshing to one edge length).
+# grading stays (no remeshing to one edge length); the same shapes through
+# --size graded and --size curvature.
 set -u
 gen=$1 surf=$2 prism=$3 vmgen=$4 conv=$5
 dir=$(mktemp -d)
@@ -56,5 +57,25 @@ if [ "${ro:-0}" -gt 0 ]; then
   check 'grep -q "turned $ro triangles over against the input" "$dir/wu.err" && grep -q "\"remeshed\": false" "$dir/wu.json"' \
     "graded wing, --size uniform: the remeshing's $ro folds are said and it is given up"
 fi
+
+# the graded and curvature-sized remeshings on the spindle and the wing:
+# the tips stay, the slivers go, nothing folds, vm-prism takes the result
+for size in graded curvature; do
+  "$surf" -q --json --size $size "$dir/sp.stl" "$dir/sp$size.vmsh" >"$dir/sp$size.json" 2>"$dir/sp$size.err"
+  rc=$?
+  "$conv" -q "$dir/sp$size.vmsh" "$dir/sp$size.off"
+  amin=$(sed -n 's/.*"graded": {[^}]*"min_angle": \([0-9.e+-]*\)}.*/\1/p' "$dir/sp$size.json")
+  check '[ $rc -eq 0 ] && grep -q "\"remeshed\": true" "$dir/sp$size.json" && grep -qx "0 0 1" "$dir/sp$size.off" && grep -qx "0 0 -1" "$dir/sp$size.off"' \
+    "spindle, --size $size: remeshed, both tips still vertices, bit for bit (got $rc: $(tail -n 1 "$dir/sp$size.err"))"
+  check 'awk -v a="$amin" "BEGIN { exit !(a > 20) }"' "spindle, --size $size: smallest angle $amin > 20"
+  "$prism" -q --json -t 0.05 -n 5 "$dir/sp$size.vmsh" "$dir/spp$size.vmsh" >"$dir/spp$size.json" 2>"$dir/spp$size.err"
+  check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/spp$size.json"' "spindle, --size $size: vm-prism takes it"
+  "$surf" -q --json --size $size "$dir/w.stl" "$dir/w$size.vmsh" >"$dir/w$size.json" 2>"$dir/w$size.err"
+  rc=$?
+  check '[ $rc -eq 0 ] && grep -q "\"remeshed\": true" "$dir/w$size.json" && grep -q "\"opposing\": 0," "$dir/w$size.json" && grep -q "\"self_intersections\": 0," "$dir/w$size.json"' \
+    "graded wing, --size $size: remeshed, nothing turned over, no intersecting pair (got $rc: $(tail -n 1 "$dir/w$size.err"))"
+  "$prism" -q --json -t 0.05 -n 3 "$dir/w$size.vmsh" "$dir/wp$size.vmsh" >"$dir/wp$size.json" 2>"$dir/wp$size.err"
+  check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wp$size.json"' "graded wing, --size $size: vm-prism takes it ($(tail -n 1 "$dir/wp$size.err"))"
+done
 
 exit $fail

@@ -8,12 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "trimesh_private.h"
 #include "varmesh/surface_mesh.h"
-#include "vec3.h"
-
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
 
 vm_cleanup_opts vm_cleanup_opts_default(void) {
   vm_cleanup_opts o;
@@ -22,110 +18,6 @@ vm_cleanup_opts vm_cleanup_opts_default(void) {
   o.max_dev_rel = 0.05;
   o.rounds = 20;
   return o;
-}
-
-/* ---- a hash map from 64-bit keys to int64 values (open addressing) ---- */
-
-#define HM_EMPTY UINT64_MAX
-#define HM_TOMB (UINT64_MAX - 1)
-
-typedef struct {
-  uint64_t *key;
-  int64_t *val;
-  size_t mask;
-} hmap;
-
-static size_t hm_hash(uint64_t k) {
-  k ^= k >> 33;
-  k *= 0xff51afd7ed558ccdULL;
-  k ^= k >> 33;
-  k *= 0xc4ceb9fe1a85ec53ULL;
-  k ^= k >> 33;
-  return (size_t)k;
-}
-
-static int hm_init(vm_ctx *ctx, hmap *h, size_t n) {
-  size_t cap = 64;
-  while (cap < 4 * n) cap <<= 1;
-  h->key = vm_alloc_array(ctx, cap, sizeof *h->key);
-  h->val = vm_alloc_array(ctx, cap, sizeof *h->val);
-  h->mask = cap - 1;
-  if (!h->key || !h->val) return VM_ERR_NOMEM;
-  for (size_t i = 0; i < cap; i++) h->key[i] = HM_EMPTY;
-  return VM_OK;
-}
-
-static void hm_free(vm_ctx *ctx, hmap *h) {
-  vm_free(ctx, h->key);
-  vm_free(ctx, h->val);
-  memset(h, 0, sizeof *h);
-}
-
-static int64_t hm_get(const hmap *h, uint64_t k) {
-  for (size_t i = hm_hash(k) & h->mask;; i = (i + 1) & h->mask) {
-    if (h->key[i] == HM_EMPTY) return -1;
-    if (h->key[i] == k) return h->val[i];
-  }
-}
-
-static void hm_put(hmap *h, uint64_t k, int64_t v) {
-  size_t tomb = SIZE_MAX;
-  for (size_t i = hm_hash(k) & h->mask;; i = (i + 1) & h->mask) {
-    if (h->key[i] == k) {
-      h->val[i] = v;
-      return;
-    }
-    if (h->key[i] == HM_TOMB && tomb == SIZE_MAX) tomb = i;
-    if (h->key[i] == HM_EMPTY) {
-      size_t at = tomb != SIZE_MAX ? tomb : i;
-      h->key[at] = k;
-      h->val[at] = v;
-      return;
-    }
-  }
-}
-
-static void hm_del(hmap *h, uint64_t k) {
-  for (size_t i = hm_hash(k) & h->mask;; i = (i + 1) & h->mask) {
-    if (h->key[i] == HM_EMPTY) return;
-    if (h->key[i] == k) {
-      h->key[i] = HM_TOMB;
-      return;
-    }
-  }
-}
-
-static uint64_t dkey(int32_t a, int32_t b) { return (uint64_t)(uint32_t)a << 32 | (uint32_t)b; }
-static uint64_t ukey(int32_t a, int32_t b) { return a < b ? dkey(a, b) : dkey(b, a); }
-
-/* ---- angles ---- */
-
-static double corner_deg(const double *p, const double *q, const double *r) {
-  double u[3], w[3], c[3];
-  vm_sub3(q, p, u);
-  vm_sub3(r, p, w);
-  vm_cross3(u, w, c);
-  return atan2(vm_norm3(c), vm_dot3(u, w)) * (180.0 / M_PI);
-}
-
-static double tri_min_deg(const double *x, int32_t a, int32_t b, int32_t c) {
-  const double *p = x + 3 * (int64_t)a, *q = x + 3 * (int64_t)b, *r = x + 3 * (int64_t)c;
-  double m = corner_deg(p, q, r), t = corner_deg(q, r, p);
-  if (t < m) m = t;
-  t = corner_deg(r, p, q);
-  return t < m ? t : m;
-}
-
-static void tri_normal(const double *x, int32_t a, int32_t b, int32_t c, double n[3]) {
-  double u[3], w[3];
-  vm_sub3(x + 3 * (int64_t)b, x + 3 * (int64_t)a, u);
-  vm_sub3(x + 3 * (int64_t)c, x + 3 * (int64_t)a, w);
-  vm_cross3(u, w, n);
-}
-
-static double cos_between(const double *a, const double *b) {
-  double la = vm_norm3(a), lb = vm_norm3(b);
-  return la > 0 && lb > 0 ? vm_dot3(a, b) / (la * lb) : -1;
 }
 
 static int tris_only(const vm_mesh *m) {
@@ -144,6 +36,18 @@ double vm_surface_elem_min_angle(const vm_mesh *m, const double *x, int64_t e) {
     if (d < mn) mn = d;
   }
   return mn;
+}
+
+double vm_surface_elem_area(const vm_mesh *m, const double *x, int64_t e) {
+  int k = vm_elem_nverts(m->etype[e]);
+  const int32_t *c = m->conn + m->eoff[e];
+  double a = 0;
+  for (int i = 1; i + 1 < k; i++) {
+    double n[3];
+    tri_normal(x, c[0], c[i], c[i + 1], n);
+    a += 0.5 * vm_norm3(n);
+  }
+  return a;
 }
 
 int64_t vm_surface_count_opposing(const vm_mesh *m, vm_surface_projector *ref, double at[3]) {
@@ -247,11 +151,9 @@ typedef struct {
   const vm_mesh *m;
   const double *x;
   int64_t nv, nf;
-  int32_t *tri;
+  vm_tm t; /* faces, a face of each vertex, directed edges */
   uint8_t *fdead, *vdead, *vborder;
-  int32_t *vface;
   double *err; /* how far the surface around each vertex has moved so far */
-  hmap he;     /* directed edge (a, b) -> halfedge 3 f + i */
   hmap fe;     /* feature edges */
   const uint8_t *vclass;
   double tol_abs, tol_rel, thr;
@@ -261,46 +163,12 @@ typedef struct {
   int32_t nu[3 * RING_MAX], nw[3 * RING_MAX];
 } cmesh;
 
-static int64_t he_find(const cmesh *c, int32_t a, int32_t b) { return hm_get(&c->he, dkey(a, b)); }
+static int64_t he_find(const cmesh *c, int32_t a, int32_t b) { return vm_tm_he(&c->t, a, b); }
 
-static void face_keys(cmesh *c, int64_t f, int add) {
-  const int32_t *t = c->tri + 3 * f;
-  for (int i = 0; i < 3; i++) {
-    uint64_t k = dkey(t[i], t[(i + 1) % 3]);
-    if (add) {
-      if (hm_get(&c->he, k) >= 0) c->bad_keys++;
-      hm_put(&c->he, k, 3 * f + i);
-    } else
-      hm_del(&c->he, k);
-  }
-}
+static void face_keys(cmesh *c, int64_t f, int add) { c->bad_keys += vm_tm_keys(&c->t, f, add); }
 
-static int index_in(const int32_t *t, int32_t v) { return t[0] == v ? 0 : t[1] == v ? 1 : 2; }
-
-/* The faces around v (n <= RING_MAX; -1 if more). */
 static int ring(const cmesh *c, int32_t v, int64_t *out) {
-  int n = 0;
-  int64_t f0 = c->vface[v], f = f0;
-  for (;;) {
-    if (n == RING_MAX) return -1;
-    out[n++] = f;
-    const int32_t *t = c->tri + 3 * f;
-    int32_t w = t[(index_in(t, v) + 2) % 3];
-    int64_t h = he_find(c, v, w);
-    if (h < 0) break; /* border: walk the other way below */
-    f = h / 3;
-    if (f == f0) return n;
-  }
-  f = f0;
-  for (;;) {
-    const int32_t *t = c->tri + 3 * f;
-    int32_t u = t[(index_in(t, v) + 1) % 3];
-    int64_t h = he_find(c, u, v);
-    if (h < 0) return n;
-    f = h / 3;
-    if (n == RING_MAX) return -1;
-    out[n++] = f;
-  }
+  return vm_tm_ring(&c->t, v, out, RING_MAX);
 }
 
 /* Smallest angle of the faces fs, and how many are under the sliver angle. */
@@ -308,7 +176,7 @@ static double faces_min(const cmesh *c, const int64_t *fs, int n, int *bad) {
   double m = 180;
   *bad = 0;
   for (int i = 0; i < n; i++) {
-    const int32_t *t = c->tri + 3 * fs[i];
+    const int32_t *t = c->t.tri + 3 * fs[i];
     double a = tri_min_deg(c->x, t[0], t[1], t[2]);
     if (a < m) m = a;
     *bad += a < c->thr;
@@ -367,7 +235,7 @@ static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
   int64_t h = he_find(c, a, b), t = he_find(c, b, a);
   if (h < 0 || t < 0) return;
   int64_t f0 = h / 3, f1 = t / 3;
-  const int32_t *t0 = c->tri + 3 * f0, *t1 = c->tri + 3 * f1;
+  const int32_t *t0 = c->t.tri + 3 * f0, *t1 = c->t.tri + 3 * f1;
   int32_t cc = t0[(h % 3 + 2) % 3], d = t1[(t % 3 + 2) % 3];
   if (cc == d || he_find(c, cc, d) >= 0 || he_find(c, d, cc) >= 0) return;
   if (!same_fields(c->m, f0, f1)) return;
@@ -407,23 +275,6 @@ static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
   mv->dev = dev;
 }
 
-static int contains(const int32_t *s, int n, int32_t v) {
-  for (int i = 0; i < n; i++)
-    if (s[i] == v) return 1;
-  return 0;
-}
-
-/* neighbours of v from its ring faces (unique) */
-static int neighbours(const cmesh *c, int32_t v, const int64_t *fs, int n, int32_t *out) {
-  int k = 0;
-  for (int i = 0; i < n; i++) {
-    const int32_t *t = c->tri + 3 * fs[i];
-    for (int j = 0; j < 3; j++)
-      if (t[j] != v && !contains(out, k, t[j])) out[k++] = t[j];
-  }
-  return k;
-}
-
 /* collapse u onto w (u goes away, w stays where it is) */
 static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
   mv->kind = 0;
@@ -435,16 +286,16 @@ static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
   int64_t h = he_find(c, u, w), t = he_find(c, w, u);
   if (h < 0 || t < 0) return;
   int64_t f0 = h / 3, f1 = t / 3;
-  int32_t c0 = c->tri[3 * f0 + (h % 3 + 2) % 3], d0 = c->tri[3 * f1 + (t % 3 + 2) % 3];
+  int32_t c0 = c->t.tri[3 * f0 + (h % 3 + 2) % 3], d0 = c->t.tri[3 * f1 + (t % 3 + 2) % 3];
   int64_t *Fu = c->fu, *Fw = c->fw;
   int nu = ring(c, u, Fu), nw = ring(c, w, Fw);
   if (nu < 0 || nw < 0) return;
   int32_t *Nu = c->nu, *Nw = c->nw;
-  int ku = neighbours(c, u, Fu, nu, Nu), kw = neighbours(c, w, Fw, nw, Nw);
+  int ku = vm_tm_neighbours(&c->t, u, Fu, nu, Nu), kw = vm_tm_neighbours(&c->t, w, Fw, nw, Nw);
   /* link condition: the common neighbours are exactly c0 and d0 */
   int common = 0;
   for (int i = 0; i < ku; i++)
-    if (contains(Nw, kw, Nu[i])) {
+    if (vm_tm_contains(Nw, kw, Nu[i])) {
       if (Nu[i] != c0 && Nu[i] != d0) return;
       common++;
     }
@@ -459,10 +310,10 @@ static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
     int64_t g = Fu[i];
     if (g == f0 || g == f1) continue;
     int32_t nt[3];
-    memcpy(nt, c->tri + 3 * g, sizeof nt);
+    memcpy(nt, c->t.tri + 3 * g, sizeof nt);
     double no[3], nn[3];
     tri_normal(x, nt[0], nt[1], nt[2], no);
-    nt[index_in(nt, u)] = w;
+    nt[vm_tm_index(nt, u)] = w;
     tri_normal(x, nt[0], nt[1], nt[2], nn);
     if (cos_between(no, nn) < 0.5) return;
     double ln = vm_norm3(nn);
@@ -498,24 +349,12 @@ static void raise_err(cmesh *c, int32_t v, double e) {
 }
 
 static void apply_flip(cmesh *c, int32_t a, int32_t b, double dev) {
-  int64_t h = he_find(c, a, b), t = he_find(c, b, a);
-  int64_t f0 = h / 3, f1 = t / 3;
-  int32_t cc = c->tri[3 * f0 + (h % 3 + 2) % 3], d = c->tri[3 * f1 + (t % 3 + 2) % 3];
-  face_keys(c, f0, 0);
-  face_keys(c, f1, 0);
-  int32_t *t0 = c->tri + 3 * f0, *t1 = c->tri + 3 * f1;
-  t0[0] = a, t0[1] = d, t0[2] = cc;
-  t1[0] = d, t1[1] = b, t1[2] = cc;
-  face_keys(c, f0, 1);
-  face_keys(c, f1, 1);
-  c->vface[a] = (int32_t)f0;
-  c->vface[b] = (int32_t)f1;
-  c->vface[cc] = (int32_t)f0;
-  c->vface[d] = (int32_t)f1;
+  int32_t cd[2];
+  c->bad_keys += vm_tm_flip(&c->t, a, b, cd);
   raise_err(c, a, dev);
   raise_err(c, b, dev);
-  raise_err(c, cc, dev);
-  raise_err(c, d, dev);
+  raise_err(c, cd[0], dev);
+  raise_err(c, cd[1], dev);
 }
 
 static void apply_collapse(cmesh *c, int32_t u, int32_t w, double dev) {
@@ -528,11 +367,11 @@ static void apply_collapse(cmesh *c, int32_t u, int32_t w, double dev) {
   for (int i = 0; i < nu; i++) {
     int64_t g = Fu[i];
     if (g == f0 || g == f1) continue;
-    int32_t *tt = c->tri + 3 * g;
-    tt[index_in(tt, u)] = w;
+    int32_t *tt = c->t.tri + 3 * g;
+    tt[vm_tm_index(tt, u)] = w;
     face_keys(c, g, 1);
     for (int j = 0; j < 3; j++) {
-      c->vface[tt[j]] = (int32_t)g;
+      c->t.vface[tt[j]] = (int32_t)g;
       raise_err(c, tt[j], dev);
     }
   }
@@ -568,23 +407,21 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   c.thr = o.angle;
   const size_t nv1 = (size_t)(c.nv > 0 ? c.nv : 1), nf1 = (size_t)c.nf;
   int st = VM_OK;
-  vm_mesh *n = NULL;
-  int32_t *idx = NULL;
-  c.tri = vm_alloc_array(ctx, 3 * nf1, sizeof *c.tri);
+  c.t.tri = vm_alloc_array(ctx, 3 * nf1, sizeof *c.t.tri);
   c.fdead = vm_calloc(ctx, nf1, 1);
   c.vdead = vm_calloc(ctx, nv1, 1);
   c.vborder = vm_calloc(ctx, nv1, 1);
-  c.vface = vm_alloc_array(ctx, nv1, sizeof *c.vface);
+  c.t.vface = vm_alloc_array(ctx, nv1, sizeof *c.t.vface);
   c.err = vm_calloc(ctx, nv1, sizeof *c.err);
-  if (!c.err || !c.tri || !c.fdead || !c.vdead || !c.vborder || !c.vface ||
-      hm_init(ctx, &c.he, 3 * nf1) || hm_init(ctx, &c.fe, (size_t)f->nedge + 1)) {
+  if (!c.err || !c.t.tri || !c.fdead || !c.vdead || !c.vborder || !c.t.vface ||
+      hm_init(ctx, &c.t.he, 3 * nf1) || hm_init(ctx, &c.fe, (size_t)f->nedge + 1)) {
     st = VM_ERR_NOMEM;
     goto done;
   }
-  for (int64_t v = 0; v < c.nv; v++) c.vface[v] = -1;
+  for (int64_t v = 0; v < c.nv; v++) c.t.vface[v] = -1;
   for (int64_t e = 0; e < c.nf; e++) {
-    memcpy(c.tri + 3 * e, m->conn + m->eoff[e], 3 * sizeof *c.tri);
-    for (int i = 0; i < 3; i++) c.vface[c.tri[3 * e + i]] = (int32_t)e;
+    memcpy(c.t.tri + 3 * e, m->conn + m->eoff[e], 3 * sizeof *c.t.tri);
+    for (int i = 0; i < 3; i++) c.t.vface[c.t.tri[3 * e + i]] = (int32_t)e;
     face_keys(&c, e, 1);
   }
   if (c.bad_keys) {
@@ -596,54 +433,32 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   }
   for (int64_t e = 0; e < c.nf; e++)
     for (int i = 0; i < 3; i++) {
-      int32_t a = c.tri[3 * e + i], b = c.tri[3 * e + (i + 1) % 3];
+      int32_t a = c.t.tri[3 * e + i], b = c.t.tri[3 * e + (i + 1) % 3];
       if (he_find(&c, b, a) < 0) c.vborder[a] = c.vborder[b] = 1;
     }
-  {
-    /* every vertex's faces must form one fan (a manifold vertex): the walk
-     * around it meets them all */
-    int32_t *deg = vm_calloc(ctx, nv1, sizeof *deg);
-    if (!deg) {
-      st = VM_ERR_NOMEM;
-      goto done;
-    }
-    for (int64_t e = 0; e < 3 * c.nf; e++) deg[c.tri[e]]++;
-    int64_t bad = -1;
-    for (int64_t v = 0; v < c.nv && bad < 0; v++) {
-      if (deg[v] == 0) continue;
-      int n = ring(&c, (int32_t)v, c.fu);
-      if (n < 0)
-        c.vborder[v] = 1; /* more triangles than a ring holds: left alone */
-      else if (n != deg[v])
-        bad = v;
-    }
-    vm_free(ctx, deg);
-    if (bad >= 0) {
-      const double *p = m->xyz + 3 * bad;
-      st = vm_error(ctx, VM_ERR_ARG,
-                    "cleanup: vertex %lld at (%g, %g, %g) is not manifold (its triangles do not "
-                    "form one fan)",
-                    (long long)bad, p[0], p[1], p[2]);
-      goto done;
-    }
-  }
+  /* every vertex's faces must form one fan; a vertex with more faces than
+   * a ring holds is left alone */
+  if ((st = vm_tm_check_manifold(ctx, &c.t, c.nv, c.nf, m->xyz, RING_MAX, c.vborder, "cleanup")))
+    goto done;
   for (int64_t k = 0; k < f->nedge; k++) hm_put(&c.fe, ukey(f->edge[2 * k], f->edge[2 * k + 1]), 1);
 
   r.nv_in = m->nv;
   r.nf_in = m->ne;
   r.min_angle_free_in = vm_surface_min_angle_free(m, f, &r.min_angle_in);
   for (int64_t e = 0; e < c.nf; e++)
-    if (tri_min_deg(c.x, c.tri[3 * e], c.tri[3 * e + 1], c.tri[3 * e + 2]) < o.angle) r.below_in++;
+    if (tri_min_deg(c.x, c.t.tri[3 * e], c.t.tri[3 * e + 1], c.t.tri[3 * e + 2]) < o.angle)
+      r.below_in++;
 
   for (int round = 0; round < o.rounds; round++) {
     int64_t changed = 0;
     for (int64_t e = 0; e < c.nf; e++) {
       if (c.fdead[e]) continue;
-      if (tri_min_deg(c.x, c.tri[3 * e], c.tri[3 * e + 1], c.tri[3 * e + 2]) >= o.angle) continue;
+      if (tri_min_deg(c.x, c.t.tri[3 * e], c.t.tri[3 * e + 1], c.t.tri[3 * e + 2]) >= o.angle)
+        continue;
       if ((e & 1023) == 0 && vm_ctx_interrupted(ctx)) break;
       move best = {0, 0, 0, 0, 0, 0, 0, 0}, mv;
       for (int i = 0; i < 3; i++) {
-        int32_t a = c.tri[3 * e + i], b = c.tri[3 * e + (i + 1) % 3];
+        int32_t a = c.t.tri[3 * e + i], b = c.t.tri[3 * e + (i + 1) % 3];
         for (int k = 0; k < 3; k++) {
           if (k == 0) eval_flip(&c, a, b, &mv);
           if (k == 1) eval_collapse(&c, a, b, &mv);
@@ -672,82 +487,9 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   }
 
   /* the new mesh: surviving vertices in their order, surviving faces */
-  idx = vm_alloc_array(ctx, nv1, sizeof *idx);
-  if (!idx) {
-    st = VM_ERR_NOMEM;
+  if ((st = vm_tm_output(ctx, m, m->xyz, c.nv, c.vdead, &c.t, c.nf, c.fdead, 1, &c.fe, f,
+                         "cleanup")))
     goto done;
-  }
-  int64_t nk = 0, fk = 0;
-  for (int64_t v = 0; v < c.nv; v++) idx[v] = c.vdead[v] ? -1 : (int32_t)nk++;
-  for (int64_t e = 0; e < c.nf; e++) fk += !c.fdead[e];
-  if ((st = vm_mesh_create(ctx, &n))) goto done;
-  n->dim = m->dim;
-  if ((st = vm_mesh_set_vertices(n, nk)) || (st = vm_mesh_set_elements(n, fk, 3 * fk))) goto done;
-  for (int64_t v = 0; v < c.nv; v++) {
-    if (idx[v] < 0) continue;
-    memcpy(n->xyz + 3 * (int64_t)idx[v], m->xyz + 3 * v, 3 * sizeof *m->xyz);
-    n->vflag[idx[v]] = m->vflag[v];
-    n->vsurf[idx[v]] = m->vsurf[v];
-  }
-  fk = 0;
-  for (int64_t e = 0; e < c.nf; e++) {
-    if (c.fdead[e]) continue;
-    n->etype[fk] = VM_TRI;
-    n->eoff[fk + 1] = n->eoff[fk] + 3;
-    for (int i = 0; i < 3; i++) n->conn[3 * fk + i] = idx[c.tri[3 * e + i]];
-    fk++;
-  }
-  for (int i = 0; i < m->nattr; i++)
-    if ((st = vm_mesh_set_attr(n, m->attrs[i].key, m->attrs[i].value))) goto done;
-  for (int i = 0; i < m->nfield; i++) {
-    const vm_field *src = &m->fields[i];
-    vm_field *dst = NULL;
-    if ((st = vm_mesh_add_field(n, src->name, src->location, src->type, src->ncomp, &dst)))
-      goto done;
-    size_t sz = (size_t)src->ncomp * (src->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
-    int64_t cnt = src->location == VM_FIELD_VERTEX ? c.nv : c.nf, j = 0;
-    for (int64_t k = 0; k < cnt; k++) {
-      int dead = src->location == VM_FIELD_VERTEX ? c.vdead[k] : c.fdead[k];
-      if (dead) continue;
-      memcpy((char *)dst->data + (size_t)j * sz, (const char *)src->data + (size_t)k * sz, sz);
-      j++;
-    }
-  }
-  {
-    /* the new features: the feature edges left, the same corners */
-    int64_t nfe = 0;
-    int32_t *fev = vm_alloc_array(ctx, 2 * (size_t)(f->nedge + 1), sizeof *fev);
-    uint8_t *corner = vm_calloc(ctx, (size_t)(nk > 0 ? nk : 1), 1);
-    if (!fev || !corner) {
-      vm_free(ctx, fev);
-      vm_free(ctx, corner);
-      st = VM_ERR_NOMEM;
-      goto done;
-    }
-    for (size_t s = 0; s <= c.fe.mask; s++) {
-      uint64_t k = c.fe.key[s];
-      if (k == HM_EMPTY || k == HM_TOMB || nfe > f->nedge) continue;
-      int32_t a = (int32_t)(k >> 32), b = (int32_t)(k & 0xffffffffu);
-      if (idx[a] < 0 || idx[b] < 0) continue;
-      fev[2 * nfe] = idx[a];
-      fev[2 * nfe + 1] = idx[b];
-      nfe++;
-    }
-    for (int64_t v = 0; v < c.nv; v++)
-      if (idx[v] >= 0 && f->vclass[v] == VM_FEATURE_CORNER) corner[idx[v]] = 1;
-    vm_surface_features nf;
-    st = vm_surface_features_from_edges(n, nfe, fev, corner, 180, &nf);
-    vm_free(ctx, fev);
-    vm_free(ctx, corner);
-    if (st) goto done;
-    vm_surface_features_free(ctx, f);
-    *f = nf;
-  }
-  {
-    vm_mesh tmp = *m;
-    *m = *n;
-    *n = tmp;
-  }
   r.nv = m->nv;
   r.nf = m->ne;
   r.min_angle_free = vm_surface_min_angle_free(m, f, &r.min_angle);
@@ -757,15 +499,13 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   }
   if (rep) *rep = r;
 done:
-  vm_mesh_destroy(&n);
-  vm_free(ctx, idx);
-  vm_free(ctx, c.tri);
+  vm_free(ctx, c.t.tri);
   vm_free(ctx, c.fdead);
   vm_free(ctx, c.vdead);
   vm_free(ctx, c.vborder);
-  vm_free(ctx, c.vface);
+  vm_free(ctx, c.t.vface);
   vm_free(ctx, c.err);
-  hm_free(ctx, &c.he);
+  hm_free(ctx, &c.t.he);
   hm_free(ctx, &c.fe);
   return st;
 }

@@ -11,6 +11,7 @@
 #include "varmesh/curvature.h"
 #include "varmesh/mesh.h"
 #include "varmesh/cleanup.h"
+#include "varmesh/graded.h"
 #include "varmesh/repair.h"
 
 #ifdef __cplusplus
@@ -26,7 +27,12 @@ typedef enum {
 } vm_surface_step;
 
 /* The sizing of the remeshing step. */
-enum { VM_SURFACE_SIZE_INPUT = 0, VM_SURFACE_SIZE_UNIFORM = 1 };
+enum {
+  VM_SURFACE_SIZE_INPUT = 0,
+  VM_SURFACE_SIZE_UNIFORM = 1,
+  VM_SURFACE_SIZE_GRADED = 2,
+  VM_SURFACE_SIZE_CURVATURE = 3
+};
 
 /* Whether to run an optional step. */
 enum { VM_SURFACE_AUTO = 0, VM_SURFACE_YES = 1, VM_SURFACE_NO = 2 };
@@ -43,7 +49,14 @@ typedef struct vm_surface_opts {
                                    the input's own vertices and grading, slivers removed
                                    by flips and collapses (vm_surface_cleanup);
                                    VM_SURFACE_SIZE_UNIFORM: isotropic remeshing to one
-                                   edge length (CGAL), then the same cleanup */
+                                   edge length (CGAL), then the same cleanup;
+                                   VM_SURFACE_SIZE_GRADED: isotropic remeshing to the
+                                   input's own local size (vm_surface_remesh_graded),
+                                   then the same cleanup; VM_SURFACE_SIZE_CURVATURE:
+                                   the same to sizes from the curvature */
+  int64_t triangles;            /* > 0: about this many triangles (GRADED, CURVATURE:
+                                   graded_opts.triangles; UNIFORM: the edge length) */
+  vm_graded_opts graded_opts;   /* its sizing follows size */
   vm_cleanup_opts cleanup_opts; /* its angle is sliver_angle */
   vm_repair_opts repair_opts;
   vm_remesh_opts remesh_opts; /* target_edge_length <= 0 (default): the mean
@@ -64,6 +77,7 @@ typedef struct vm_surface_summary {
   int64_t nv_before_remesh;
   int cleaned;                 /* the sliver cleanup ran */
   vm_cleanup_report cleanup;   /* its figures */
+  vm_graded_report graded;     /* the graded remeshing's figures (size GRADED) */
   int64_t cones;               /* cone points kept as corners */
   int64_t remesh_lost_corners; /* corners and tips the uniform remeshing lost, */
   int64_t remesh_opposing;     /* ... or triangles it turned over against the input:

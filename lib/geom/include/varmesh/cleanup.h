@@ -65,6 +65,10 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
  * vertex coordinates x (m->xyz or another position of m's vertices). */
 double vm_surface_elem_min_angle(const vm_mesh *m, const double *x, int64_t e);
 
+/* Area of the 2D element e of m with the vertex coordinates x (a polygon
+ * as the fan of triangles from its first vertex). */
+double vm_surface_elem_area(const vm_mesh *m, const double *x, int64_t e);
+
 /* Triangles of the surface m whose normal opposes (dot <= 0) the normal of
  * the projector's reference surface at the closest point of their
  * centroid: turned over against the surface they lie on (a fold the
