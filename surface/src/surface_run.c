@@ -187,6 +187,10 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   if (!st) st = features(m, o, s, &f);
   double *keep = NULL; /* the corners' coordinates: the remeshing must keep them */
   int64_t nkeep = 0;
+  if (!st && (uniform || graded) && !all_triangles(m)) {
+    vm_log(ctx, VM_LOG_WARN, "remesh: the surface has quads: no %s remeshing", how);
+    uniform = graded = 0;
+  }
   if (!st && (uniform || graded)) {
     keep = vm_alloc_array(ctx, 3 * (size_t)(f.ncorner + 1), sizeof *keep);
     if (!keep) st = VM_ERR_NOMEM;
