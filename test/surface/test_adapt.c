@@ -2,7 +2,8 @@
  * with a sharp circular ridge: vertices condense near the ridge
  * (quantified), stay on the surface (Hausdorff bound), nothing flips,
  * connectivity and flags are kept, runs are deterministic; open surfaces,
- * fixed vertices and bad input. */
+ * fixed vertices and bad input; the projection onto a long feature line
+ * against a brute-force scan. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -147,6 +148,68 @@ static void test_lens(vm_ctx *ctx) {
   vm_mesh_destroy(&in);
 }
 
+/* Distance from p to the segment a-b. */
+static double seg_dist(const double *p, const double *a, const double *b) {
+  double ab[3], ap[3], l2 = 0, t = 0;
+  for (int r = 0; r < 3; r++) ab[r] = b[r] - a[r], ap[r] = p[r] - a[r], l2 += ab[r] * ab[r];
+  for (int r = 0; r < 3; r++) t += ap[r] * ab[r];
+  t = l2 > 0 ? t / l2 : 0;
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  double d2 = 0;
+  for (int r = 0; r < 3; r++) {
+    double c = a[r] + t * ab[r] - p[r];
+    d2 += c * c;
+  }
+  return sqrt(d2);
+}
+
+/* Projection onto a long feature line (the lens's ridge, a closed line of
+ * more segments than the projector scans whole, so its tree answers):
+ * the point it returns lies on the line and is as close as the closest
+ * point of a brute-force scan of the line's edges, for points around the
+ * ridge and far from it. */
+static void test_line_projection(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_lens(m, 1.0, 0.5, 0.02) == 0, "fine lens");
+  vm_surface_features f;
+  CHECK(vm_surface_detect_features(m, 20, 50, &f) == 0 && f.nline == 1, "one ridge line: %d",
+        f.nline);
+  vm_surface_projector *pr = NULL;
+  CHECK(vm_surface_projector_create(ctx, m, &f, &pr) == 0, "projector");
+  vm_surface_ops ops = vm_surface_projector_ops(pr);
+  int64_t bad = 0, off = 0, n = 0;
+  double worst = 0;
+  for (int i = 0; i < 40; i++)
+    for (int j = 0; j < 9; j++) {
+      double a = 2 * M_PI * (i + 0.37 * j) / 40, rad = 0.3 + 0.15 * j, z = 0.2 * (j - 4);
+      double p[3] = {rad * cos(a), rad * sin(a), z}, q[3], nr[9];
+      CHECK(ops.project(ops.user, 1, p, q, nr) == 2, "line projection");
+      double brute = INFINITY, on = INFINITY;
+      for (int64_t k = 0; k < f.nedge; k++) {
+        const double *u = m->xyz + 3 * (int64_t)f.edge[2 * k],
+                     *v = m->xyz + 3 * (int64_t)f.edge[2 * k + 1];
+        double d = seg_dist(p, u, v), e = seg_dist(q, u, v);
+        if (d < brute) brute = d;
+        if (e < on) on = e;
+      }
+      double got = sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                        (q[2] - p[2]) * (q[2] - p[2]));
+      if (fabs(got - brute) > 1e-12) bad++;
+      if (on > 1e-12) off++;
+      if (fabs(got - brute) > worst) worst = fabs(got - brute);
+      n++;
+    }
+  fprintf(stderr, "line projection: %lld points onto a line of %lld segments, worst %.3g\n",
+          (long long)n, (long long)f.nedge, worst);
+  CHECK(f.nedge > 64, "the ridge has %lld segments", (long long)f.nedge);
+  CHECK(bad == 0 && off == 0, "%lld not the closest point (worst %g), %lld off the line",
+        (long long)bad, worst, (long long)off);
+  vm_surface_projector_destroy(&pr);
+  vm_surface_features_free(ctx, &f);
+  vm_mesh_destroy(&m);
+}
+
 static void test_open_cylinder(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_mesh_create(ctx, &m);
@@ -282,6 +345,7 @@ int main(void) {
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_threads(ctx, 1);
   test_lens(ctx);
+  test_line_projection(ctx);
   test_open_cylinder(ctx);
   test_bad(ctx);
   test_alloc_failures(ctx);

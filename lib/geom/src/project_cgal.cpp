@@ -111,6 +111,9 @@ void orthogonal_pair(const double t[3], double n[6]) {
 
 } // namespace
 
+// lines up to this many segments are scanned whole
+constexpr std::size_t kLineScan = 32;
+
 struct vm_surface_projector {
   vm_ctx *ctx;
   TriSurface surf;
@@ -119,6 +122,10 @@ struct vm_surface_projector {
   std::vector<int32_t> seg_line;
   std::vector<std::size_t> lstart;
   std::unique_ptr<SegTree> segtree;
+  // a tree per line of more than kLineScan segments (line k: ltree[k - 1]):
+  // its candidates near the query, in index order, are scanned as the
+  // whole line would be, so a long line costs a logarithm, not its length
+  std::vector<std::unique_ptr<SegTree>> ltree;
   std::vector<Point> corner;
   int32_t nline = 0;
 };
@@ -150,10 +157,28 @@ static int project_cb(void *user, int surf_id, const double p[3], double out[3],
   std::size_t b = pr->lstart[static_cast<std::size_t>(surf_id) - 1],
               e = pr->lstart[static_cast<std::size_t>(surf_id)];
   if (b == e) return VM_ERR_ARG;
+  // the segments that can be closest: all of a short line; of a long one
+  // those whose boxes meet a box around q a little larger than the
+  // distance its tree finds (every segment at that distance is in, so the
+  // scan below picks what the scan of the whole line would)
+  std::vector<std::size_t> cand;
+  const SegTree *lt =
+      pr->ltree.empty() ? nullptr : pr->ltree[static_cast<std::size_t>(surf_id) - 1].get();
+  if (lt) {
+    double r = std::sqrt(lt->squared_distance(q));
+    r = r * (1 + 1e-6) + 1e-12 * (std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]) + r);
+    CGAL::Bbox_3 box(p[0] - r, p[1] - r, p[2] - r, p[0] + r, p[1] + r, p[2] + r);
+    std::vector<SegIt> hit;
+    lt->all_intersected_primitives(box, std::back_inserter(hit));
+    for (const SegIt &it : hit) cand.push_back(static_cast<std::size_t>(it - pr->seg.begin()));
+    std::sort(cand.begin(), cand.end());
+  }
   double best = INFINITY, bt = 0;
   std::size_t bi = b;
   Point bp = q;
-  for (std::size_t i = b; i < e; i++) {
+  std::size_t nc = lt ? cand.size() : e - b;
+  for (std::size_t ci = 0; ci < nc; ci++) {
+    std::size_t i = lt ? cand[ci] : b + ci;
     double t;
     Point c = closest_on_segment(pr->seg[i], q, &t);
     double d = CGAL::squared_distance(c, q);
@@ -256,6 +281,14 @@ extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
     }
     pr->segtree.reset(new SegTree(pr->seg.begin(), pr->seg.end()));
     pr->segtree->accelerate_distance_queries();
+    pr->ltree.resize(static_cast<std::size_t>(pr->nline));
+    for (std::size_t k = 0; k + 1 < pr->lstart.size(); k++) {
+      std::size_t b = pr->lstart[k], e = pr->lstart[k + 1];
+      if (e - b <= kLineScan) continue;
+      pr->ltree[k].reset(new SegTree(pr->seg.begin() + static_cast<std::ptrdiff_t>(b),
+                                     pr->seg.begin() + static_cast<std::ptrdiff_t>(e)));
+      pr->ltree[k]->accelerate_distance_queries();
+    }
   } else {
     pr->lstart.push_back(0);
   }
