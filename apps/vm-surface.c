@@ -362,7 +362,6 @@ int main(int argc, char **argv) {
   if (a.triangles > 0) {
     if (a.so.size == VM_SURFACE_SIZE_INPUT)
       vm_log(cli.ctx, VM_LOG_WARN, "--triangles has no effect with --size input");
-    a.so.graded_opts.triangles = a.triangles;
     a.so.triangles = a.triangles;
   }
   /* a remeshing asked for by name runs whatever the smallest angle */

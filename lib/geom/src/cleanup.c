@@ -232,37 +232,17 @@ static double tol_for(const cmesh *c, double len) {
 static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
   mv->kind = 0;
   if (is_feature(c, a, b)) return;
-  int64_t h = he_find(c, a, b), t = he_find(c, b, a);
-  if (h < 0 || t < 0) return;
-  int64_t f0 = h / 3, f1 = t / 3;
-  const int32_t *t0 = c->t.tri + 3 * f0, *t1 = c->t.tri + 3 * f1;
-  int32_t cc = t0[(h % 3 + 2) % 3], d = t1[(t % 3 + 2) % 3];
-  if (cc == d || he_find(c, cc, d) >= 0 || he_find(c, d, cc) >= 0) return;
-  if (!same_fields(c->m, f0, f1)) return;
+  int32_t opp[2];
+  double dev, lmax;
+  if (!vm_tm_flip_check(&c->t, c->x, a, b, 0.5, opp, &dev, &lmax)) return;
+  int32_t cc = opp[0], d = opp[1];
+  if (!same_fields(c->m, he_find(c, a, b) / 3, he_find(c, b, a) / 3)) return;
   const double *x = c->x;
-  double n0[3], n1[3], m0[3], m1[3], ns[3];
-  tri_normal(x, a, b, cc, n0);
-  tri_normal(x, b, a, d, n1);
-  tri_normal(x, a, d, cc, m0);
-  tri_normal(x, d, b, cc, m1);
-  vm_normalize3(n0);
-  vm_normalize3(n1);
-  for (int r = 0; r < 3; r++) ns[r] = n0[r] + n1[r];
-  if (cos_between(m0, m1) < 0.5 || cos_between(m0, ns) < 0.5 || cos_between(m1, ns) < 0.5) return;
-  /* how far the surface moves: the distance between the lines ab and cd */
-  double ab[3], cd[3], ca[3], nn[3];
-  vm_sub3(x + 3 * (int64_t)b, x + 3 * (int64_t)a, ab);
-  vm_sub3(x + 3 * (int64_t)d, x + 3 * (int64_t)cc, cd);
-  vm_sub3(x + 3 * (int64_t)cc, x + 3 * (int64_t)a, ca);
-  vm_cross3(ab, cd, nn);
-  double ln = vm_norm3(nn);
-  if (!(ln > 0)) return;
-  double dev = fabs(vm_dot3(ca, nn)) / ln, lab = vm_norm3(ab), lcd = vm_norm3(cd);
   /* what earlier moves there changed adds up */
   double e0 = c->err[a] > c->err[b] ? c->err[a] : c->err[b];
   double e1 = c->err[cc] > c->err[d] ? c->err[cc] : c->err[d];
   dev += e0 > e1 ? e0 : e1;
-  if (dev > tol_for(c, lab > lcd ? lab : lcd)) return;
+  if (dev > tol_for(c, lmax)) return;
   double o0 = tri_min_deg(x, a, b, cc), o1 = tri_min_deg(x, b, a, d);
   double w0 = tri_min_deg(x, a, d, cc), w1 = tri_min_deg(x, d, b, cc);
   mv->kind = 1;

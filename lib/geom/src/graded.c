@@ -359,38 +359,19 @@ static int collapse_short(gmesh *g) {
 
 static int try_flip(gmesh *g, int32_t a, int32_t b) {
   if (fline(g, a, b)) return 0;
-  int64_t h = he_find(g, a, b), t = he_find(g, b, a);
-  if (h < 0 || t < 0) return 0;
-  int64_t f0 = h / 3, f1 = t / 3;
-  int32_t c = g->t.tri[3 * f0 + (h % 3 + 2) % 3], d = g->t.tri[3 * f1 + (t % 3 + 2) % 3];
-  if (c == d || he_find(g, c, d) >= 0 || he_find(g, d, c) >= 0) return 0;
+  int32_t opp[2];
+  double dev, lmax;
+  /* new normals within 30 degrees, the surface moved by at most 5 % of
+   * the longer diagonal */
+  if (!vm_tm_flip_check(&g->t, g->x, a, b, 0.8660254037844386, opp, &dev, &lmax) ||
+      dev > 0.05 * lmax)
+    return 0;
+  int32_t c = opp[0], d = opp[1];
   const double *x = g->x;
   double o0 = tri_min_deg(x, a, b, c), o1 = tri_min_deg(x, b, a, d);
   double w0 = tri_min_deg(x, a, d, c), w1 = tri_min_deg(x, d, b, c);
-  double oldmin = o0 < o1 ? o0 : o1, newmin = w0 < w1 ? w0 : w1;
-  if (!(newmin > oldmin + 1e-6)) return 0;
-  double n0[3], n1[3], m0[3], m1[3], ns[3];
-  tri_normal(x, a, b, c, n0);
-  tri_normal(x, b, a, d, n1);
-  tri_normal(x, a, d, c, m0);
-  tri_normal(x, d, b, c, m1);
-  vm_normalize3(n0);
-  vm_normalize3(n1);
-  for (int r = 0; r < 3; r++) ns[r] = n0[r] + n1[r];
-  const double c30 = 0.8660254037844386;
-  if (cos_between(m0, ns) < c30 || cos_between(m1, ns) < c30 || cos_between(m0, m1) < c30) return 0;
-  /* the surface moves by the distance between the lines ab and cd: at
-   * most 5 % of the longer */
-  double ab[3], cd[3], ca[3], nn[3];
-  vm_sub3(x + 3 * (int64_t)b, x + 3 * (int64_t)a, ab);
-  vm_sub3(x + 3 * (int64_t)d, x + 3 * (int64_t)c, cd);
-  vm_sub3(x + 3 * (int64_t)c, x + 3 * (int64_t)a, ca);
-  vm_cross3(ab, cd, nn);
-  double ln = vm_norm3(nn), lab = vm_norm3(ab), lcd = vm_norm3(cd);
-  if (!(ln > 0)) return 0;
-  if (fabs(vm_dot3(ca, nn)) / ln > 0.05 * (lab > lcd ? lab : lcd)) return 0;
+  if (!((w0 < w1 ? w0 : w1) > (o0 < o1 ? o0 : o1) + 1e-6)) return 0;
   if (!faces_input(g, a, d, c) || !faces_input(g, d, b, c)) return 0;
-  int32_t opp[2];
   vm_tm_flip(&g->t, a, b, opp);
   g->flips++;
   return 1;
@@ -598,20 +579,13 @@ static int size_field(gmesh *g, const vm_graded_opts *o, const vm_surf_edges *E,
       int64_t t = he_find(g, b, a);
       if (t < 0 || a > b || fline(g, a, b)) continue;
       const int32_t *t0 = g->t.tri + 3 * f, *t1 = g->t.tri + 3 * (t / 3);
-      double n0[3], n1[3], c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
+      double n0[3], n1[3];
       tri_normal(g->x, t0[0], t0[1], t0[2], n0);
       tri_normal(g->x, t1[0], t1[1], t1[2], n1);
       double cs = cos_between(n0, n1);
       double th = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
-      for (int j = 0; j < 3; j++)
-        for (int r = 0; r < 3; r++) {
-          c0[r] += g->x[3 * (int64_t)t0[j] + r] / 3;
-          c1[r] += g->x[3 * (int64_t)t1[j] + r] / 3;
-        }
       /* across the edge: a third of the two triangles' heights over it
        * (the centroids' distance would count a stretched triangle's length) */
-      (void)c0;
-      (void)c1;
       double d = (vm_norm3(n0) + vm_norm3(n1)) / (3 * l);
       if (!(d > 0)) continue;
       kappa[a] += th / d;

@@ -39,6 +39,39 @@ int vm_tm_flip(vm_tm *t, int32_t a, int32_t b, int32_t cd[2]) {
   return dup;
 }
 
+int vm_tm_flip_check(const vm_tm *t, const double *x, int32_t a, int32_t b, double min_cos,
+                     int32_t cd[2], double *dev, double *lmax) {
+  int64_t h = vm_tm_he(t, a, b), w = vm_tm_he(t, b, a);
+  if (h < 0 || w < 0) return 0;
+  int32_t c = t->tri[3 * (h / 3) + (h % 3 + 2) % 3], d = t->tri[3 * (w / 3) + (w % 3 + 2) % 3];
+  if (c == d || vm_tm_he(t, c, d) >= 0 || vm_tm_he(t, d, c) >= 0) return 0;
+  double n0[3], n1[3], m0[3], m1[3], ns[3];
+  tri_normal(x, a, b, c, n0);
+  tri_normal(x, b, a, d, n1);
+  tri_normal(x, a, d, c, m0);
+  tri_normal(x, d, b, c, m1);
+  vm_normalize3(n0);
+  vm_normalize3(n1);
+  for (int r = 0; r < 3; r++) ns[r] = n0[r] + n1[r];
+  if (cos_between(m0, m1) < min_cos || cos_between(m0, ns) < min_cos ||
+      cos_between(m1, ns) < min_cos)
+    return 0;
+  /* how far the surface moves: the distance between the lines ab and cd */
+  double ab[3], dc[3], ca[3], nn[3];
+  vm_sub3(x + 3 * (int64_t)b, x + 3 * (int64_t)a, ab);
+  vm_sub3(x + 3 * (int64_t)d, x + 3 * (int64_t)c, dc);
+  vm_sub3(x + 3 * (int64_t)c, x + 3 * (int64_t)a, ca);
+  vm_cross3(ab, dc, nn);
+  double ln = vm_norm3(nn);
+  if (!(ln > 0)) return 0;
+  double lab = vm_norm3(ab), lcd = vm_norm3(dc);
+  *dev = fabs(vm_dot3(ca, nn)) / ln;
+  *lmax = lab > lcd ? lab : lcd;
+  cd[0] = c;
+  cd[1] = d;
+  return 1;
+}
+
 int vm_tm_ring(const vm_tm *t, int32_t v, int64_t *out, int max) {
   int n = 0;
   int64_t f0 = t->vface[v], f = f0;

@@ -171,6 +171,14 @@ static inline int vm_tm_contains(const int32_t *s, int n, int32_t v) {
  * how many of them were there already (a non-manifold or inconsistently
  * oriented surface). */
 int vm_tm_keys(vm_tm *t, int64_t f, int add);
+/* Can the interior edge (a, b) of the faces (a, b, c) and (b, a, d) be
+ * flipped to (c, d): c != d, (c, d) not an edge yet, the two new
+ * triangles' normals within acos(min_cos) of each other and of the old
+ * pair's mean? Then 1, cd = {c, d}, *dev the distance between the lines
+ * ab and cd (how far the flip moves the surface), *lmax the longer of
+ * |ab| and |cd|; else 0. Features and fields are the caller's. */
+int vm_tm_flip_check(const vm_tm *t, const double *x, int32_t a, int32_t b, double min_cos,
+                     int32_t cd[2], double *dev, double *lmax);
 /* Flip the interior edge (a, b) of the faces (a, b, c) and (b, a, d) to
  * (c, d) (not checked: the caller has); cd = {c, d}; the duplicate edges
  * the new faces met, as vm_tm_keys. */
