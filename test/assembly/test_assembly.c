@@ -8,7 +8,9 @@
 #include <string.h>
 
 #include "meshgen.h"
+#include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
+#include "varmesh/quadrature.h"
 #include "vmtest.h"
 
 enum {
@@ -654,6 +656,178 @@ static void test_node_weights(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* det J of the trilinear hex x (8 x 3) at (u, v, w), from its derivatives. */
+static double hex_det(const double *x, double u, double v, double w) {
+  static const int cu[8] = {0, 1, 1, 0, 0, 1, 1, 0}, cv[8] = {0, 0, 1, 1, 0, 0, 1, 1},
+                   cw[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+  double J[3][3] = {{0}};
+  for (int a = 0; a < 8; a++) {
+    double fu = cu[a] ? u : 1 - u, fv = cv[a] ? v : 1 - v, fw = cw[a] ? w : 1 - w;
+    double d[3] = {(cu[a] ? 1 : -1) * fv * fw, (cv[a] ? 1 : -1) * fu * fw,
+                   (cw[a] ? 1 : -1) * fu * fv};
+    for (int r = 0; r < 3; r++)
+      for (int l = 0; l < 3; l++) J[r][l] += x[3 * a + r] * d[l];
+  }
+  return J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+         J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+         J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+}
+
+/* vm_hex_bernstein against det J itself, its gradient against finite
+ * differences; the problem's Bernstein term: value, gradient against finite
+ * differences, Hessian blocks against the Gauss-Newton formula, weights,
+ * eps 0 as a barrier. */
+static void test_bernstein(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 23);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 2, 2, 2, 1.0);
+  mg_jitter(ctx, m, 0.3);
+  /* the polynomial: det J at 27 points of the cell from the coefficients */
+  double worst = 0, gerr = 0, gmax = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    double x[24], b[27], G[27 * 24];
+    for (int a = 0; a < 8; a++)
+      memcpy(x + 3 * a, m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + a], 3 * sizeof *x);
+    vm_hex_bernstein(x, b, G);
+    for (int pt = 0; pt < 27; pt++) {
+      double t[3] = {0.1 + 0.4 * (pt / 9), 0.1 + 0.4 * (pt / 3 % 3), 0.1 + 0.4 * (pt % 3)};
+      double B[3][3];
+      for (int d = 0; d < 3; d++) {
+        B[d][0] = (1 - t[d]) * (1 - t[d]);
+        B[d][1] = 2 * t[d] * (1 - t[d]);
+        B[d][2] = t[d] * t[d];
+      }
+      double sum = 0;
+      for (int c = 0; c < 27; c++) sum += b[c] * B[0][c / 9] * B[1][c / 3 % 3] * B[2][c % 3];
+      worst = fmax(worst, fabs(sum - hex_det(x, t[0], t[1], t[2])));
+    }
+    for (int k = 0; k < 24; k++) {
+      double xp[24], xm[24], bp[27], bm[27], h = 1e-6;
+      memcpy(xp, x, sizeof xp);
+      memcpy(xm, x, sizeof xm);
+      xp[k] += h;
+      xm[k] -= h;
+      vm_hex_bernstein(xp, bp, NULL);
+      vm_hex_bernstein(xm, bm, NULL);
+      for (int c = 0; c < 27; c++) {
+        gmax = fmax(gmax, fabs(G[24 * c + k]));
+        gerr = fmax(gerr, fabs(G[24 * c + k] - (bp[c] - bm[c]) / (2 * h)));
+      }
+    }
+  }
+  CHECK(worst < 1e-12, "Bernstein coefficients miss det J by %.2e", worst);
+  CHECK(gerr < 1e-8 * gmax, "Bernstein gradient off by %.2e (max %.2e)", gerr, gmax);
+
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  /* the geometric rule couples every pair of a hex's vertices, so every
+   * block of the Gauss-Newton part is there */
+  CHECK(vm_problem_set_rule(p, VM_RULE_GEOMETRIC) == 0, "rule");
+  vm_measure_params q = vm_measure_params_default();
+  q.eps = 0.05;
+  vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q);
+  int64_t nn = vm_problem_num_nodes(p), nv = m->nv;
+  double *w = calloc((size_t)nn, sizeof *w), *we = malloc((size_t)m->ne * sizeof *we);
+  double *eps = malloc(27 * (size_t)m->ne * sizeof *eps);
+  /* the nodes left out: F is the Bernstein term alone */
+  vm_problem_set_node_weights(p, w);
+  for (int64_t e = 0; e < m->ne; e++) {
+    we[e] = e % 3 == 2 ? 0 : 0.5 + 0.25 * (double)(e % 2);
+    for (int c = 0; c < 27; c++) eps[27 * e + c] = 0.02 + 0.01 * c;
+  }
+  double scale = 1.7;
+  CHECK(vm_problem_set_bernstein(p, we, eps, scale) == 0, "set Bernstein");
+  double F = 0;
+  double *g = calloc(3 * (size_t)nv, sizeof *g), *hd = calloc(9 * (size_t)nv, sizeof *hd);
+  const int64_t *rp;
+  const int32_t *adj;
+  vm_problem_graph(p, &rp, &adj);
+  double *ho = calloc(3 * (size_t)rp[nv] + 1, sizeof *ho);
+  vm_eval ev = {&F, g, hd, ho};
+  CHECK(vm_problem_eval(p, m->xyz, &ev) == 0, "eval");
+  /* the same sums here: value, diagonal blocks, off-diagonal diagonals */
+  double Fr = 0, *hdr = calloc(9 * (size_t)nv, sizeof *hdr);
+  double *hor = calloc(3 * (size_t)rp[nv] + 1, sizeof *hor);
+  const vm_qrule *R = vm_qrule_get(VM_HEX, VM_RULE_GEOMETRIC);
+  /* the node weights of an ideal hex summed (every hex has the same) */
+  double tv = vm_problem_target_volume(p) / (double)m->ne;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (we[e] == 0) continue;
+    double x[24], b[27], G[27 * 24];
+    const int32_t *cv = m->conn + m->eoff[e];
+    for (int a = 0; a < 8; a++) memcpy(x + 3 * a, m->xyz + 3 * (int64_t)cv[a], 3 * sizeof *x);
+    vm_hex_bernstein(x, b, G);
+    for (int c = 0; c < 27; c++) {
+      double ep = eps[27 * e + c], d = scale * b[c], qq = sqrt(ep * ep + d * d);
+      double chi = 0.5 * (d + qq), wq = we[e] * tv / R->nnodes;
+      Fr += wq / chi;
+      double r2 = wq * 2 / (qq * qq * qq) * scale * scale;
+      for (int a = 0; a < 8; a++)
+        for (int a2 = 0; a2 < 8; a2++) {
+          const double *u = G + 24 * c + 3 * a, *v = G + 24 * c + 3 * a2;
+          if (a == a2) {
+            for (int r = 0; r < 3; r++)
+              for (int t = 0; t < 3; t++) hdr[9 * (int64_t)cv[a] + 3 * r + t] += r2 * u[r] * v[t];
+          } else {
+            int64_t k = find_pos(rp, adj, cv[a], cv[a2]);
+            if (k >= 0 && adj[k] == cv[a2])
+              for (int r = 0; r < 3; r++) hor[3 * k + r] += r2 * u[r] * v[r];
+          }
+        }
+    }
+  }
+  CHECK(fabs(F - Fr) <= 1e-12 * Fr, "Bernstein term %.17g, by hand %.17g", F, Fr);
+  double eh = 0, mh = 0;
+  for (int64_t k = 0; k < 9 * nv; k++) {
+    eh = fmax(eh, fabs(hd[k] - hdr[k]));
+    mh = fmax(mh, fabs(hdr[k]));
+  }
+  for (int64_t k = 0; k < 3 * rp[nv]; k++) eh = fmax(eh, fabs(ho[k] - hor[k]));
+  CHECK(mh > 0 && eh <= 1e-12 * mh, "Gauss-Newton blocks off by %.2e (max %.2e)", eh, mh);
+  /* the gradient against finite differences of F */
+  double ge = 0, gm = 0, *x = dup(m->xyz, 3 * (size_t)nv);
+  for (int64_t k = 0; k < 3 * nv; k++) {
+    double Fp, Fm, h = 1e-6;
+    x[k] = m->xyz[k] + h;
+    vm_problem_value(p, x, &Fp);
+    x[k] = m->xyz[k] - h;
+    vm_problem_value(p, x, &Fm);
+    x[k] = m->xyz[k];
+    gm = fmax(gm, fabs(g[k]));
+    ge = fmax(ge, fabs(g[k] - (Fp - Fm) / (2 * h)));
+  }
+  CHECK(gm > 0 && ge < 1e-6 * gm, "Bernstein gradient vs finite differences: %.2e of %.2e", ge, gm);
+  /* eps 0 (params, no per-coefficient eps): a barrier, outside at b <= 0 */
+  q.eps = 0;
+  vm_problem_set_params(p, &q);
+  CHECK(vm_problem_set_bernstein(p, we, NULL, scale) == 0, "barrier");
+  CHECK(vm_problem_value(p, m->xyz, &F) == 0 && isfinite(F), "barrier at a valid mesh");
+  /* push vertex 0's hex inside out */
+  x[0] = 1.6;
+  x[1] = 1.6;
+  x[2] = 1.6;
+  CHECK(vm_problem_value(p, x, &F) == VM_WARN_INVERTED, "barrier at a negative coefficient");
+  CHECK(vm_problem_set_bernstein(p, NULL, NULL, 1) == 0 && vm_problem_value(p, x, &F) == 0 &&
+            F == 0,
+        "term off: F %g", F);
+  we[1] = -1;
+  CHECK(vm_problem_set_bernstein(p, we, NULL, 1) == VM_ERR_ARG, "negative weight accepted");
+  we[1] = 1;
+  eps[27] = 0;
+  CHECK(vm_problem_set_bernstein(p, we, eps, 1) == VM_ERR_ARG, "eps 0 accepted");
+  CHECK(vm_problem_set_bernstein(p, we, NULL, 0) == VM_ERR_ARG, "scale 0 accepted");
+  free(x);
+  free(w);
+  free(we);
+  free(eps);
+  free(g);
+  free(hd);
+  free(ho);
+  free(hdr);
+  free(hor);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
 /* Bad input is refused with the problem unchanged; every allocation
  * failure is reported and leaks nothing. */
 static void test_errors(vm_ctx *ctx) {
@@ -722,6 +896,7 @@ int main(void) {
   test_node_stats(ctx);
   test_subsets(ctx);
   test_node_weights(ctx);
+  test_bernstein(ctx);
   test_errors(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("assembly");

@@ -1,7 +1,7 @@
 /* test/solver/test_minimize.c: explicit and implicit minimizers on
  * generated meshes: jittered hex cube, quad and triangle squares return to
  * the uniform mesh; fixed vertices keep their bits; thread-count
- * independence. */
+ * independence; the line search's admissibility test. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -104,11 +104,80 @@ static void test_return_to_uniform(vm_ctx *ctx) {
   }
 }
 
+/* The line search's admissibility test: a free vertex whose uniform place
+ * lies right of where the jitter put it may move right only halfway; the
+ * run keeps to it (the final iterate too), F still falls, and without the
+ * test the vertex goes back to its place. */
+typedef struct {
+  int64_t v;
+  double xmax;
+  int calls, refused;
+} fence;
+
+static int fence_ok(void *user, const double *x) {
+  fence *f = user;
+  f->calls++;
+  int ok = x[3 * f->v] <= f->xmax;
+  f->refused += !ok;
+  return ok;
+}
+
+static void test_admissible(vm_ctx *ctx) {
+  for (int kind = 0; kind < 2; kind++) {
+    vm_mesh *m = NULL;
+    gen_cube(ctx, 4, 0, &m);
+    size_t bytes = (size_t)m->nv * 3 * sizeof(double);
+    double *ref = malloc(bytes), *x0 = malloc(bytes);
+    memcpy(ref, m->xyz, bytes);
+    mark_boundary(m, VM_VERTEX_FIXED, -1);
+    jitter_free(ctx, m, 0.05, 7);
+    fence f = {-1, 0, 0, 0};
+    for (int64_t v = 0; v < m->nv && f.v < 0; v++)
+      if (m->vflag[v] != VM_VERTEX_FIXED && m->xyz[3 * v] < ref[3 * v] - 0.02) f.v = v;
+    CHECK(f.v >= 0, "no free vertex left of its place");
+    if (f.v < 0) goto next;
+    f.xmax = 0.5 * (m->xyz[3 * f.v] + ref[3 * f.v]);
+    memcpy(x0, m->xyz, bytes);
+    for (int with = 0; with < 2; with++) {
+      memcpy(m->xyz, x0, bytes);
+      vm_problem *p = NULL;
+      vm_minimizer *mn = NULL;
+      vm_problem_create(ctx, m, &p);
+      vm_minimizer_create(ctx, p, kind, &mn);
+      vm_minimize_options o = vm_minimize_options_default();
+      o.max_iter = 200;
+      if (with) {
+        o.admissible = fence_ok;
+        o.user = &f;
+      }
+      vm_minimizer_set_options(mn, &o);
+      vm_minimize_result r;
+      int st = vm_minimizer_run(mn, m->xyz, &r);
+      CHECK(st >= 0 && r.F < r.F_initial, "admissible %d: status %d, F %g -> %g", with, st,
+            r.F_initial, r.F);
+      if (with)
+        CHECK(m->xyz[3 * f.v] <= f.xmax && f.refused > 0,
+              "admissible: x %.17g beyond %.17g (%d of %d trials refused)", m->xyz[3 * f.v], f.xmax,
+              f.refused, f.calls);
+      else
+        CHECK(m->xyz[3 * f.v] > f.xmax + 0.01, "without the test the vertex stays at %g (%g)",
+              m->xyz[3 * f.v], f.xmax);
+      vm_minimizer_destroy(&mn);
+      vm_problem_destroy(&p);
+    }
+  next:
+    free(ref);
+    free(x0);
+    vm_mesh_destroy(&m);
+  }
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_threads(ctx, 1); /* fast on a loaded machine; test_control checks 2 threads */
   test_return_to_uniform(ctx);
+  test_admissible(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == 0, "leak: %ld live allocations", vm_ctx_alloc_live(ctx));
   vm_ctx_destroy(&ctx);
   return vmtest_end("test_minimize");

@@ -84,8 +84,8 @@ static void pi_cube(vm_ctx *ctx, int n) {
  * only, as a mesh of its own: one round (2 rings, so that the region is not
  * the whole of this small mesh) from m, whose corner tets are all positive
  * but some cells not certified, moves no vertex that has a cell outside
- * that region (bit for bit), and certifies cells (all 143: 284
- * iterations). */
+ * that region (bit for bit), and certifies cells (all 143: one round of
+ * the Bernstein repair). */
 static void repair_region(vm_ctx *ctx, const vm_mesh *m0) {
   vm_mesh *m = NULL;
   CHECK(vm_mesh_clone(m0, &m) == VM_OK, "clone");

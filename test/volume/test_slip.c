@@ -183,8 +183,9 @@ int main(void) {
   double ps = slip_case(ctx, "hex, pi/2, slip", PI / 2, VM_GEN_HEX, 1);
   double pf = slip_case(ctx, "hex, pi/2, fixed", PI / 2, VM_GEN_HEX, 0);
   /* the crowded boundary, once free to slide, no longer pins the worst
-   * element (measured: phi_min 8.4e-2 against 7.3e-4) */
-  CHECK(ps > 10 * pf, "slip improves phi_min: %.3e vs %.3e fixed", ps, pf);
+   * element (measured: phi_min 8.4e-2 against 2.4e-2 fixed; 5.2e-3 fixed
+   * before the optimization after the certifying repair) */
+  CHECK(ps > 2 * pf, "slip improves phi_min: %.3e vs %.3e fixed", ps, pf);
   double ts = slip_case(ctx, "tets, pi/2, slip", PI / 2, VM_GEN_TETS, 1);
   CHECK(ts > 1e-2, "tets: phi_min %.3e with slip", ts);
   bad_input(ctx);

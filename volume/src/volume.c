@@ -35,6 +35,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.repair_rounds = 20;
   o.repair_rings = 4;
   o.repair_round_iter = 1000;
+  o.repair_bernstein = 1;
   return o;
 }
 
@@ -84,6 +85,16 @@ typedef struct {
   int block_iter;     /* foldover: iterations at the current eps */
   double F_block0;    /* foldover: F before the first of them */
   double eps_restart; /* foldover: least eps after a stalled local round */
+  int keep_certified; /* optimization: every step keeps every cell certified */
+  int no_local;       /* untangling without local rounds */
+  int keep_guards;    /* every step keeps every guarded node positive */
+  /* the Bernstein repair: per element of m a weight (hexes of the region),
+   * per coefficient penalized (1) or walled (0) and its eps, and the scale
+   * that makes the coefficients target-relative */
+  double *bw;
+  uint8_t *bpen;
+  double *beps;
+  double bscale;
   double t0;
 } ut_state;
 
@@ -91,6 +102,56 @@ static double now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Cells of s->m not certified det J > 0 everywhere (varmesh/jacobian.h)
+ * with the vertices at x; -1 on error. */
+static int64_t uncertified_at(const ut_state *s, const double *x) {
+  vm_mesh mx = *s->m;
+  mx.xyz = (double *)x;
+  vm_jac_report jr;
+  if (vm_mesh_jacobian_certify(&mx, &jr, NULL) < 0) return -1;
+  return jr.invalid + jr.undecided;
+}
+
+/* The line search's test while the optimization keeps the mesh certified:
+ * a step that leaves a cell not certified is outside the domain. */
+static int all_certified(void *user, const double *x) { return uncertified_at(user, x) == 0; }
+
+/* The line search's test while the guarded nodes must stay positive: a
+ * guard's wall (eps = delta0) is steep only away from det = 0, and next to
+ * a penalty grown large a node squeezed flat against it could cross. */
+static int guards_positive(void *user, const double *x) {
+  ut_state *s = user;
+  if (vm_problem_node_dets(s->P, x, s->dets) < 0) return 0;
+  for (int64_t q = 0; q < s->nnodes; q++)
+    if (s->guard[q] && s->dets[q] <= 0) return 0;
+  return 1;
+}
+
+/* The Bernstein coefficients of det J of hex e of m with the vertices at x. */
+static void hex_coefs(const vm_mesh *m, const double *x, int64_t e, double b[27]) {
+  double xe[24];
+  for (int a = 0; a < 8; a++)
+    memcpy(xe + 3 * a, x + 3 * (int64_t)m->conn[m->eoff[e] + a], 3 * sizeof *xe);
+  vm_hex_bernstein(xe, b, NULL);
+}
+
+/* The scale that makes m's Bernstein coefficients target-relative: 1 / h^3
+ * for ideal targets of edge h, else over the mean centre coefficient (the
+ * mean hex volume). */
+static double hex_scale(const vm_problem *P, const vm_mesh *m) {
+  double h = vm_problem_target_size(P);
+  if (h > 0) return 1 / (h * h * h);
+  double vsum = 0, b[27];
+  int64_t nhex = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_HEX) continue;
+    hex_coefs(m, m->xyz, e, b);
+    vsum += fabs(b[13]);
+    nhex++;
+  }
+  return nhex > 0 && vsum > 0 ? (double)nhex / vsum : 1;
 }
 
 /* Node determinants at x: M, min det, and the best state so far. */
@@ -104,6 +165,19 @@ static int stats(ut_state *s, const double *x) {
     if (s->dets[q] <= 0) M++;
     /* a guard's small positive det is not what eps should follow */
     if (s->dets[q] < mn && (!s->guard || !s->guard[q] || s->dets[q] <= 0)) mn = s->dets[q];
+  }
+  if (s->bpen) {
+    /* the Bernstein repair: the penalized coefficients are its nodes */
+    for (int64_t e = 0; e < s->m->ne; e++) {
+      if (!(s->bw[e] > 0)) continue;
+      double b[27];
+      hex_coefs(s->m, x, e, b);
+      for (int c = 0; c < 27; c++) {
+        if (!s->bpen[27 * e + c]) continue;
+        if (b[c] <= 0) M++;
+        if (s->bscale * b[c] < mn) mn = s->bscale * b[c];
+      }
+    }
   }
   s->M = M;
   s->min_det = mn;
@@ -198,6 +272,13 @@ static int update_eps(ut_state *s, int first) {
     int st = vm_problem_set_node_eps(s->P, s->node_eps);
     if (st < 0) return st;
   }
+  if (s->bpen) {
+    /* the penalized coefficients follow eps, the others stay walled */
+    for (int64_t k = 0; k < 27 * s->m->ne; k++)
+      s->beps[k] = s->bpen[k] ? fmax(s->eps, o->delta0) : o->delta0;
+    int st = vm_problem_set_bernstein(s->P, s->bw, s->beps, s->bscale);
+    if (st < 0) return st;
+  }
   prm.eps = s->eps;
   return vm_problem_set_params(s->P, &prm);
 }
@@ -263,6 +344,8 @@ static int run_phase(ut_state *s, const char *phase, vm_minimizer_kind kind, int
   }
   mo.monitor = monitor;
   mo.before_iteration = hook;
+  if (s->keep_certified) mo.admissible = all_certified;
+  if (s->keep_guards && s->guard) mo.admissible = guards_positive;
   mo.user = s;
   s->phase = phase;
   if ((st = vm_minimizer_set_options(mz, &mo)) < 0) goto done;
@@ -453,6 +536,9 @@ static int sub_begin(ut_state *s, vm_rule rule, vm_measure_kind k, const vm_meas
   ss->rule = rule;
   if ((st = size_node_arrays(ss)) < 0) return st;
   if ((st = vm_problem_set_measure(ss->P, k, prm)) < 0) return st;
+  /* the Bernstein roles are the repair round's own (repair_round_bern) */
+  ss->bw = ss->beps = NULL;
+  ss->bpen = NULL;
   /* the sub-problem's M is the mesh's (every inverted node is in it, and
    * nothing outside moves): its best state is the mesh's best state */
   if (s->best && !(ss->best = vm_alloc_array(ctx, (size_t)sm->m->nv * 3 + 1, sizeof *ss->best)))
@@ -595,7 +681,7 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
     if (o->theta_untangle > 0) pu.theta = o->theta_untangle;
     if ((st = vm_problem_set_measure(s->P, k, &pu)) < 0) return st;
     if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
-    s->go_local = o->local_threshold > 0;
+    s->go_local = o->local_threshold > 0 && !s->no_local;
     int64_t M0 = s->M;
     vm_minimizer_kind ks =
         o->untangle_solver >= 0 ? (vm_minimizer_kind)o->untangle_solver : o->solver;
@@ -604,7 +690,7 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) return st;
     if ((st = stats(s, s->m->xyz)) < 0) return st;
-    if (s->M > 0 && s->M < o->local_threshold) {
+    if (s->M > 0 && !s->no_local && s->M < o->local_threshold) {
       if ((st = local_phase(s, k, &prm, budget)) < 0) return st;
     }
     if (s->M > 0 && s->M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
@@ -746,9 +832,80 @@ static int repair_round(ut_state *s, const vm_measure_params *prm, const uint8_t
   return st;
 }
 
+/* One round of the certifying repair on hexahedra, on the Bernstein
+ * coefficients themselves: the region as in repair_round, with the rule's
+ * nodes (all positive after the untangling) guarded, and the Bernstein
+ * term of varmesh/problem.h on every hex of the region: in a hex not
+ * certified, its coefficients <= 0 (the least one if none is) are
+ * penalized with the untangling's eps, the others walled (eps = delta0);
+ * in a certified hex every positive coefficient is walled. All 27 of a hex
+ * positive certify it, and a coefficient is the mean of the geometric
+ * rule's nodes behind it, so this asks far less than every one of those
+ * nodes positive. The round ends when every coefficient of its region is
+ * positive. (After a round without progress repair_phase goes on with
+ * repair_round, so there are no soft cells here.) */
+static int repair_round_bern(ut_state *s, const vm_measure_params *prm, const uint8_t *verdict,
+                             const uint8_t *emask, const uint8_t *vmark, int *budget) {
+  vm_ctx *ctx = s->ctx;
+  ut_state ss;
+  submesh sm;
+  int st = sub_begin(s, s->rule, VM_MEASURE_PENALTY, prm, emask, vmark, &ss, &sm);
+  ss.repair_stage = 1;
+  /* no local rounds: the roles are the region's own */
+  ss.no_local = 1;
+  ss.keep_guards = 1;
+  if (st >= 0) {
+    size_t nn = (size_t)ss.nnodes + 1, ne = (size_t)sm.m->ne + 1;
+    vm_free(ctx, ss.guard);
+    ss.guard = vm_alloc_array(ctx, nn, 1);
+    ss.bw = vm_alloc_array(ctx, ne, sizeof *ss.bw);
+    ss.bpen = vm_alloc_array(ctx, 27 * ne, 1);
+    ss.beps = vm_alloc_array(ctx, 27 * ne, sizeof *ss.beps);
+    if (!ss.guard || !ss.bw || !ss.bpen || !ss.beps) st = VM_ERR_NOMEM;
+  }
+  if (st >= 0) st = vm_problem_node_dets(ss.P, sm.m->xyz, ss.dets);
+  if (st >= 0) {
+    const vm_mesh *r = sm.m;
+    for (int64_t e = 0; e < r->ne; e++) {
+      int32_t e0 = sm.e_of[e];
+      int bad = verdict[e0] != VM_JAC_VALID;
+      ss.bw[e] = 0;
+      memset(ss.bpen + 27 * e, 0, 27);
+      if (r->etype[e] != VM_HEX) continue;
+      double b[27];
+      hex_coefs(r, r->xyz, e, b);
+      ss.bw[e] = 1;
+      int least = 0, any = 0;
+      for (int c = 0; c < 27; c++) {
+        ss.bpen[27 * e + c] = b[c] <= 0;
+        any |= b[c] <= 0;
+        if (b[c] < b[least]) least = c;
+      }
+      if (bad && !any) ss.bpen[27 * e + least] = 1;
+    }
+    ss.bscale = hex_scale(ss.P, r);
+    /* the rule's nodes stay walled: the repair must not give back what
+     * the untangling won */
+    for (int64_t q = 0; q < ss.nnodes; q++) ss.guard[q] = ss.dets[q] > 0;
+    st = stats(&ss, sm.m->xyz);
+  }
+  if (st >= 0) {
+    ss.eps = 0;
+    ss.eps_restart = 0;
+    st = untangle_rounds(&ss, prm, budget);
+  }
+  vm_free(ctx, ss.bw);
+  vm_free(ctx, ss.bpen);
+  vm_free(ctx, ss.beps);
+  sub_end(s, &ss, &sm, vmark);
+  return st;
+}
+
 /* Certifying repair: while some cells are not certified valid (the corner
  * rule's nodes can all be positive with det J < 0 inside a hex), untangle
- * the geometric rule's nodes of those cells only, on the cells within
+ * their Bernstein coefficients (repair_round_bern; when they are all hexes,
+ * until a round makes no progress) or the geometric rule's nodes of those
+ * cells (repair_round), on the cells within
  * `rings` of them (repair_round), with every positive node elsewhere
  * guarded, then certify again; stops when every cell is certified, after
  * three rounds in a row without fewer uncertified cells, or at the budget.
@@ -773,6 +930,11 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   if (st >= 0) memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
   int stalls = 0;
   s->phase_name = "repair";
+  /* the Bernstein repair when every cell to repair is a hex (prisms and
+   * pyramids: the geometric rule's nodes) */
+  int bern = o0->repair_bernstein;
+  for (int64_t e = 0; e < m->ne && bern && st >= 0; e++)
+    if (verdict[e] != VM_JAC_VALID && m->etype[e] != VM_HEX) bern = 0;
   for (int round = 0; st >= 0 && nbad > 0 && round<o0->repair_rounds && * budget> 0 &&
                       !out_of_time(s) && stalls < 3;
        round++) {
@@ -794,7 +956,13 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
      * would otherwise keep the local rounds busy until the run's budget */
     int round_budget = *budget < o0->repair_round_iter ? *budget : o0->repair_round_iter;
     int used0 = round_budget;
-    st = repair_round(s, prm, verdict, stalls > 0 ? soft : NULL, emask, vmark, &round_budget);
+    /* after a Bernstein round without progress, the rounds go on with
+     * the geometric rule's nodes and the soft walls, as before the
+     * Bernstein rounds existed */
+    if (stalls > 0) bern = 0;
+    st = bern
+             ? repair_round_bern(s, prm, verdict, emask, vmark, &round_budget)
+             : repair_round(s, prm, verdict, stalls > 0 ? soft : NULL, emask, vmark, &round_budget);
     *budget -= used0 - round_budget;
     s->rep->iter_repair += s->rep->iter_untangle - u0 + s->rep->iter_local - l0;
     s->rep->iter_untangle = u0;
@@ -828,6 +996,66 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   vm_free(ctx, vel);
   vm_free(ctx, best);
   return st;
+}
+
+/* The Bernstein term as a wall on every hex whose 27 coefficients are
+ * positive (weight w, eps delta0), so that the optimization after the
+ * repair keeps them so without the line search having to cut its steps to
+ * nothing at a wall it cannot see; w <= 0 takes the term off. */
+static int bern_walls(ut_state *s, double w) {
+  vm_ctx *ctx = s->ctx;
+  const vm_mesh *m = s->m;
+  if (!(w > 0)) return vm_problem_set_bernstein(s->P, NULL, NULL, 1);
+  double *bw = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *bw);
+  double *be = vm_alloc_array(ctx, 27 * (size_t)m->ne + 1, sizeof *be);
+  int st = bw && be ? VM_OK : VM_ERR_NOMEM;
+  for (int64_t e = 0; e < m->ne && st >= 0; e++) {
+    bw[e] = 0;
+    for (int c = 0; c < 27; c++) be[27 * e + c] = s->o->delta0;
+    if (m->etype[e] != VM_HEX) continue;
+    double b[27];
+    hex_coefs(m, m->xyz, e, b);
+    int pos = 1;
+    for (int c = 0; c < 27; c++) pos &= b[c] > 0;
+    bw[e] = pos ? w : 0;
+  }
+  if (st >= 0) st = vm_problem_set_bernstein(s->P, bw, be, hex_scale(s->P, m));
+  vm_free(ctx, bw);
+  vm_free(ctx, be);
+  return st;
+}
+
+/* Optimization of an untangled mesh: the barrier measure (which keeps the
+ * mesh admissible) for opt_iter iterations, then qi_steps steps of the
+ * quasi-isometric continuation (11), raising t of W_t to push up the worst
+ * element. With s->keep_certified every step also keeps every cell
+ * certified. */
+static int optimize_phase(ut_state *s, const vm_measure_params *prm) {
+  const vm_volume_opts *o = s->o;
+  vm_minimize_result res;
+  int st;
+  if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
+  s->eps = 0;
+  if ((st = vm_problem_set_measure(s->P, o->measure, prm)) < 0) return st;
+  if (o->opt_iter > 0) {
+    st = run_phase(s, "optimize", o->solver, o->opt_iter, before_plain, &res);
+    s->rep->iter_opt += res.iterations;
+    if (st < 0) return st;
+  }
+  for (int k = 0; k < o->qi_steps && st >= 0 && !out_of_time(s); k++) {
+    if ((st = vm_problem_set_measure(s->P, VM_MEASURE_QUASI_ISO, prm)) < 0) return st;
+    double lo = k == 0 ? 0 : s->rep->t_reached;
+    double tmax = qi_feasible_t(s, lo);
+    vm_measure_params q = *prm;
+    q.t = lo + 0.9 * (tmax - lo);
+    s->eps = q.t;
+    if ((st = vm_problem_set_params(s->P, &q)) < 0) return st;
+    st = run_phase(s, "quasi-iso", o->solver, o->opt_iter > 0 ? o->opt_iter : 50, before_plain,
+                   &res);
+    s->rep->iter_opt += res.iterations;
+    s->rep->t_reached = q.t;
+  }
+  return st > 0 ? VM_OK : st;
 }
 
 int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_volume_opts *opts,
@@ -868,7 +1096,6 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   if ((st = stats(&s, m->xyz)) < 0) goto done;
   rep.M_init = rep.M_max = s.M;
   int budget = o.max_iter;
-  vm_minimize_result res;
   if (o.staged && (o.rule == VM_RULE_CORNER || o.rule == VM_RULE_GEOMETRIC) && has_hex(m) &&
       s.M > 0) {
     /* the 6-tet split first (the most freedom to find the twist), then the
@@ -894,34 +1121,20 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
   if (s.M > 0 && s.best_M < s.M) memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
   rep.time_untangle = now() - s.t0;
-  if (s.M == 0 && !out_of_time(&s)) {
-    /* optimization: a barrier measure keeps the mesh admissible */
-    if ((st = vm_problem_set_node_eps(s.P, NULL)) < 0) goto done;
-    s.eps = 0;
-    if ((st = vm_problem_set_measure(s.P, o.measure, &prm)) < 0) goto done;
-    if (o.opt_iter > 0) {
-      st = run_phase(&s, "optimize", o.solver, o.opt_iter, before_plain, &res);
-      rep.iter_opt += res.iterations;
-      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
-    }
-    /* (11): raise t of W_t by continuation to push up the worst element */
-    for (int k = 0; k < o.qi_steps && st >= 0 && !out_of_time(&s); k++) {
-      if ((st = vm_problem_set_measure(s.P, VM_MEASURE_QUASI_ISO, &prm)) < 0) goto done;
-      double tmax = qi_feasible_t(&s, rep.t_reached);
-      vm_measure_params q = prm;
-      q.t = rep.t_reached + 0.9 * (tmax - rep.t_reached);
-      s.eps = q.t;
-      if ((st = vm_problem_set_params(s.P, &q)) < 0) goto done;
-      st = run_phase(&s, "quasi-iso", o.solver, o.opt_iter > 0 ? o.opt_iter : 50, before_plain,
-                     &res);
-      rep.iter_opt += res.iterations;
-      rep.t_reached = q.t;
-    }
-    if (st > 0) st = VM_OK;
-  }
+  if (s.M == 0 && !out_of_time(&s))
+    if ((st = optimize_phase(&s, &prm)) < 0 && st != VM_ERR_INTERRUPTED) goto done;
   if (st >= 0 && s.M == 0 && o.repair && !out_of_time(&s)) {
     /* the corner rule's M = 0 is not det J > 0 inside every hex */
     if ((st = repair_phase(&s, &prm, &budget)) < 0) goto done;
+    if (rep.cert_bad_init > 0 && rep.cert_invalid + rep.cert_undecided == 0 && !out_of_time(&s)) {
+      /* the repair squeezed cells to certify them: optimize again, every
+       * step keeping every cell certified */
+      s.keep_certified = 1;
+      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm);
+      s.keep_certified = 0;
+      bern_walls(&s, 0);
+      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+    }
   }
   if (st >= 0 && (st = stats(&s, m->xyz)) < 0) goto done;
   {

@@ -6,6 +6,7 @@
 
 #include "hessian_psd_private.h"
 #include "problem_private.h"
+#include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
 
 #if defined(__GNUC__)
@@ -579,6 +580,82 @@ static int elem2_o4(const vm_problem *p, const elem_ctx *ec, double *Fe, elem_ac
 
 /* Element i's F into *Fe and, by order, its derivatives into acc; offd:
  * with order 2, the off-diagonal entries too (only hoff reads them). */
+/* The Bernstein term of hex i (vm_problem_set_bernstein) added to *Fe and
+ * acc: sum_c w / chi_eps(s b_c) (w: the element's weight times the mean
+ * node weight of its rule times bern_w), its gradient, and the Gauss-Newton part
+ * of its Hessian, (1/chi)'' grad b grad b^T (the part with the Hessian of
+ * b, which is indefinite, is dropped). Returns 1 outside the domain (eps 0
+ * and a coefficient <= 0). */
+static int bern_term(const vm_problem *p, int64_t i, const elem_ctx *ec, int order, int offd,
+                     double *Fe, elem_acc *acc) {
+  double x[24], b[27], G[27 * 24];
+  for (int a = 0; a < 8; a++)
+    for (int r = 0; r < 3; r++) x[3 * a + r] = ec->x[a][r];
+  vm_hex_bernstein(x, b, order ? G : NULL);
+  /* each coefficient weighs what an average node of the rule does */
+  double wb = 0;
+  for (int j = 0; j < ec->R->nnodes; j++) wb += ec->wb[j];
+  double wq = ec->w * p->bern_w[i] * wb / ec->R->nnodes, sc = p->bern_scale, F = 0;
+  int np = p->npair[VM_HEX];
+  /* pairs of vertices the rule does not couple (a corner rule's body
+   * diagonals): their blocks are lumped onto the two diagonal blocks
+   * (|u_r| sum_t |v_t| on entry r r), which keeps the sum positive
+   * semidefinite */
+  signed char coupled[8][8];
+  memset(coupled, 0, sizeof coupled);
+  for (int k = 0; k < np; k++) coupled[p->pair[VM_HEX][k][0]][p->pair[VM_HEX][k][1]] = 1;
+  for (int c = 0; c < 27; c++) {
+    double eps = p->bern_eps ? p->bern_eps[27 * i + c] : p->prm.eps;
+    double d = sc * b[c], q = sqrt(eps * eps + d * d);
+    /* (14), in the conjugate form for d < 0 */
+    double chi = d >= 0 ? 0.5 * (d + q) : 0.5 * eps * eps / (q - d);
+    if (!(chi > 0) || !(chi < INFINITY)) return 1;
+    double r = 1 / chi;
+    F += wq * r;
+    if (!order) continue;
+    double r1 = -wq * r / q * sc, r2 = wq * 2 / (q * q * q) * sc * sc;
+    const double *g = G + 24 * c;
+    for (int a = 0; a < 8; a++)
+      for (int k = 0; k < 3; k++) acc->g[a][k] += r1 * g[3 * a + k];
+    if (order < 2) continue;
+    for (int a = 0; a < 8; a++) {
+      const double *u = g + 3 * a;
+      double *h = acc->h[a];
+      h[0] += r2 * u[0] * u[0];
+      h[1] += r2 * u[1] * u[1];
+      h[2] += r2 * u[2] * u[2];
+      h[3] += r2 * u[0] * u[1];
+      h[4] += r2 * u[1] * u[2];
+      h[5] += r2 * u[0] * u[2];
+    }
+    for (int a = 0; a < 8; a++)
+      for (int a2 = a + 1; a2 < 8; a2++) {
+        if (coupled[a][a2]) continue;
+        const double *u = g + 3 * a, *v = g + 3 * a2;
+        double su = fabs(u[0]) + fabs(u[1]) + fabs(u[2]), sv = fabs(v[0]) + fabs(v[1]) + fabs(v[2]);
+        for (int r = 0; r < 3; r++) {
+          acc->h[a][r] += r2 * fabs(u[r]) * sv;
+          acc->h[a2][r] += r2 * fabs(v[r]) * su;
+        }
+      }
+    if (order == 2 && !offd) continue;
+    for (int k = 0; k < np; k++) {
+      const double *u = g + 3 * p->pair[VM_HEX][k][0], *v = g + 3 * p->pair[VM_HEX][k][1];
+      if (order == 2) {
+        for (int r = 0; r < 3; r++) acc->o[k][r] += r2 * u[r] * v[r];
+      } else {
+        for (int r = 0; r < 3; r++)
+          for (int t = 0; t < 3; t++) acc->f[k][3 * r + t] += r2 * u[r] * v[t];
+      }
+    }
+  }
+  *Fe += F;
+  return 0;
+}
+
+static int elem_kernel(const vm_problem *p, const elem_ctx *ec, int order, int offd, double *Fe,
+                       elem_acc *acc);
+
 static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order, int offd,
                      double *Fe, elem_acc *acc) {
   elem_ctx ec;
@@ -594,21 +671,29 @@ static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order,
         memset(acc->f, 0, sizeof acc->f[0] * (size_t)p->npair[ec.t]);
     }
   }
+  if (elem_kernel(p, &ec, order, offd, Fe, acc)) return 1;
+  if (p->bern_w && p->bern_w[i] > 0 && ec.t == VM_HEX)
+    return bern_term(p, i, &ec, order, offd, Fe, acc);
+  return 0;
+}
+
+static int elem_kernel(const vm_problem *p, const elem_ctx *ec, int order, int offd, double *Fe,
+                       elem_acc *acc) {
   if (p->tdim == 3) {
     switch (order) {
-    case 0: return elem3_o0(p, &ec, Fe, acc);
-    case 1: return elem3_o1(p, &ec, Fe, acc);
-    case 2: return offd ? elem3_o2(p, &ec, Fe, acc) : elem3_o2d(p, &ec, Fe, acc);
-    case 3: return elem3_o3(p, &ec, Fe, acc);
-    default: return elem3_o4(p, &ec, Fe, acc);
+    case 0: return elem3_o0(p, ec, Fe, acc);
+    case 1: return elem3_o1(p, ec, Fe, acc);
+    case 2: return offd ? elem3_o2(p, ec, Fe, acc) : elem3_o2d(p, ec, Fe, acc);
+    case 3: return elem3_o3(p, ec, Fe, acc);
+    default: return elem3_o4(p, ec, Fe, acc);
     }
   }
   switch (order) {
-  case 0: return elem2_o0(p, &ec, Fe, acc);
-  case 1: return elem2_o1(p, &ec, Fe, acc);
-  case 2: return elem2_o2(p, &ec, Fe, acc);
-  case 3: return elem2_o3(p, &ec, Fe, acc);
-  default: return elem2_o4(p, &ec, Fe, acc);
+  case 0: return elem2_o0(p, ec, Fe, acc);
+  case 1: return elem2_o1(p, ec, Fe, acc);
+  case 2: return elem2_o2(p, ec, Fe, acc);
+  case 3: return elem2_o3(p, ec, Fe, acc);
+  default: return elem2_o4(p, ec, Fe, acc);
   }
 }
 

@@ -340,6 +340,42 @@ static vm_jac_verdict certify_planar(int type, const double *x, double *min_coef
   return v;
 }
 
+/* Local vertex of corner (a, b, c) of the hex, a along u, b along v, c along w. */
+static int hex_vertex(int a, int b, int c) { return 4 * c + (b ? (a ? 2 : 3) : a); }
+
+void vm_hex_bernstein(const double *xyz, double b[27], double *grad) {
+  memset(b, 0, 27 * sizeof *b);
+  if (grad) memset(grad, 0, 27 * 24 * sizeof *grad);
+  static const double count[3] = {1, 2, 1};
+  for (int n = 0; n < 64; n++) {
+    /* x edge at (j, k), y edge at (i2, k2), z edge at (i3, j3) */
+    int j = n & 1, k = n >> 1 & 1, i2 = n >> 2 & 1, k2 = n >> 3 & 1, i3 = n >> 4 & 1,
+        j3 = n >> 5 & 1;
+    int hd[3] = {hex_vertex(1, j, k), hex_vertex(i2, 1, k2), hex_vertex(i3, j3, 1)};
+    int tl[3] = {hex_vertex(0, j, k), hex_vertex(i2, 0, k2), hex_vertex(i3, j3, 0)};
+    double e[3][3];
+    for (int l = 0; l < 3; l++)
+      for (int r = 0; r < 3; r++) e[l][r] = xyz[3 * hd[l] + r] - xyz[3 * tl[l] + r];
+    double cof[3][3];
+    for (int l = 0; l < 3; l++) {
+      const double *p = e[(l + 1) % 3], *q = e[(l + 2) % 3];
+      cof[l][0] = p[1] * q[2] - p[2] * q[1];
+      cof[l][1] = p[2] * q[0] - p[0] * q[2];
+      cof[l][2] = p[0] * q[1] - p[1] * q[0];
+    }
+    int I = i2 + i3, J = j + j3, K = k + k2, c = 9 * I + 3 * J + K;
+    double wgt = 1 / (count[I] * count[J] * count[K]);
+    b[c] += wgt * (e[0][0] * cof[0][0] + e[0][1] * cof[0][1] + e[0][2] * cof[0][2]);
+    if (!grad) continue;
+    double *g = grad + 24 * c;
+    for (int l = 0; l < 3; l++)
+      for (int r = 0; r < 3; r++) {
+        g[3 * hd[l] + r] += wgt * cof[l][r];
+        g[3 * tl[l] + r] -= wgt * cof[l][r];
+      }
+  }
+}
+
 vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, double *min_bound) {
   if (max_depth <= 0) max_depth = DEFAULT_DEPTH;
   double lo = INFINITY;

@@ -140,6 +140,7 @@ static int trial_value(vm_minimizer *m, const double *x, const double *d, double
   st = vm_problem_value(m->prob, xt, F);
   if (st < 0) return st;
   if (st > 0 || !isfinite(*F)) *F = INFINITY;
+  if (isfinite(*F) && m->opt.admissible && !m->opt.admissible(m->opt.user, xt)) *F = INFINITY;
   return VM_OK;
 }
 

@@ -891,6 +891,8 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->nrm);
   vm_free(ctx, p->eps_node);
   vm_free(ctx, p->node_w);
+  vm_free(ctx, p->bern_w);
+  vm_free(ctx, p->bern_eps);
   vm_free(ctx, p->Fe);
   vm_free(ctx, p->part);
   vm_free(ctx, p);
@@ -960,5 +962,48 @@ int vm_problem_set_node_weights(vm_problem *p, const double *w_node) {
   memcpy(w, w_node, (size_t)p->nn * sizeof *w);
   vm_free(p->ctx, p->node_w);
   p->node_w = w;
+  return VM_OK;
+}
+
+int vm_problem_set_bernstein(vm_problem *p, const double *w_elem, const double *eps_coef,
+                             double scale) {
+  if (!p) return VM_ERR_ARG;
+  vm_free(p->ctx, p->bern_w);
+  vm_free(p->ctx, p->bern_eps);
+  p->bern_w = p->bern_eps = NULL;
+  if (!w_elem) return VM_OK;
+  if (!(scale > 0) || !isfinite(scale))
+    return vm_error(p->ctx, VM_ERR_ARG, "Bernstein scale %g is not finite and > 0", scale);
+  size_t n = (size_t)(p->nae ? p->nae : 1);
+  double *w = vm_alloc_array(p->ctx, n, sizeof *w);
+  double *e = eps_coef ? vm_alloc_array(p->ctx, 27 * n, sizeof *e) : NULL;
+  if (!w || (eps_coef && !e)) {
+    vm_free(p->ctx, w);
+    vm_free(p->ctx, e);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t i = 0; i < p->nae; i++) {
+    int32_t el = p->ael[i];
+    w[i] = p->m->etype[el] == VM_HEX ? w_elem[el] : 0;
+    if (!(w[i] >= 0) || !isfinite(w[i])) {
+      vm_free(p->ctx, w);
+      vm_free(p->ctx, e);
+      return vm_error(p->ctx, VM_ERR_ARG, "Bernstein weight of element %lld is %g", (long long)el,
+                      w_elem[el]);
+    }
+    for (int c = 0; e && c < 27; c++) {
+      double v = eps_coef[27 * (int64_t)el + c];
+      if (w[i] > 0 && !(v > 0 && isfinite(v))) {
+        vm_free(p->ctx, w);
+        vm_free(p->ctx, e);
+        return vm_error(p->ctx, VM_ERR_ARG, "Bernstein eps %g of element %lld is not > 0", v,
+                        (long long)el);
+      }
+      e[27 * i + c] = v;
+    }
+  }
+  p->bern_w = w;
+  p->bern_eps = e;
+  p->bern_scale = scale;
   return VM_OK;
 }

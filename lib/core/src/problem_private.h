@@ -110,6 +110,9 @@ struct vm_problem {
 
   double *eps_node; /* nn or NULL */
   double *node_w;   /* nn or NULL: per-node weight factor (0: node left out) */
+  double *bern_w;   /* nae or NULL: weight of the hex's Bernstein term */
+  double *bern_eps; /* 27 nae or NULL: eps per coefficient (NULL: prm.eps) */
+  double bern_scale;
 
   /* scratch for the fixed-order sum of F */
   double *Fe;   /* nae */

@@ -90,6 +90,10 @@ typedef struct vm_volume_opts {
                                 after a round without progress, when the
                                 certified cells next to the others also lose
                                 their guards, one ring more each time) */
+  int repair_bernstein;      /* repair rounds on hexahedra penalize the Bernstein
+                                coefficients of det J themselves (default 1; after
+                                a round without progress, and for other cells, the
+                                geometric rule's nodes); 0: the nodes throughout */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;

@@ -53,6 +53,17 @@ typedef enum {
  * VM_JAC_VALID. */
 vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, double *min_bound);
 
+/* The 27 Bernstein coefficients of det J of the trilinear hexahedron with
+ * vertices xyz (8 x 3, the mesh's hex order): det J(u,v,w) = sum over
+ * I,J,K in {0,1,2} of b[9 I + 3 J + K] B_I(u) B_J(v) B_K(w), B the
+ * quadratic Bernstein basis. b is the mean of the determinants of the
+ * geometric rule's compound simplices (24) that fall on it (1, 2, 4 or 8
+ * of them), so it is cubic in the coordinates; grad (may be NULL)
+ * receives d b[c] / d xyz[a][r] at grad[24 c + 3 a + r]. The corner
+ * coefficients are the corner tets' determinants; all 27 positive imply
+ * det J > 0 in the whole cell. */
+void vm_hex_bernstein(const double *xyz, double b[27], double *grad);
+
 /* Counts over the cells of a mesh (elements of its top dimension: volume
  * elements in a mesh that has any, else the 2D elements of a planar mesh;
  * the triangles and quads of a 3D surface mesh have no orientation and are

@@ -92,7 +92,12 @@ typedef struct vm_minimize_options {
   int stats_every; /* node statistics (M, min det) every k iterations (default 1; 0 off) */
   vm_monitor_fn monitor;
   vm_before_iteration_fn before_iteration;
-  void *user; /* passed to monitor and before_iteration */
+  /* optional: a trial point of the line search at which it returns 0 is
+   * treated as outside the measure's domain (the step is shortened), so
+   * every accepted iterate satisfies it when the start does (e.g. every
+   * cell certified det J > 0 everywhere); NULL: none */
+  int (*admissible)(void *user, const double *x);
+  void *user; /* passed to monitor, before_iteration and admissible */
 } vm_minimize_options;
 
 vm_minimize_options vm_minimize_options_default(void);

@@ -173,6 +173,21 @@ int vm_problem_set_node_eps(vm_problem *p, const double *eps_node);
  * nodes penalized, the others guarded or left out). */
 int vm_problem_set_node_weights(vm_problem *p, const double *w_node);
 
+/* A Bernstein term on hexahedra: with w_elem != NULL (one value >= 0 per
+ * mesh element, copied), F gains for every active hex e with w_elem[e] > 0
+ *   w_e w_elem[e] sum_{c < 27} 1 / chi_eps(scale b_c),
+ * w_e the element's weight times the mean weight of its rule's nodes
+ * b_c the Bernstein coefficients of its det J (vm_hex_bernstein), chi_eps
+ * the regularized determinant of (14) with eps = eps_coef[27 e + c] (> 0;
+ * NULL: params.eps): a penalty that drives a coefficient positive, or with
+ * a tiny eps a wall that keeps it there; all 27 positive certify the cell.
+ * The Hessian blocks are the Gauss-Newton part (1/chi)'' grad b grad b^T,
+ * positive semidefinite, on the pairs of vertices the rule couples. scale
+ * makes b relative to the target (1 / h^3 for ideal hexes of edge h).
+ * NULL turns the term off; it survives a change of rule. */
+int vm_problem_set_bernstein(vm_problem *p, const double *w_elem, const double *eps_coef,
+                             double scale);
+
 #ifdef __cplusplus
 }
 #endif
