@@ -210,9 +210,17 @@ static void check_same_tris(const vm_mesh *ref, const vm_mesh *got, int to_float
   int32_t *map = malloc(sizeof *map * (size_t)ref->nv);
   int64_t unmatched = 0;
   for (int64_t v = 0; v < ref->nv; v++) {
+    /* Round through a volatile float: GCC 12.2 at -O3 vectorizes the plain
+     * `to_float ? (double)(float)x : x` in this loop and drops the rounding
+     * of two of the three lanes (seen with Debian's gcc 12.2.0-14). */
     double p[3];
-    for (int d = 0; d < 3; d++)
-      p[d] = to_float ? (double)(float)ref->xyz[3 * v + d] : ref->xyz[3 * v + d];
+    for (int d = 0; d < 3; d++) {
+      p[d] = ref->xyz[3 * v + d];
+      if (to_float) {
+        volatile float r = (float)p[d];
+        p[d] = r;
+      }
+    }
     map[v] = -1;
     for (int64_t w = 0; w < got->nv; w++)
       if (!memcmp(p, got->xyz + 3 * w, sizeof p)) {

@@ -456,6 +456,18 @@ extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *p
                                  int8_t *inside) {
   if (!surf || n < 0 || (n > 0 && (!pts || !inside))) return VM_ERR_ARG;
   vm_ctx *ctx = surf->ctx;
+  // squared distances and ray crossings overflow beyond this: no answer
+  // rather than a wrong one (CGAL's own checks are off under NDEBUG)
+  const double big = 1e150;
+  for (int64_t i = 0; i < 3 * surf->nv; i++)
+    if (!(std::fabs(surf->xyz[i]) < big))
+      return vm_error(ctx, VM_ERR_UNSUPPORTED,
+                      "inside test: surface coordinate %g beyond what it can take (1e150)",
+                      surf->xyz[i]);
+  for (int64_t i = 0; i < 3 * n; i++)
+    if (!(std::fabs(pts[i]) < big))
+      return vm_error(ctx, VM_ERR_UNSUPPORTED,
+                      "inside test: point coordinate %g beyond what it can take (1e150)", pts[i]);
   VM_CXX_BEGIN
   TriSurface s;
   s.build(surf);
