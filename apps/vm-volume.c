@@ -39,6 +39,7 @@ static void progress(void *user, const vm_volume_progress *p) {
 typedef struct {
   const char *in, *out, *report_dir;
   int json, free_boundary, slip_boundary, fout, every, method, direct;
+  int repair;        /* index into repairs[] */
   int auto_schedule; /* neither --staged nor --direct: chosen from the mesh, with fallback */
   double feature_deg, corner_deg;
   double boundary_tol; /* free or sliding boundary: largest move, relative to the diagonal */
@@ -60,6 +61,7 @@ static int opt_measure(vm_cli *cli, const vm_opt *opt, const char *val, void *a)
 static const char *const methods[] = {"penalty", "oneway", "barrier", "adaptive", "foldover", NULL};
 static const char *const solvers[] = {"explicit", "implicit", "newton", NULL};
 static const char *const rules[] = {"corner", "geometric", NULL};
+static const char *const repairs[] = {"geometric", "coefficients", "nodes", NULL};
 static const vm_opt opts[] = {
     {"--untangle", NULL, VM_OPT_CHOICE, A(method), NULL,
      "untangling method: (35), its one-way variant, contraction (39), adaptive (default: (35) "
@@ -88,6 +90,12 @@ static const vm_opt opts[] = {
      .ival = 1},
     {"--rule", NULL, VM_OPT_CHOICE, A(o.rule), NULL,
      "quadrature (default corner; geometric: 64 per hex)", .choices = rules},
+    {"--repair", NULL, VM_OPT_CHOICE, A(repair), NULL,
+     "how cells not certified after the schedule are repaired: geometric (default: the whole "
+     "mesh untangled under the 64-node rule (24) until every cell is certified, then rounds "
+     "on what is left), coefficients (rounds on the hexes' Bernstein coefficients first: "
+     "faster on mild twists, fails on the worst), nodes (rounds on the nodes of (24))",
+     .choices = repairs},
     {"--target-size", NULL, VM_OPT_DOUBLE, A(o.target_size), "H",
      "ideal element edge length (default: total volume kept)", .lo = 1e-300, .hi = 1e300},
     {"--max-iter", NULL, VM_OPT_INT, A(o.max_iter), "N", "untangling iterations (default 20000)",
@@ -236,12 +244,15 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
       fprintf(stderr, " (certified valid after %.2f s)\n", rep->time_certified);
     else
       fprintf(stderr, "\n");
-    if (rep->cert_bad_init > 0)
-      fprintf(stderr,
-              "vm-volume: repair: %lld cells with M = 0 but not certified valid -> %lld, %d "
-              "rounds\n",
-              (long long)rep->cert_bad_init, (long long)(r->cert.invalid + r->cert.undecided),
-              rep->repair_rounds);
+    if (rep->cert_bad_init > 0) {
+      fprintf(stderr, "vm-volume: repair: %lld cells with M = 0 but not certified valid",
+              (long long)rep->cert_bad_init);
+      if (rep->geometric_left >= 0)
+        fprintf(stderr, " -> %lld under the geometric rule (%.2f s)",
+                (long long)rep->geometric_left, rep->time_geometric);
+      fprintf(stderr, " -> %lld after %d rounds\n",
+              (long long)(r->cert.invalid + r->cert.undecided), rep->repair_rounds);
+    }
     fprintf(stderr,
             "vm-volume: phi_min %.4e  psi_min %.4e  min scaled Jacobian %.4f  inverted "
             "corner tets %lld in %lld elements\n",
@@ -325,10 +336,12 @@ static void print_json(const args *a, const outcome *r, int rc) {
   printf(", \"flat_elements\": %lld", (long long)r->flat);
   printf(", \"corner_valid\": %s, \"certified_cells\": %lld, \"certified_invalid\": %lld, "
          "\"certified_undecided\": %lld, \"repair_cells_init\": %lld, \"iter_repair\": %d, "
+         "\"repair_geometric_left\": %lld, \"time_repair_geometric\": %.3f, "
          "\"time_certified\": %.3f",
          r->q.all.inverted_nodes == 0 && rep->M_final == 0 ? "true" : "false",
          (long long)r->cert.cells, (long long)r->cert.invalid, (long long)r->cert.undecided,
-         (long long)rep->cert_bad_init, rep->iter_repair, rep->valid ? rep->time_certified : -1.0);
+         (long long)rep->cert_bad_init, rep->iter_repair, (long long)rep->geometric_left,
+         rep->time_geometric, rep->valid ? rep->time_certified : -1.0);
   printf(", \"staged\": %s, \"fallback\": %s", r->staged ? "true" : "false",
          r->fell_back ? "true" : "false");
   if (r->staged)
@@ -540,6 +553,8 @@ int main(int argc, char **argv) {
   outcome r = {0};
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
   if (rc != VM_CLI_RUN) goto done;
+  a.o.repair_geometric = a.repair == 0;
+  a.o.repair_bernstein = a.repair != 2;
   if (a.o.staged && a.direct) {
     rc = vm_cli_usage_error(&cli, "--staged and --direct exclude each other");
     goto done;

@@ -168,13 +168,15 @@ int main(int argc, char **argv) {
         "%-6s %9lld %9lld %9lld %7d %7d %7d %9.2f %10.3e %10.3e %8lld %8.2f %8.2f   | paper: %7.0f "
         "%7.0f %6.0f %6.0f %9.2e %9.2e\n"
         "       certified: %lld invalid, %lld undecided of %lld cells; repair: %lld cells, %d "
-        "iterations, %d rounds; certified valid after %.2f s\n",
+        "iterations (geometric phase: %lld cells left, %.2f s), %d rounds; certified valid "
+        "after %.2f s\n",
         angle_names[a], (long long)r.M_init, (long long)r.M_max, (long long)r.M_final,
         r.iter_untangle, r.iter_local, r.iter_opt, r.time_untangle, r.phi_min, r.psi_min,
         (long long)q.all.inverted_elems, r.time_total, cpu, paper[0][a], paper[1][a], paper[2][a],
         paper[3][a], paper[4][a], paper[5][a], (long long)r.cert_invalid,
         (long long)r.cert_undecided, (long long)r.cert_cells, (long long)r.cert_bad_init,
-        r.iter_repair, r.repair_rounds, r.valid ? r.time_certified : -1.0);
+        r.iter_repair, (long long)r.geometric_left, r.time_geometric, r.repair_rounds,
+        r.valid ? r.time_certified : -1.0);
     if (!r.valid) all_ok = 0;
     fflush(stdout);
     if (where && cells != VM_GEN_MIXED) {

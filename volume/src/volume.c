@@ -36,6 +36,7 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.repair_rings = 4;
   o.repair_round_iter = 1000;
   o.repair_bernstein = 1;
+  o.repair_geometric = 1;
   return o;
 }
 
@@ -88,6 +89,9 @@ typedef struct {
   int keep_certified; /* optimization: every step keeps every cell certified */
   int no_local;       /* untangling without local rounds */
   int keep_guards;    /* every step keeps every guarded node positive */
+  int stop_certified; /* untangling ends once every cell is certified */
+  int local_scale;    /* local_threshold counts this many times the nodes */
+  int reached_certified;
   /* the Bernstein repair: per element of m a weight (hexes of the region),
    * per coefficient penalized (1) or walled (0) and its eps, and the scale
    * that makes the coefficients target-relative */
@@ -283,6 +287,14 @@ static int update_eps(ut_state *s, int first) {
   return vm_problem_set_params(s->P, &prm);
 }
 
+/* Inverted nodes below which the untangling goes local: the option counts
+ * the corner rule's nodes, 8 per hex; the geometric phase's 64 per hex
+ * count 8 times as many for the same cells (the n = 32 7pi/8 cube's
+ * geometric phase stalled globally with ~215 nodes in ~10 cells). */
+static int64_t local_threshold(const ut_state *s) {
+  return (int64_t)s->o->local_threshold * (s->local_scale > 1 ? s->local_scale : 1);
+}
+
 static int before_untangle(void *user, int iter, const double *x) {
   ut_state *s = user;
   int st = stats(s, x);
@@ -290,7 +302,17 @@ static int before_untangle(void *user, int iter, const double *x) {
   int adaptive = s->o->method == VM_UNTANGLE_ADAPTIVE;
   /* the adaptive rule goes on past M = 0 until min det clears mu */
   if (s->M == 0 && (!adaptive || s->done)) return 1;
-  if (s->go_local && s->M > 0 && s->M < s->o->local_threshold) return 1;
+  /* the geometric phase: certified is what it is for, every node of (24)
+   * positive only the way there */
+  if (s->stop_certified && (iter == 1 || iter % 5 == 0)) {
+    int64_t nb = uncertified_at(s, x);
+    if (nb < 0) return VM_ERR_NOMEM;
+    if (nb == 0) {
+      s->reached_certified = 1;
+      return 1;
+    }
+  }
+  if (s->go_local && s->M > 0 && s->M < local_threshold(s)) return 1;
   if ((st = update_eps(s, iter == 1 && s->eps == 0)) < 0) return st;
   if (adaptive && s->M == 0 && s->done) return 1;
   s->have_step = 0;
@@ -620,6 +642,8 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
     vm_minimize_result res = {0};
     int chunk = *budget < 200 ? *budget : 200;
     st = sub_begin(s, s->rule, k, prm, emask, vmark, &ss, &sm);
+    /* a local region's cells certified are not the mesh's */
+    ss.stop_certified = 0;
     if (st >= 0) st = stats(&ss, ss.m->xyz);
     if (st >= 0) {
       ss.go_local = 0;
@@ -630,6 +654,17 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) break;
     if ((st = stats(s, m->xyz)) < 0) break;
+    if (s->stop_certified) {
+      int64_t nb = uncertified_at(s, m->xyz);
+      if (nb < 0) {
+        st = VM_ERR_NOMEM;
+        break;
+      }
+      if (nb == 0) {
+        s->reached_certified = 1;
+        break;
+      }
+    }
     if (s->M >= M0) {
       stalls++;
       rings += 2;
@@ -674,7 +709,8 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
   vm_measure_params prm = *prm0;
   vm_minimize_result res;
   int st = VM_OK;
-  for (int round = 0; s->M > 0 && *budget > 0 && !out_of_time(s) && round < 50; round++) {
+  for (int round = 0;
+       s->M > 0 && !s->reached_certified && *budget > 0 && !out_of_time(s) && round < 50; round++) {
     vm_measure_kind k = o->method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
     prm.drop_chi2 = 1;
     vm_measure_params pu = prm;
@@ -690,7 +726,7 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) return st;
     if ((st = stats(s, s->m->xyz)) < 0) return st;
-    if (s->M > 0 && !s->no_local && s->M < o->local_threshold) {
+    if (s->M > 0 && !s->reached_certified && !s->no_local && s->M < local_threshold(s)) {
       if ((st = local_phase(s, k, &prm, budget)) < 0) return st;
     }
     if (s->M > 0 && s->M >= M0 && res.reason == VM_STOP_LINE_SEARCH) break; /* stuck */
@@ -901,6 +937,38 @@ static int repair_round_bern(ut_state *s, const vm_measure_params *prm, const ui
   return st;
 }
 
+/* The guarantee: every node of the geometric rule (24) positive gives
+ * det J > 0 throughout a hex (Theorem 3.1) or a prism, so all of its
+ * Bernstein coefficients (means of those nodes) are positive and the cell
+ * is certified. The whole mesh untangled under that rule from where it is
+ * (the corner rule's nodes all positive, most of the 64 already), every
+ * node penalized, none guarded (the freedom to rearrange is what the
+ * guarded rounds lack: they left 63-133 cells of the n = 32 pi cube), with
+ * the global and local rounds of steps 1-2, until every cell is certified
+ * (checked every 5 global iterations: all 64 nodes positive is more than
+ * that asks) or the rounds stall. */
+static int geometric_phase(ut_state *s, const vm_measure_params *prm, int *budget) {
+  int u0 = s->rep->iter_untangle, l0 = s->rep->iter_local;
+  int st = set_stage_rule(s, VM_RULE_GEOMETRIC);
+  if (st >= 0) st = stats(s, s->m->xyz);
+  if (st >= 0) {
+    s->phase_name = "geometric";
+    s->eps = 0;
+    s->eps_restart = 0;
+    s->stop_certified = 1;
+    s->local_scale = 8;
+    st = untangle_rounds(s, prm, budget);
+    s->stop_certified = s->reached_certified = s->local_scale = 0;
+  }
+  int st2 = set_stage_rule(s, s->o->rule);
+  if (st2 >= 0) st2 = stats(s, s->m->xyz);
+  s->rep->iter_repair += s->rep->iter_untangle - u0 + s->rep->iter_local - l0;
+  s->rep->iter_untangle = u0;
+  s->rep->iter_local = l0;
+  s->phase_name = "repair";
+  return st < 0 ? st : st2;
+}
+
 /* Certifying repair: while some cells are not certified valid (the corner
  * rule's nodes can all be positive with det J < 0 inside a hex), untangle
  * their Bernstein coefficients (repair_round_bern; when they are all hexes,
@@ -930,6 +998,32 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   if (st >= 0) memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
   int stalls = 0;
   s->phase_name = "repair";
+  s->repair_stage = 1;
+  if (st >= 0 && nbad > 0 && o0->repair_geometric && !out_of_time(s)) {
+    /* the guarantee first: the whole mesh under the rule of (24) until
+     * every cell is certified; the rounds below take what it leaves */
+    double t = now();
+    vm_log(ctx, VM_LOG_INFO,
+           "repair: %lld cells not certified; untangling under the geometric rule (24)",
+           (long long)nbad);
+    st = geometric_phase(s, prm, budget);
+    int64_t nb = st >= 0 || st == VM_ERR_INTERRUPTED ? certify(s, verdict) : -1;
+    s->rep->geometric_left = nb;
+    s->rep->time_geometric = now() - t;
+    if (nb >= 0 && nb < best_bad) {
+      best_bad = nbad = nb;
+      memcpy(best, m->xyz, (size_t)m->nv * 3 * sizeof *best);
+    } else if (nb >= 0) {
+      /* no better: the rounds start from where the phase did */
+      memcpy(m->xyz, best, (size_t)m->nv * 3 * sizeof *best);
+      nbad = certify(s, verdict);
+      if (st >= 0) st = stats(s, m->xyz);
+    }
+    if (nb < 0 && st >= 0) st = VM_ERR_NOMEM;
+    if (nbad > 0 && st >= 0)
+      vm_log(ctx, VM_LOG_INFO, "repair: the geometric rule left %lld cells not certified",
+             (long long)nbad);
+  }
   /* the Bernstein repair when every cell to repair is a hex (prisms and
    * pyramids: the geometric rule's nodes) */
   int bern = o0->repair_bernstein;
@@ -988,6 +1082,7 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   }
   if (nbad == 0) s->rep->time_certified = now() - s->t0;
   s->phase_name = "untangle";
+  s->repair_stage = 0;
   vm_free(ctx, verdict);
   vm_free(ctx, emask);
   vm_free(ctx, soft);
@@ -1064,6 +1159,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   vm_volume_report rep;
   memset(&rep, 0, sizeof rep);
   rep.cert_bad_init = -1;
+  rep.geometric_left = -1;
   ut_state s;
   memset(&s, 0, sizeof s);
   s.ctx = ctx;

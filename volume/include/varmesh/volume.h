@@ -94,6 +94,11 @@ typedef struct vm_volume_opts {
                                 coefficients of det J themselves (default 1; after
                                 a round without progress, and for other cells, the
                                 geometric rule's nodes); 0: the nodes throughout */
+  int repair_geometric;      /* the repair begins by untangling the whole mesh
+                                under the geometric rule (24) until every cell is
+                                certified (all 64 nodes of a hex positive give
+                                det J > 0 in it, Theorem 3.1), then rounds for
+                                what is left (default 1); 0: the rounds alone */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;
@@ -121,6 +126,9 @@ typedef struct vm_volume_report {
                                        (-1: no repair ran) */
   int iter_repair;                  /* repair iterations (global + local) */
   int repair_rounds;                /* certify-and-repair rounds run */
+  int64_t geometric_left;           /* cells not certified after the repair's
+                                       geometric phase (-1: it did not run) */
+  double time_geometric;            /* seconds the geometric phase took */
   double time_certified;            /* seconds until every cell was certified valid */
   int64_t split_M_init;             /* staged: inverted split tets at the start */
   int64_t split_M_max;              /* staged: the most while untangling the split (M_max
