@@ -295,6 +295,15 @@ static int64_t local_threshold(const ut_state *s) {
   return (int64_t)s->o->local_threshold * (s->local_scale > 1 ? s->local_scale : 1);
 }
 
+/* The geometric phase's stop: 1 (and s->reached_certified set) when every
+ * cell is certified at x, 0 when not, < 0 on error. */
+static int reach_certified(ut_state *s, const double *x) {
+  int64_t nb = uncertified_at(s, x);
+  if (nb < 0) return VM_ERR_NOMEM;
+  s->reached_certified = nb == 0;
+  return nb == 0;
+}
+
 static int before_untangle(void *user, int iter, const double *x) {
   ut_state *s = user;
   int st = stats(s, x);
@@ -305,12 +314,7 @@ static int before_untangle(void *user, int iter, const double *x) {
   /* the geometric phase: certified is what it is for, every node of (24)
    * positive only the way there */
   if (s->stop_certified && (iter == 1 || iter % 5 == 0)) {
-    int64_t nb = uncertified_at(s, x);
-    if (nb < 0) return VM_ERR_NOMEM;
-    if (nb == 0) {
-      s->reached_certified = 1;
-      return 1;
-    }
+    if ((st = reach_certified(s, x)) != 0) return st;
   }
   if (s->go_local && s->M > 0 && s->M < local_threshold(s)) return 1;
   if ((st = update_eps(s, iter == 1 && s->eps == 0)) < 0) return st;
@@ -654,16 +658,9 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
     *budget -= res.iterations > 0 ? res.iterations : 1;
     if (st < 0) break;
     if ((st = stats(s, m->xyz)) < 0) break;
-    if (s->stop_certified) {
-      int64_t nb = uncertified_at(s, m->xyz);
-      if (nb < 0) {
-        st = VM_ERR_NOMEM;
-        break;
-      }
-      if (nb == 0) {
-        s->reached_certified = 1;
-        break;
-      }
+    if (s->stop_certified && (st = reach_certified(s, m->xyz)) != 0) {
+      if (st > 0) st = VM_OK;
+      break;
     }
     if (s->M >= M0) {
       stalls++;
