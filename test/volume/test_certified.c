@@ -187,29 +187,20 @@ static void geometric_alone(vm_ctx *ctx, const vm_mesh *m0) {
   fprintf(stderr, "geometric phase: %lld -> 0 cells not certified in %d iterations, %.2f s\n",
           (long long)r.cert_bad_init, r.iter_repair, r.time_geometric);
   /* the phase's eps at the other phases' pace (0.9 per block): certified
-   * too, in more iterations; a decay outside (0, 1) is that pace */
-  vm_mesh *m9[2] = {NULL, NULL};
-  vm_volume_report r9[2];
-  double decays[2] = {0.9, 1.5};
-  for (int k = 0; k < 2; k++) {
-    CHECK(vm_mesh_clone(m0, &m9[k]) == VM_OK, "clone");
-    o.geometric_decay = decays[k];
-    st = vm_volume_run(ctx, m9[k], NULL, &o, &r9[k]);
-    CHECK(st == VM_OK && r9[k].valid && r9[k].geometric_left == 0,
-          "geometric phase, decay %.1f: status %d, %lld cells left", decays[k], st,
-          (long long)r9[k].geometric_left);
-  }
-  CHECK(r9[0].iter_repair > r.iter_repair,
-        "geometric phase: decay 0.9 took %d iterations, the default %d", r9[0].iter_repair,
+   * too, in more iterations */
+  vm_mesh *m9 = NULL;
+  CHECK(vm_mesh_clone(m0, &m9) == VM_OK, "clone");
+  o.geometric_decay = 0.9;
+  vm_volume_report r9;
+  st = vm_volume_run(ctx, m9, NULL, &o, &r9);
+  CHECK(st == VM_OK && r9.valid && r9.geometric_left == 0,
+        "geometric phase, decay 0.9: status %d, %lld cells left", st, (long long)r9.geometric_left);
+  CHECK(r9.iter_repair > r.iter_repair,
+        "geometric phase: decay 0.9 took %d iterations, the default %d", r9.iter_repair,
         r.iter_repair);
-  CHECK(r9[1].iter_repair == r9[0].iter_repair &&
-            memcmp(m9[0]->xyz, m9[1]->xyz, (size_t)m->nv * 3 * sizeof(double)) == 0,
-        "geometric phase: decay 1.5 is not 0.9 (%d against %d iterations)", r9[1].iter_repair,
-        r9[0].iter_repair);
-  fprintf(stderr, "geometric phase, decay 0.9: %d iterations, %.2f s\n", r9[0].iter_repair,
-          r9[0].time_geometric);
-  vm_mesh_destroy(&m9[0]);
-  vm_mesh_destroy(&m9[1]);
+  fprintf(stderr, "geometric phase, decay 0.9: %d iterations, %.2f s\n", r9.iter_repair,
+          r9.time_geometric);
+  vm_mesh_destroy(&m9);
   vm_mesh_destroy(&m);
 }
 
