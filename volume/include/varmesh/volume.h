@@ -99,9 +99,10 @@ typedef struct vm_volume_opts {
                                 certified (all 64 nodes of a hex positive give
                                 det J > 0 in it, Theorem 3.1), then rounds for
                                 what is left (default 1); 0: the rounds alone */
-  double geometric_decay;    /* the geometric phase under --untangle foldover:
-                                the most of the penalty at the worst node that
-                                one block of eps_inner iterations keeps (default
+  double geometric_decay;    /* the geometric phase's global rounds under
+                                --untangle foldover: the most of the penalty at
+                                the worst node that one block of eps_inner
+                                iterations keeps (default
                                 0.7; the other phases 0.9, and so does a value
                                 outside (0, 1)) */
   double target_size;        /* ideal target edge length, <= 0: automatic */
