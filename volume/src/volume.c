@@ -954,7 +954,7 @@ static int repair_round_bern(ut_state *s, const vm_measure_params *prm, const ui
  * that asks) or the rounds stall. Under foldover its eps falls faster than
  * the other phases' (opts geometric_decay, 0.7 against 0.9 per block: from
  * a mesh whose corner nodes are all positive, the n = 32 7pi/8 cube's
- * phase ran at the 0.9 cap for 330 iterations, 107 s; with 0.7, 38 s, and
+ * phase ran at the 0.9 cap for 330 iterations, 107 s; with 0.7, 41 s, and
  * with both 0.7 and one iteration per block it no longer certified); its
  * local rounds keep 0.9 (local_phase). */
 static int geometric_phase(ut_state *s, const vm_measure_params *prm, int *budget) {

@@ -102,9 +102,8 @@ typedef struct vm_volume_opts {
   double geometric_decay;    /* the geometric phase's global rounds under
                                 --untangle foldover: the most of the penalty at
                                 the worst node that one block of eps_inner
-                                iterations keeps (default
-                                0.7; the other phases 0.9, and so does a value
-                                outside (0, 1)) */
+                                iterations keeps (default 0.7; the other phases
+                                and a value outside (0, 1): 0.9) */
   double target_size;        /* ideal target edge length, <= 0: automatic */
   const double *target_xyz;  /* reference coordinates as targets (overrides size) */
   vm_volume_progress_fn progress;
