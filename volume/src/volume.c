@@ -93,7 +93,6 @@ typedef struct {
   int stop_certified; /* untangling ends once every cell is certified */
   int local_scale;    /* local_threshold counts this many times the nodes */
   int reached_certified;
-  double mu_cap; /* foldover: the most of chi at the worst node a block keeps (0: 0.9) */
   /* the Bernstein repair: per element of m a weight (hexes of the region),
    * per coefficient penalized (1) or walled (0) and its eps, and the scale
    * that makes the coefficients target-relative */
@@ -242,9 +241,13 @@ static int update_eps(ut_state *s, int first) {
   case VM_UNTANGLE_FOLDOVER: {
     /* eps stays for eps_inner iterations (or until a step stalls); then
      * chi_eps at the worst node is scaled by mu = min(F_end/F_start, cap)
-     * of that block (cap 0.9, or s->mu_cap when set), which fixes the new
-     * eps: chi_eps'(D) = mu chi_eps(D) <=> eps' = 2 sqrt(mu' (mu' - D))
-     * with mu' = mu chi_eps(D) */
+     * of that block, which fixes the new eps: chi_eps'(D) = mu chi_eps(D)
+     * <=> eps' = 2 sqrt(mu' (mu' - D)) with mu' = mu chi_eps(D). The cap
+     * is 0.9 but in the geometric phase's global rounds (stop_certified;
+     * its local rounds clear it): geometric_decay there. At that pace the
+     * local rounds squeezed the last folds with eps down to delta0 (n = 12
+     * pi cube about (1,1,1), inner 0.3: 12 stalled rounds, 2,547 iterations
+     * against 600). */
     if (first) {
       s->eps = fmax(neg > 0 ? neg : o->delta0, s->eps_restart);
       s->eps_restart = 0;
@@ -256,7 +259,8 @@ static int update_eps(ut_state *s, int first) {
     double D = s->min_det, q = sqrt(s->eps * s->eps + D * D);
     double chi = D >= 0 ? 0.5 * (D + q) : 0.5 * s->eps * s->eps / (q - D);
     double ratio = s->block_iter > 0 && s->F_block0 > 0 ? s->F_after / s->F_block0 : 1;
-    double mu = fmin(ratio, s->mu_cap > 0 ? s->mu_cap : 0.9) * chi;
+    double dk = o->geometric_decay, cap = s->stop_certified && dk > 0 && dk < 1 ? dk : 0.9;
+    double mu = fmin(ratio, cap) * chi;
     s->eps = D < mu ? 2 * sqrt(mu * (mu - D)) : o->delta0;
     if (s->eps < o->delta0) s->eps = o->delta0;
     s->block_iter = 0;
@@ -649,13 +653,9 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
     vm_minimize_result res = {0};
     int chunk = *budget < 200 ? *budget : 200;
     st = sub_begin(s, s->rule, k, prm, emask, vmark, &ss, &sm);
-    /* a local region's cells certified are not the mesh's */
+    /* a local region's cells certified are not the mesh's (and its eps
+     * falls at the usual pace, update_eps) */
     ss.stop_certified = 0;
-    /* and its eps falls at the usual pace: at the geometric phase's, the
-     * rounds on the few folds left squeezed them with eps down to delta0
-     * (n = 12 pi cube about (1,1,1), inner 0.3: 12 stalled rounds, 2,547
-     * iterations against 600) */
-    ss.mu_cap = 0;
     if (st >= 0) st = stats(&ss, ss.m->xyz);
     if (st >= 0) {
       ss.go_local = 0;
@@ -956,7 +956,7 @@ static int repair_round_bern(ut_state *s, const vm_measure_params *prm, const ui
  * a mesh whose corner nodes are all positive, the n = 32 7pi/8 cube's
  * phase ran at the 0.9 cap for 330 iterations, 107 s; with 0.7, 41 s, and
  * with both 0.7 and one iteration per block it no longer certified); its
- * local rounds keep 0.9 (local_phase). */
+ * local rounds keep 0.9 (update_eps). */
 static int geometric_phase(ut_state *s, const vm_measure_params *prm, int *budget) {
   int u0 = s->rep->iter_untangle, l0 = s->rep->iter_local;
   int st = set_stage_rule(s, VM_RULE_GEOMETRIC);
@@ -967,11 +967,8 @@ static int geometric_phase(ut_state *s, const vm_measure_params *prm, int *budge
     s->eps_restart = 0;
     s->stop_certified = 1;
     s->local_scale = 8;
-    double dk = s->o->geometric_decay;
-    s->mu_cap = dk > 0 && dk < 1 ? dk : 0;
     st = untangle_rounds(s, prm, budget);
     s->stop_certified = s->reached_certified = s->local_scale = 0;
-    s->mu_cap = 0;
   }
   int st2 = set_stage_rule(s, s->o->rule);
   if (st2 >= 0) st2 = stats(s, s->m->xyz);
