@@ -31,6 +31,10 @@ static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
            "%lld undecided\n",
            (long long)(jr->cells - jr->invalid - jr->undecided), (long long)jr->cells,
            (long long)jr->invalid, (long long)jr->undecided);
+  if (q->top_dim == 3 && q->measured)
+    printf("OpenFOAM's checkMesh: %lld cells of volume <= 0, %lld face pyramids incorrectly "
+           "oriented\n",
+           (long long)q->foam_neg_volumes, (long long)q->foam_pyramid_errors);
   if (!q->measured) return;
   printf("scaled Jacobian: min %.4f  p1 %.4f  p5 %.4f  p25 %.4f  median %.4f\n", q->all.sj_min,
          q->sj_p01, q->sj_p05, q->sj_p25, q->sj_p50);
@@ -86,6 +90,9 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q,
          "\"first_bad\": %lld}",
          (long long)jr->cells, (long long)jr->invalid, (long long)jr->undecided,
          (long long)jr->first_bad);
+  if (q->top_dim == 3)
+    printf(", \"foam\": {\"negative_volumes\": %lld, \"pyramid_errors\": %lld}",
+           (long long)q->foam_neg_volumes, (long long)q->foam_pyramid_errors);
   printf(", \"sj_histogram\": [");
   for (int b = 0; b < VM_QUALITY_NBINS; b++)
     printf("%s%lld", b ? ", " : "", (long long)q->sj_hist[b]);

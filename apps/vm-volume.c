@@ -269,6 +269,11 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
                                                                  : "  -- interrupted")
                 : "");
   }
+  if (!cli->quiet && r->q.top_dim == 3 && r->q.foam_pyramid_errors + r->q.foam_neg_volumes > 0)
+    fprintf(stderr,
+            "vm-volume: warning: OpenFOAM's checkMesh will fail it: %lld cells of volume <= 0, "
+            "%lld face pyramids incorrectly oriented (the cell centre outside a face's plane)\n",
+            (long long)r->q.foam_neg_volumes, (long long)r->q.foam_pyramid_errors);
   if (a->slip_boundary && !cli->quiet)
     fprintf(stderr,
             "vm-volume: slip boundary: largest distance of a boundary vertex from the "
@@ -334,6 +339,9 @@ static void print_json(const args *a, const outcome *r, int rc) {
     printf(", \"boundary_moved\": %s", r->shape_moved ? "true" : "false");
   }
   printf(", \"flat_elements\": %lld", (long long)r->flat);
+  if (r->q.top_dim == 3)
+    printf(", \"foam_negative_volumes\": %lld, \"foam_pyramid_errors\": %lld",
+           (long long)r->q.foam_neg_volumes, (long long)r->q.foam_pyramid_errors);
   printf(", \"corner_valid\": %s, \"certified_cells\": %lld, \"certified_invalid\": %lld, "
          "\"certified_undecided\": %lld, \"repair_cells_init\": %lld, \"iter_repair\": %d, "
          "\"repair_geometric_left\": %lld, \"time_repair_geometric\": %.3f, "
@@ -466,18 +474,13 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
 /* The options of one schedule: staged (hexahedra) or direct; `fallback`:
  * the one tried when the first stalls. What the user gave stays. */
 static vm_volume_opts schedule_opts(const args *a, int staged, int fallback) {
-  vm_volume_opts d = vm_volume_opts_default(), o = a->o;
-  /* staged, and any fallback: the setting measured on the rotated cube and
-   * its 6-tet split (docs/volume.md) */
+  /* staged, and any fallback: the staged schedule's untangling settings */
   int twisted = staged || fallback;
+  vm_volume_opts d = twisted ? vm_volume_opts_staged() : vm_volume_opts_default(), o = a->o;
   o.staged = staged;
-  o.method = a->method >= 0 ? (vm_untangle_method)a->method
-             : twisted      ? VM_UNTANGLE_FOLDOVER
-                            : d.method;
-  o.eps_inner = a->o.eps_inner ? a->o.eps_inner : twisted ? 3 : d.eps_inner;
-  o.theta_untangle = !isnan(a->o.theta_untangle) ? a->o.theta_untangle
-                     : twisted                   ? 0.999
-                                                 : d.theta_untangle;
+  o.method = a->method >= 0 ? (vm_untangle_method)a->method : d.method;
+  o.eps_inner = a->o.eps_inner ? a->o.eps_inner : d.eps_inner;
+  o.theta_untangle = !isnan(a->o.theta_untangle) ? a->o.theta_untangle : d.theta_untangle;
   return o;
 }
 

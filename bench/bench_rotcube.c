@@ -29,9 +29,41 @@ static void usage(void) {
           "penalty|oneway|barrier|adaptive|foldover]\n"
           "                     [--eps-inner N] [--local-threshold N] [--theta T]\n"
           "                     [--theta-untangle T]\n"
-          "                     [--explicit | --newton] [--staged] [--qi-steps N] [--threads N] "
+          "                     [--explicit | --newton] [--staged | --direct] [--qi-steps N] "
+          "[--threads N] "
           "[--verbose] [--where]\n"
-          "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all)\n");
+          "angles are indices 0..4 of pi/8 3pi/8 pi/2 7pi/8 pi (default all); the schedule is\n"
+          "vm-volume's default: staged with hexahedra, direct (--direct) with tets\n");
+}
+
+/* The least scaled Jacobian det J/(|J1||J2||J3|) of a hex's trilinear map
+ * sampled on a 5^3 grid of its reference cube (corners included). */
+static double hex_sj_sampled(const vm_mesh *m, int64_t e) {
+  static const int c[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                              {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  double lo = INFINITY;
+  for (int g = 0; g < 125; g++) {
+    double u[3] = {g % 5 / 4.0, g / 5 % 5 / 4.0, g / 25 / 4.0}, J[3][3] = {{0}};
+    for (int i = 0; i < 8; i++) {
+      const double *x = m->xyz + 3 * m->conn[m->eoff[e] + i];
+      for (int d = 0; d < 3; d++) {
+        /* d/du_d of the corner's shape function */
+        double w = c[i][d] ? 1 : -1;
+        for (int k = 0; k < 3; k++)
+          if (k != d) w *= c[i][k] ? u[k] : 1 - u[k];
+        for (int r = 0; r < 3; r++) J[d][r] += w * x[r];
+      }
+    }
+    double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                 J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                 J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    double l = 1;
+    for (int d = 0; d < 3; d++)
+      l *= sqrt(J[d][0] * J[d][0] + J[d][1] * J[d][1] + J[d][2] * J[d][2]);
+    double sj = l > 0 ? det / l : -1;
+    if (sj < lo) lo = sj;
+  }
+  return lo;
 }
 
 typedef struct {
@@ -49,7 +81,12 @@ static void progress(void *user, const vm_volume_progress *p) {
 
 int main(int argc, char **argv) {
   int n = 32, use[5] = {1, 1, 1, 1, 1}, cells = VM_GEN_HEX, threads = 0, where = 0;
-  vm_volume_opts o = vm_volume_opts_default();
+  /* vm-volume's default schedule: staged where there are hexahedra (its
+   * fallback to the direct schedule on a stall is not run here) */
+  int direct = 0;
+  for (int i = 1; i < argc; i++)
+    direct |= !strcmp(argv[i], "--direct") || !strcmp(argv[i], "--tets");
+  vm_volume_opts o = direct ? vm_volume_opts_default() : vm_volume_opts_staged();
   o.time_limit = 60;
   prog g = {0, getenv("VM_EVERY") ? atoi(getenv("VM_EVERY")) : 50};
   for (int i = 1; i < argc; i++) {
@@ -107,6 +144,8 @@ int main(int argc, char **argv) {
       where = 1;
     } else if (!strcmp(a, "--staged")) {
       o.staged = 1;
+    } else if (!strcmp(a, "--direct")) {
+      /* read above */
     } else if (!strcmp(a, "--qi-steps")) {
       o.qi_steps = atoi(v);
       i++;
@@ -177,7 +216,18 @@ int main(int argc, char **argv) {
         (long long)r.cert_undecided, (long long)r.cert_cells, (long long)r.cert_bad_init,
         r.iter_repair, (long long)r.geometric_left, r.time_geometric, r.repair_rounds,
         r.valid ? r.time_certified : -1.0);
-    if (!r.valid) all_ok = 0;
+    /* what a solver sees: the scaled Jacobian sampled inside the hexes,
+     * OpenFOAM's negative volumes and face pyramids (as checkMesh counts) */
+    double sj5 = INFINITY;
+    for (int64_t e = 0; e < m->ne; e++)
+      if (m->etype[e] == VM_HEX) {
+        double v = hex_sj_sampled(m, e);
+        if (v < sj5) sj5 = v;
+      }
+    printf("       min scaled Jacobian on a 5^3 grid per hex %.4f; OpenFOAM: %lld negative "
+           "volumes, %lld face pyramid errors\n",
+           sj5, (long long)q.foam_neg_volumes, (long long)q.foam_pyramid_errors);
+    if (!r.valid || q.foam_neg_volumes || q.foam_pyramid_errors) all_ok = 0;
     fflush(stdout);
     if (where && cells != VM_GEN_MIXED) {
       /* where the inverted nodes are: per cell, its layer outside the inner

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "varmesh/quadrature.h"
+#include "varmesh/quality.h"
 
 static double node_ratio(const vm_qnode *q, const double *x) {
   double c[3][3];
@@ -215,31 +216,6 @@ void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, co
   }
 }
 
-/* OpenFOAM's face centre c and area vector s of polygon x (n vertices):
- * the triangles fanned around the vertex mean, area-weighted. */
-void pr_foam_face(const double *x, int n, double *c, double *s) {
-  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
-  for (int i = 0; i < n; i++)
-    for (int r = 0; r < 3; r++) pc[r] += x[3 * i + r] / n;
-  s[0] = s[1] = s[2] = 0;
-  for (int i = 0; i < n; i++) {
-    const double *a = x + 3 * i, *b = x + 3 * ((i + 1) % n);
-    double u[3], w[3], nn[3];
-    for (int r = 0; r < 3; r++) {
-      u[r] = b[r] - a[r];
-      w[r] = pc[r] - a[r];
-    }
-    vm_cross3(u, w, nn);
-    double an = vm_norm3(nn);
-    for (int r = 0; r < 3; r++) {
-      s[r] += 0.5 * nn[r];
-      sc[r] += an * (a[r] + b[r] + pc[r]);
-    }
-    sa += an;
-  }
-  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
-}
-
 /* The prism's faces in its 18 coordinates: bottom, top, three quads. */
 const int pr_prism_faces[5][4] = {
     {0, 1, 2, -1}, {3, 4, 5, -1}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
@@ -257,7 +233,7 @@ void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*f
     double y[12];
     int n = pr_prism_faces[f][3] < 0 ? 3 : 4;
     for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * pr_prism_faces[f][i], 3 * sizeof *y);
-    pr_foam_face(y, n, fc[f], fs[f]);
+    vm_foam_face(y, n, fc[f], fs[f]);
     for (int r = 0; r < 3; r++) est[r] += fc[f][r] / 5;
   }
   double sv = 0, sum[3] = {0, 0, 0};
@@ -276,7 +252,7 @@ void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*f
  * fifth of the centres' distance). */
 double pr_foam_skew(const double *x, int n, const double *cp, const double *cn) {
   double c[3], s[3];
-  pr_foam_face(x, n, c, s);
+  vm_foam_face(x, n, c, s);
   return pr_foam_skew_of(x, n, c, s, cp, cn);
 }
 
@@ -304,7 +280,7 @@ double pr_foam_skew_of(const double *x, int n, const double *c, const double *s,
  * distance from the face). */
 double pr_foam_boundary_skew(const double *x, int n, const double *cp) {
   double c[3], s[3], e[3], sv[3];
-  pr_foam_face(x, n, c, s);
+  vm_foam_face(x, n, c, s);
   double ls = vm_norm3(s);
   if (!(ls > 0)) return INFINITY;
   for (int r = 0; r < 3; r++) e[r] = c[r] - cp[r];
@@ -320,7 +296,7 @@ double pr_foam_boundary_skew(const double *x, int n, const double *cp) {
 
 double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn) {
   double c[3], s[3];
-  pr_foam_face(x, n, c, s);
+  vm_foam_face(x, n, c, s);
   return pr_foam_ortho_cos_of(c, s, cp, cn);
 }
 

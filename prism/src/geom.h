@@ -66,9 +66,7 @@ void pr_build_targets(int64_t nt, const int32_t *tri, const pr_dir_params *k, co
 /* The prism's faces in its 18 coordinates: bottom, top, three quads (-1
  * ends a triangle). */
 extern const int pr_prism_faces[5][4];
-/* Face centre c and area vector s of polygon x (n vertices): the triangles
- * fanned around the vertex mean, area-weighted. */
-void pr_foam_face(const double *x, int n, double *c, double *s);
+/* Face centres and area vectors: vm_foam_face (varmesh/quality.h). */
 /* Cell centre of prism x: the pyramids on its faces around the face
  * centres' mean, volume-weighted. */
 void pr_foam_cell(const double *x, double *cc);

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "varmesh/jacobian.h"
 #include "varmesh/rotcube.h"
 #include "varmesh/quality.h"
 #include "varmesh/quadrature.h"
@@ -66,6 +67,9 @@ static void rotated_cube(vm_ctx *ctx) {
     vm_quality_opts qo = {VM_RULE_CORNER, 1.0 / 8};
     vm_mesh_quality(m, &qo, &q);
     CHECK(q.all.inverted_nodes == 0, "untangled at alpha 0");
+    CHECK(q.foam_neg_volumes == 0 && q.foam_pyramid_errors == 0,
+          "OpenFOAM at alpha 0: %lld negative volumes, %lld face pyramids",
+          (long long)q.foam_neg_volumes, (long long)q.foam_pyramid_errors);
     if (!tets) {
       CHECK_NEAR(q.all.phi_min, 1.0, 1e-12, "phi at alpha 0");
       CHECK_NEAR(q.all.psi_min, 1.0, 1e-12, "psi at alpha 0");
@@ -87,6 +91,7 @@ static void rotated_cube(vm_ctx *ctx) {
     vm_mesh_quality(m, &qo, &q);
     CHECK(q.all.inverted_nodes > 0 && q.all.inverted_elems > 0, "tangled at pi/2: M = %lld",
           (long long)q.all.inverted_nodes);
+    CHECK(q.foam_pyramid_errors > 0, "OpenFOAM at pi/2: face pyramids wrong");
     fprintf(stderr, "rotcube n=8 pi/2 %s: M = %lld, inverted elements %lld\n",
             tets ? "tets" : "hexes", (long long)q.all.inverted_nodes,
             (long long)q.all.inverted_elems);
@@ -185,6 +190,46 @@ static void units(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* OpenFOAM's cell geometry (vm_cell_foam): the ideal cells' volumes, every
+ * face pyramid wrong on a mirrored cell, and a certified-valid hex that
+ * checkMesh still fails (a thin twisted cell of an untangled rotated cube
+ * whose centre falls outside one face's plane). */
+static void foam_cells(void) {
+  const double vol[VM_NTYPES] = {[VM_TET] = 1 / (6 * sqrt(2.0)),
+                                 [VM_PYRAMID] = sqrt(2.0) / 6,
+                                 [VM_PRISM] = sqrt(3.0) / 4,
+                                 [VM_HEX] = 1};
+  const double h = 0.3, shift[3] = {5, -2, 7};
+  for (int t = VM_TET; t < VM_NTYPES; t++) {
+    double x[VM_MAX_ELEM_VERTS * 3], v;
+    int k = vm_elem_nverts(t), fv[6][4], nfv[6], nf = vm_elem_faces(t, fv, nfv);
+    vm_elem_ideal(t, x);
+    for (int i = 0; i < 3 * k; i++) x[i] = h * x[i] + shift[i % 3];
+    int bad = vm_cell_foam(t, x, &v);
+    CHECK(bad == 0, "%s: %d face pyramids wrong on the ideal cell", vm_elem_name(t), bad);
+    CHECK_NEAR(v, vol[t] * h * h * h, 1e-12, vm_elem_name(t));
+    for (int i = 0; i < k; i++) x[3 * i] = -x[3 * i];
+    bad = vm_cell_foam(t, x, &v);
+    CHECK(bad == nf && v < 0, "%s mirrored: %d of %d face pyramids wrong, volume %g",
+          vm_elem_name(t), bad, nf, v);
+  }
+  CHECK(vm_cell_foam(VM_QUAD, NULL, NULL) == -1, "a quad is not a 3D cell");
+  static const double twisted[8][3] = {
+      {-0.45729024717077166, -0.2364533213282789, 0.38118552920902399},
+      {-0.45682493440537664, -0.23175476494469666, 0.38015841234296677},
+      {-0.45381322268269891, 0.011714660258201856, 0.37938162188009167},
+      {-0.45469852468575489, 0.012810057953368774, 0.38018938012104248},
+      {-0.31346187849018547, -0.27598072334332385, 0.37867416176966939},
+      {-0.31637607861941441, -0.27210011553148461, 0.37701683154363314},
+      {-0.36952186182598273, 0.01753068847451171, 0.40674047200182423},
+      {-0.37353111224278956, 0.0024083061026757809, 0.40607985470771685}};
+  double v;
+  CHECK(vm_jacobian_certify(VM_HEX, twisted[0], 6, NULL) == VM_JAC_VALID,
+        "the twisted hex is certified valid");
+  CHECK(vm_cell_foam(VM_HEX, twisted[0], &v) == 1 && v > 0,
+        "the twisted hex: 1 face pyramid wrong, volume %g > 0", v);
+}
+
 int main(void) {
   vm_ctx *ctx;
   vm_ctx_create(&ctx);
@@ -194,6 +239,7 @@ int main(void) {
   mixed_cube(ctx);
   adjacency(ctx);
   units(ctx);
+  foam_cells();
   CHECK(vm_ctx_alloc_live(ctx) == live0, "leak: %ld blocks", vm_ctx_alloc_live(ctx) - live0);
   vm_ctx_destroy(&ctx);
   return vmtest_end("quality");

@@ -7,10 +7,14 @@
 # straight to a case, whose patches are the wall (type wall) and the outer
 # surface (type patch); writing again into a case keeps its 0/ and system/.
 # potentialFoam, when installed, runs on the mixed cube's patches. Skipped
-# (77) when checkMesh is not installed.
-# usage: test_foam_checkmesh.sh FOAM_CASES VM_GEN VM_CONVERT VM_PRISM
+# (77) when checkMesh is not installed. vm-quality's count of OpenFOAM's
+# negative volumes and face pyramids equals checkMesh's on tangled rotated
+# cubes (hexahedra, and the mixed cells; at 7pi/8, where no cell is
+# degenerate: at pi/2 and pi cells collapse onto coincident points, which
+# checkMesh reports as open cells, and the counts differ in rounding).
+# usage: test_foam_checkmesh.sh FOAM_CASES VM_GEN VM_CONVERT VM_PRISM VM_QUALITY
 set -u
-cases=$1 gen=$2 conv=$3 prism=$4
+cases=$1 gen=$2 conv=$3 prism=$4 quality=$5
 if ! command -v checkMesh >/dev/null 2>&1; then
   echo "skip: checkMesh (OpenFOAM) not on PATH"
   exit 77
@@ -52,6 +56,17 @@ check '[ $? -eq 0 ]' "vm-gen rotcube at angle 0, hexahedra and tetrahedra"
 check '[ $? -eq 0 ] && mesh_ok "$dir/h.foam"' "vm-convert h.vmsh h.foam: checkMesh OK"
 "$conv" --binary --format foam "$dir/t.vmsh" "$dir/t" 2>/dev/null
 check '[ $? -eq 0 ] && mesh_ok "$dir/t"' "vm-convert --binary --format foam t.vmsh t: checkMesh OK"
+
+# vm-quality counts what checkMesh counts: the same geometry, cell by cell
+for kind in hex mixed; do
+  opt=; [ $kind = mixed ] && opt=--mixed
+  "$gen" rotcube --n 8 --angle 7pi/8 $opt "$dir/tg.vmsh" && "$conv" "$dir/tg.vmsh" "$dir/tg.foam" 2>/dev/null
+  checkMesh -case "$dir/tg.foam" >"$dir/tg.log" 2>&1
+  neg=$(sed -n 's/.*Number of negative volume cells: \([0-9]*\).*/\1/p' "$dir/tg.log")
+  pyr=$(sed -n 's/.*Error in face pyramids: \([0-9]*\) faces.*/\1/p' "$dir/tg.log")
+  own=$("$quality" "$dir/tg.vmsh" | sed -n "s/^OpenFOAM's checkMesh: \([0-9]*\) cells of volume <= 0, \([0-9]*\) face pyramids.*/\1 \2/p")
+  check '[ -n "$pyr" ] && [ "$own" = "${neg:-0} $pyr" ]' "tangled $kind cube: vm-quality's OpenFOAM counts ($own) are checkMesh's (${neg:-0} $pyr)"
+done
 
 # a solver on the patches: potentialFoam on the mixed cube, the symmetry
 # side with OpenFOAM's symmetryPlane condition (refused on a patch of

@@ -11,6 +11,7 @@
 
 #include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
+#include "varmesh/quality.h"
 #include "varmesh/topology.h"
 
 vm_volume_opts vm_volume_opts_default(void) {
@@ -38,6 +39,15 @@ vm_volume_opts vm_volume_opts_default(void) {
   o.repair_bernstein = 1;
   o.repair_geometric = 1;
   o.geometric_decay = 0.7;
+  return o;
+}
+
+vm_volume_opts vm_volume_opts_staged(void) {
+  vm_volume_opts o = vm_volume_opts_default();
+  o.staged = 1;
+  o.method = VM_UNTANGLE_FOLDOVER;
+  o.eps_inner = 3;
+  o.theta_untangle = 0.999;
   return o;
 }
 
@@ -90,6 +100,8 @@ typedef struct {
   int keep_certified; /* optimization: every step keeps every cell certified */
   int no_local;       /* untangling without local rounds */
   int keep_guards;    /* every step keeps every guarded node positive */
+  int64_t foam_max;   /* >= 0: every step keeps the face pyramids OpenFOAM
+                         calls incorrectly oriented at most this many */
   int stop_certified; /* untangling ends once every cell is certified */
   int local_scale;    /* local_threshold counts this many times the nodes */
   int reached_certified;
@@ -119,9 +131,30 @@ static int64_t uncertified_at(const ut_state *s, const double *x) {
   return jr.invalid + jr.undecided;
 }
 
-/* The line search's test while the optimization keeps the mesh certified:
- * a step that leaves a cell not certified is outside the domain. */
-static int all_certified(void *user, const double *x) { return uncertified_at(user, x) == 0; }
+/* Face pyramids OpenFOAM's checkMesh would call incorrectly oriented
+ * (vm_cell_foam) over the 3D cells with the vertices at x. */
+static int64_t foam_errors_at(const ut_state *s, const double *x) {
+  const vm_mesh *m = s->m;
+  int64_t bad = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int t = m->etype[e];
+    if (vm_elem_dim(t) != 3) continue;
+    double y[3 * VM_MAX_ELEM_VERTS];
+    int k = vm_elem_nverts(t);
+    for (int i = 0; i < k; i++) memcpy(y + 3 * i, x + 3 * m->conn[m->eoff[e] + i], 3 * sizeof *y);
+    bad += vm_cell_foam(t, y, NULL);
+  }
+  return bad;
+}
+
+/* The line search's test while the optimization keeps the mesh certified
+ * (a step that leaves a cell not certified is outside the domain) and the
+ * face pyramids from getting worse. */
+static int keep_admissible(void *user, const double *x) {
+  const ut_state *s = user;
+  if (s->foam_max >= 0 && foam_errors_at(s, x) > s->foam_max) return 0;
+  return !s->keep_certified || uncertified_at(s, x) == 0;
+}
 
 /* The line search's test while the guarded nodes must stay positive: a
  * guard's wall (eps = delta0) is steep only away from det = 0, and next to
@@ -377,7 +410,7 @@ static int run_phase(ut_state *s, const char *phase, vm_minimizer_kind kind, int
   }
   mo.monitor = monitor;
   mo.before_iteration = hook;
-  if (s->keep_certified) mo.admissible = all_certified;
+  if (s->keep_certified || s->foam_max >= 0) mo.admissible = keep_admissible;
   if (s->keep_guards && s->guard) mo.admissible = guards_positive;
   mo.user = s;
   s->phase = phase;
@@ -446,6 +479,14 @@ static int local_mask(ut_state *s, int rings, const int64_t *vrp, const int32_t 
   grow_mask(m, rings, vrp, vel, emask, vmark);
   drop_fixed(m, vmark, emask);
   return VM_OK;
+}
+
+/* 3D cells whose face pyramids can be wrong while the cell is valid: all
+ * but tetrahedra (whose centre is inside). */
+static int has_foam_cells(const vm_mesh *m) {
+  for (int64_t e = 0; e < m->ne; e++)
+    if (vm_elem_dim(m->etype[e]) == 3 && m->etype[e] != VM_TET) return 1;
+  return 0;
 }
 
 static int has_hex(const vm_mesh *m) {
@@ -1134,7 +1175,9 @@ static int bern_walls(ut_state *s, double w) {
  * mesh admissible) for opt_iter iterations, then qi_steps steps of the
  * quasi-isometric continuation (11), raising t of W_t to push up the worst
  * element. With s->keep_certified every step also keeps every cell
- * certified. */
+ * certified; on a mesh with 3D cells other than tets no step adds a face
+ * pyramid OpenFOAM's checkMesh calls incorrectly oriented (a certified
+ * cell can have one: a warped face with the cell centre beyond it). */
 static int optimize_phase(ut_state *s, const vm_measure_params *prm) {
   const vm_volume_opts *o = s->o;
   vm_minimize_result res;
@@ -1142,24 +1185,28 @@ static int optimize_phase(ut_state *s, const vm_measure_params *prm) {
   if ((st = vm_problem_set_node_eps(s->P, NULL)) < 0) return st;
   s->eps = 0;
   if ((st = vm_problem_set_measure(s->P, o->measure, prm)) < 0) return st;
+  if (has_foam_cells(s->m)) s->foam_max = foam_errors_at(s, s->m->xyz);
   if (o->opt_iter > 0) {
     st = run_phase(s, "optimize", o->solver, o->opt_iter, before_plain, &res);
     s->rep->iter_opt += res.iterations;
-    if (st < 0) return st;
+    if (st < 0) goto done;
+    if (s->foam_max > 0) s->foam_max = foam_errors_at(s, s->m->xyz);
   }
   for (int k = 0; k < o->qi_steps && st >= 0 && !out_of_time(s); k++) {
-    if ((st = vm_problem_set_measure(s->P, VM_MEASURE_QUASI_ISO, prm)) < 0) return st;
+    if ((st = vm_problem_set_measure(s->P, VM_MEASURE_QUASI_ISO, prm)) < 0) goto done;
     double lo = k == 0 ? 0 : s->rep->t_reached;
     double tmax = qi_feasible_t(s, lo);
     vm_measure_params q = *prm;
     q.t = lo + 0.9 * (tmax - lo);
     s->eps = q.t;
-    if ((st = vm_problem_set_params(s->P, &q)) < 0) return st;
+    if ((st = vm_problem_set_params(s->P, &q)) < 0) goto done;
     st = run_phase(s, "quasi-iso", o->solver, o->opt_iter > 0 ? o->opt_iter : 50, before_plain,
                    &res);
     s->rep->iter_opt += res.iterations;
     s->rep->t_reached = q.t;
   }
+done:
+  s->foam_max = -1;
   return st > 0 ? VM_OK : st;
 }
 
@@ -1180,6 +1227,7 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   s.surf = surf;
   s.t0 = now();
   s.best_M = INT64_MAX;
+  s.foam_max = -1;
   s.phase_name = "untangle";
   int st = vm_problem_create(ctx, m, &s.P);
   if (st < 0) return st;

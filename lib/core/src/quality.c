@@ -103,6 +103,70 @@ static void rule_tinv(const vm_qrule *R, const double *ref, double h, double *Ti
   }
 }
 
+void vm_foam_face(const double *y, int n, double *c, double *s) {
+  if (n == 3) {
+    double u[3], w[3];
+    vm_sub3(y + 3, y, u);
+    vm_sub3(y + 6, y, w);
+    vm_cross3(u, w, s);
+    for (int r = 0; r < 3; r++) {
+      s[r] *= 0.5;
+      c[r] = (y[r] + y[3 + r] + y[6 + r]) / 3;
+    }
+    return;
+  }
+  double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
+  for (int i = 0; i < n; i++)
+    for (int r = 0; r < 3; r++) pc[r] += y[3 * i + r];
+  for (int r = 0; r < 3; r++) pc[r] /= n;
+  s[0] = s[1] = s[2] = 0;
+  for (int i = 0; i < n; i++) {
+    const double *a = y + 3 * i, *b = y + 3 * ((i + 1) % n);
+    double u[3], w[3], nn[3];
+    vm_sub3(b, a, u);
+    vm_sub3(pc, a, w);
+    vm_cross3(u, w, nn);
+    double an = vm_norm3(nn);
+    for (int r = 0; r < 3; r++) {
+      s[r] += 0.5 * nn[r];
+      sc[r] += an * (a[r] + b[r] + pc[r]);
+    }
+    sa += an;
+  }
+  for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
+}
+
+int vm_cell_foam(int type, const double *x, double *volume) {
+  int fv[6][4], nfv[6];
+  if (type < VM_TET || type >= VM_NTYPES) return -1;
+  int nf = vm_elem_faces(type, fv, nfv);
+  double fc[6][3], fs[6][3], est[3] = {0, 0, 0};
+  for (int f = 0; f < nf; f++) {
+    double y[12];
+    for (int i = 0; i < nfv[f]; i++) memcpy(y + 3 * i, x + 3 * fv[f][i], 3 * sizeof *y);
+    vm_foam_face(y, nfv[f], fc[f], fs[f]);
+    for (int r = 0; r < 3; r++) est[r] += fc[f][r];
+  }
+  for (int r = 0; r < 3; r++) est[r] /= nf;
+  double v3 = 0, sum[3] = {0, 0, 0}, cc[3];
+  for (int f = 0; f < nf; f++) {
+    double d[3];
+    vm_sub3(fc[f], est, d);
+    double v = vm_dot3(fs[f], d);
+    for (int r = 0; r < 3; r++) sum[r] += v * (0.75 * fc[f][r] + 0.25 * est[r]);
+    v3 += v;
+  }
+  for (int r = 0; r < 3; r++) cc[r] = fabs(v3) > 0 ? sum[r] / v3 : est[r];
+  int bad = 0;
+  for (int f = 0; f < nf; f++) {
+    double d[3];
+    vm_sub3(fc[f], cc, d);
+    bad += !(vm_dot3(fs[f], d) > 0);
+  }
+  if (volume) *volume = v3 / 3;
+  return bad;
+}
+
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);
@@ -249,6 +313,11 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
     if (esj) esj[e] = sjm;
     if (ephi) ephi[e] = ephi_min;
     if (inv) tq->inverted_elems++;
+    if (d == 3) {
+      double vol;
+      q->foam_pyramid_errors += vm_cell_foam(t, x, &vol);
+      q->foam_neg_volumes += !(vol > 0);
+    }
   }
   for (int t = 0; t < VM_NTYPES; t++) {
     vm_type_quality *tq = &q->type[t];

@@ -111,6 +111,11 @@ typedef struct vm_volume_opts {
 } vm_volume_opts;
 
 vm_volume_opts vm_volume_opts_default(void);
+/* The staged schedule's settings, vm-volume's default on meshes with
+ * hexahedra: the defaults with staged = 1 and the foldover untangling
+ * measured on the rotated cube and its 6-tet split (eps_inner 3,
+ * theta_untangle 0.999; docs/volume.md). */
+vm_volume_opts vm_volume_opts_staged(void);
 
 typedef struct vm_volume_report {
   int64_t nodes; /* quadrature nodes */

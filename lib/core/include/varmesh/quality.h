@@ -40,6 +40,10 @@ typedef struct vm_quality {
   double min_det; /* min det C over nodes (target-scaled if a size is known) */
   double sj_p01, sj_p05, sj_p25, sj_p50; /* scaled-Jacobian percentiles */
   int64_t sj_hist[VM_QUALITY_NBINS];
+  /* OpenFOAM's checkMesh on the 3D cells (vm_cell_foam): cells of volume
+   * <= 0 and face pyramids of volume <= 0 ("incorrectly oriented"; a face
+   * counts once per cell it bounds, as checkMesh counts) */
+  int64_t foam_neg_volumes, foam_pyramid_errors;
 } vm_quality;
 
 /* Quality of every element of the top dimension. The scaled Jacobian of an
@@ -55,6 +59,24 @@ int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q
  * dimension). sj and phi: m->ne doubles each, or NULL; q may be NULL. */
 int vm_mesh_element_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
                             double *sj, double *phi);
+
+/* OpenFOAM's face centre c and area vector s of the polygon y (n >= 3
+ * vertices, 3 coordinates each): a triangle's centroid and half cross
+ * product; otherwise the triangles fanned around the vertex mean, their
+ * centroids weighted by their areas (s their summed area vectors). */
+void vm_foam_face(const double *y, int n, double *c, double *s);
+
+/* OpenFOAM's geometry of one 3D cell (type VM_TET..VM_HEX) with its
+ * vertices at x (3 per vertex, varmesh order), as its primitiveMesh
+ * computes it: each face's centre and area vector by the triangles fanned
+ * around its vertex mean (a triangle directly), the cell centre by the
+ * pyramids on the face centres around their mean, weighted by their signed
+ * volumes. Returns the number of the cell's face pyramids (its outward face
+ * and its centre) whose volume is not positive: those checkMesh reports as
+ * "incorrectly oriented" (a valid cell can have them: a twisted or bent
+ * cell whose centre falls outside one of its faces' planes). *volume (may
+ * be NULL) gets the cell volume. -1 for a type that is not 3D. */
+int vm_cell_foam(int type, const double *x, double *volume);
 
 #ifdef __cplusplus
 }
