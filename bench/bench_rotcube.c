@@ -224,9 +224,15 @@ int main(int argc, char **argv) {
         double v = hex_sj_sampled(m, e);
         if (v < sj5) sj5 = v;
       }
-    printf("       min scaled Jacobian on a 5^3 grid per hex %.4f; OpenFOAM: %lld negative "
-           "volumes, %lld face pyramid errors\n",
-           sj5, (long long)q.foam_neg_volumes, (long long)q.foam_pyramid_errors);
+    /* phi and psi over the certifying nodes: the geometric rule's 64 (24) */
+    vm_quality qg;
+    vm_quality_opts qgo = {VM_RULE_GEOMETRIC, 1.0 / n};
+    vm_mesh_quality(m, &qgo, &qg);
+    printf("       over the geometric rule's nodes (24): phi_min %.3e, psi_min %.3e, M %lld; min "
+           "scaled Jacobian on a 5^3 grid per hex %.4f; OpenFOAM: %lld negative volumes, %lld "
+           "face pyramid errors\n",
+           qg.all.phi_min, qg.all.psi_min, (long long)qg.all.inverted_nodes, sj5,
+           (long long)q.foam_neg_volumes, (long long)q.foam_pyramid_errors);
     if (!r.valid || q.foam_neg_volumes || q.foam_pyramid_errors) all_ok = 0;
     fflush(stdout);
     if (where && cells != VM_GEN_MIXED) {

@@ -4,8 +4,8 @@
 # (0,1,1) and (1,2,3), angles k pi/8 (k = 1..8), inner half-sizes 0.25, 0.3,
 # 0.35 and 0.4, for each n given. Per case: the exit code (0 certified
 # valid, 3 not valid or impossible, 4 time limit), the time to a certified
-# mesh, phi_min, min scaled Jacobian, cells not certified, CPU seconds; then
-# a summary per n. One thread, so that two sweeps can run side by side.
+# mesh, phi_min, min scaled Jacobian, cells not certified, the face pyramids
+# OpenFOAM's checkMesh would call wrong, CPU seconds; then a summary per n. One thread, so that two sweeps can run side by side.
 # usage: bench/bench_rotcube_sweep.sh BUILD_DIR [N ...]   (default N: 12)
 #        VM_SWEEP_LIMIT=S  seconds per case (default 120, the issue's target)
 #        VM_SWEEP_AXES="0,0,1 1,1,1" VM_SWEEP_ANGLES="pi/2 pi"
@@ -22,10 +22,10 @@ inners=${VM_SWEEP_INNER:-0.25 0.3 0.35 0.4}
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 json() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" "$1" | head -1; }
-printf '| n | axis | angle | inner | exit | certified after s | CPU s | phi_min | min SJ | not certified | note |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
+printf '| n | axis | angle | inner | exit | certified after s | CPU s | phi_min | min SJ | not certified | wrong face pyramids | note |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 for n in $sizes; do
-  ok=0 bad=0 imp=0 slow=0 total=0 cpu_sum=0 worst_cpu=0
+  ok=0 bad=0 imp=0 slow=0 total=0 cpu_sum=0 worst_cpu=0 foam_bad=0
   for ax in $axes; do
     for an in $angles; do
       for in in $inners; do
@@ -58,15 +58,17 @@ for n in $sizes; do
         ci=$(json "$c.json" certified_invalid)
         cu=$(json "$c.json" certified_undecided)
         ncert=$([ -n "$ci" ] && echo $((ci + cu)))
+        pyr=$(json "$c.json" foam_pyramid_errors)
+        [ $rc -eq 0 ] && [ "${pyr:-0}" != 0 ] && foam_bad=$((foam_bad + 1))
         g3() { [ -n "$1" ] && awk -v x="$1" 'BEGIN { printf "%.3g", x }'; }
         [ "${tc:-}" = "-1.000" ] && tc=""
-        printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$n" "$ax" "$an" "$in" "$rc" \
-          "${tc:--}" "$cpu" "$(g3 "$(json "$c.json" phi_min)")" "$(g3 "$(json "$c.json" sj_min)")" \
-          "${ncert:--}" "$note"
+        printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$n" "$ax" "$an" "$in" \
+          "$rc" "${tc:--}" "$cpu" "$(g3 "$(json "$c.json" phi_min)")" "$(g3 "$(json "$c.json" sj_min)")" \
+          "${ncert:--}" "${pyr:--}" "$note"
       done
     done
   done
-  printf '\nn = %s: %s cases: %s certified valid (CPU mean %s s, max %s s), %s impossible (said at once), %s at the %s s limit, %s other exit 3\n\n' \
+  printf '\nn = %s: %s cases: %s certified valid (CPU mean %s s, max %s s; %s of them with face pyramids OpenFOAM calls wrong), %s impossible (said at once), %s at the %s s limit, %s other exit 3\n\n' \
     "$n" "$total" "$ok" "$(awk -v s="$cpu_sum" -v k="$ok" 'BEGIN { printf "%.1f", k ? s / k : 0 }')" \
-    "$worst_cpu" "$imp" "$slow" "$limit" "$bad"
+    "$worst_cpu" "$foam_bad" "$imp" "$slow" "$limit" "$bad"
 done

@@ -67,6 +67,10 @@ check '! grep -q "lies outside" "$dir/free.err"' "a free boundary is not refused
 "$vol" --time-limit 1 -q "$dir/in04.vmsh" "$dir/out_res.vmsh" 2>"$dir/in04.err"
 check '! grep -q "lies outside" "$dir/in04.err"' \
   "half-size 0.4: the turned fixed vertices stay inside (0.495 < 0.5), not refused"
+"$gen" rotcube --n 16 --angle pi/4 --inner 0.3 "$dir/graze.vmsh"
+"$vol" --time-limit 1 -q "$dir/graze.vmsh" "$dir/out_res.vmsh" 2>"$dir/graze.err"
+check '! grep -q "lies outside" "$dir/graze.err"' \
+  "n = 16, pi/4, half-size 0.3: inside, not refused (rays from its turned vertices along simple irrational directions grazed the outer grid's edges)"
 
 # hex 283 of the n = 16 pi cube after the staged schedule without the
 # repair (scaled): all 8 corner tets positive, det J < 0 inside

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -452,6 +453,32 @@ extern "C" int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double s
   return vm_surface_hausdorff_at(a, b, spacing, ab, ba, NULL, NULL);
 }
 
+// Crossings of the ray from p along d with the triangles of s, or -1 when
+// the ray meets a triangle within rounding of one of its edges or vertices,
+// or runs along one (the parity would say nothing there).
+int ray_crossings(const TriSurface &s, const Point &p, const Vector &d) {
+  std::vector<TriIt> hit;
+  s.tree->all_intersected_primitives(K::Ray_3(p, d), std::back_inserter(hit));
+  const double eps = 1e-9;
+  int n = 0;
+  for (TriIt it : hit) {
+    const Triangle &t = *it;
+    Vector e1 = t[1] - t[0], e2 = t[2] - t[0];
+    Vector q = CGAL::cross_product(d, e2);
+    double det = e1 * q;
+    double scale = std::sqrt(e1.squared_length() * e2.squared_length() * d.squared_length());
+    if (!(std::fabs(det) > eps * scale)) return -1;
+    Vector r = p - t[0];
+    double u = (r * q) / det;
+    Vector w = CGAL::cross_product(r, e1);
+    double v = (d * w) / det;
+    if (u < -eps || v < -eps || u + v > 1 + eps) continue; // the box test's slack
+    if (u < eps || v < eps || u + v > 1 - eps) return -1;
+    n++;
+  }
+  return n;
+}
+
 extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts, double tol,
                                  int8_t *inside) {
   if (!surf || n < 0 || (n > 0 && (!pts || !inside))) return VM_ERR_ARG;
@@ -475,24 +502,31 @@ extern "C" int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *p
     for (int64_t i = 0; i < n; i++) inside[i] = 0;
     return VM_OK;
   }
-  // three directions in no special relation to the axes or to each other:
-  // a ray grazing an edge or a vertex miscounts its crossings, and the
-  // majority of three rays is wrong only if two of them graze
-  static const double dir[3][3] = {{0.5773502691896258, 0.6172133998483676, 0.5345224838248488},
-                                   {-0.4082482904638630, 0.7071067811865475, -0.5773502691896258},
-                                   {0.2672612419124244, -0.5345224838248488, 0.8017837257372732}};
+  // Directions with no algebraic relation to the axes, to each other or to
+  // rotations by simple angles (unit vectors made of 1/sqrt(2), 1/sqrt(3),
+  // 1/sqrt(6) grazed the grid edges of a cube's surface from points of a
+  // cube turned by pi/4: two of three rays, a wrong majority). A ray that
+  // still passes within rounding of an edge or a vertex of a triangle it
+  // meets, or along one, is not counted: the next direction is tried, and
+  // the first three clean rays vote.
+  static const double dir[8][3] = {{0.4217, 0.7433, 0.5192},    {-0.6329, 0.2871, 0.7193},
+                                   {0.3391, -0.5478, 0.7649},   {0.8123, 0.3307, -0.4806},
+                                   {-0.2713, -0.8419, 0.4664},  {0.5521, -0.6013, -0.5776},
+                                   {-0.7339, -0.1547, -0.6614}, {0.1911, 0.9093, -0.3697}};
   for (int64_t i = 0; i < n; i++) {
     Point p(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
     if (s.tree->squared_distance(p) <= tol * tol) {
       inside[i] = -1;
       continue;
     }
-    int votes = 0;
-    for (int k = 0; k < 3; k++) {
-      K::Ray_3 ray(p, Vector(dir[k][0], dir[k][1], dir[k][2]));
-      votes += static_cast<int>(s.tree->number_of_intersected_primitives(ray) & 1);
+    int votes = 0, clean = 0;
+    for (int k = 0; k < 8 && clean < 3; k++) {
+      int c = ray_crossings(s, p, Vector(dir[k][0], dir[k][1], dir[k][2]));
+      if (c < 0) continue;
+      clean++;
+      votes += c & 1;
     }
-    inside[i] = votes >= 2;
+    inside[i] = clean == 3 ? votes >= 2 : -1;
   }
   return VM_OK;
   VM_CXX_END(ctx, "inside")

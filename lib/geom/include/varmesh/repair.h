@@ -102,8 +102,10 @@ int vm_surface_hausdorff(const vm_mesh *a, const vm_mesh *b, double spacing, dou
  * be NULL. */
 /* Whether each of n points (3*n) lies inside the closed triangle/quad
  * surface surf (inside[i] = 1) or outside (0), by the parity of a ray's
- * crossings, the majority of three rays; -1 for a point within distance tol
- * of the surface, where the parity says nothing. */
+ * crossings, the majority of three rays that meet no triangle within
+ * rounding of its edges or vertices (up to eight directions are tried);
+ * -1 for a point within distance tol of the surface, where the parity says
+ * nothing, or where no three such rays were found. */
 int vm_surface_inside(const vm_mesh *surf, int64_t n, const double *pts, double tol,
                       int8_t *inside);
 int vm_surface_hausdorff_at(const vm_mesh *a, const vm_mesh *b, double spacing, double *ab,
