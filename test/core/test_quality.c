@@ -8,6 +8,7 @@
 #include "varmesh/quality.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/topology.h"
+#include "twisted_hex.h"
 #include "vmtest.h"
 
 /* One ideal element of each type, scaled by h: phi = psi = sj = 1, M = 0. */
@@ -214,19 +215,10 @@ static void foam_cells(void) {
           vm_elem_name(t), bad, nf, v);
   }
   CHECK(vm_cell_foam(VM_QUAD, NULL, NULL) == -1, "a quad is not a 3D cell");
-  static const double twisted[8][3] = {
-      {-0.45729024717077166, -0.2364533213282789, 0.38118552920902399},
-      {-0.45682493440537664, -0.23175476494469666, 0.38015841234296677},
-      {-0.45381322268269891, 0.011714660258201856, 0.37938162188009167},
-      {-0.45469852468575489, 0.012810057953368774, 0.38018938012104248},
-      {-0.31346187849018547, -0.27598072334332385, 0.37867416176966939},
-      {-0.31637607861941441, -0.27210011553148461, 0.37701683154363314},
-      {-0.36952186182598273, 0.01753068847451171, 0.40674047200182423},
-      {-0.37353111224278956, 0.0024083061026757809, 0.40607985470771685}};
   double v;
-  CHECK(vm_jacobian_certify(VM_HEX, twisted[0], 6, NULL) == VM_JAC_VALID,
+  CHECK(vm_jacobian_certify(VM_HEX, twisted_hex[0], 6, NULL) == VM_JAC_VALID,
         "the twisted hex is certified valid");
-  CHECK(vm_cell_foam(VM_HEX, twisted[0], &v) == 1 && v > 0,
+  CHECK(vm_cell_foam(VM_HEX, twisted_hex[0], &v) == 1 && v > 0,
         "the twisted hex: 1 face pyramid wrong, volume %g > 0", v);
 }
 

@@ -136,7 +136,9 @@ void vm_foam_face(const double *y, int n, double *c, double *s) {
   for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
 }
 
-int vm_cell_foam(int type, const double *x, double *volume) {
+/* vm_cell_foam, and the least face pyramid's volume over the cell's
+ * (-INFINITY for a cell of volume 0). */
+static int foam_cell(int type, const double *x, double *volume, double *margin) {
   int fv[6][4], nfv[6];
   if (type < VM_TET || type >= VM_NTYPES) return -1;
   int nf = vm_elem_faces(type, fv, nfv);
@@ -158,13 +160,26 @@ int vm_cell_foam(int type, const double *x, double *volume) {
   }
   for (int r = 0; r < 3; r++) cc[r] = fabs(v3) > 0 ? sum[r] / v3 : est[r];
   int bad = 0;
+  double least = INFINITY;
   for (int f = 0; f < nf; f++) {
     double d[3];
     vm_sub3(fc[f], cc, d);
-    bad += !(vm_dot3(fs[f], d) > 0);
+    double v = vm_dot3(fs[f], d);
+    bad += !(v > 0);
+    if (!(v >= least)) least = v;
   }
   if (volume) *volume = v3 / 3;
+  if (margin) *margin = fabs(v3) > 0 ? least / fabs(v3) : -INFINITY;
   return bad;
+}
+
+int vm_cell_foam(int type, const double *x, double *volume) {
+  return foam_cell(type, x, volume, NULL);
+}
+
+double vm_cell_foam_margin(int type, const double *x) {
+  double m;
+  return foam_cell(type, x, NULL, &m) < 0 ? NAN : m;
 }
 
 static int cmp_double(const void *a, const void *b) {

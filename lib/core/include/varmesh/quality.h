@@ -77,6 +77,10 @@ void vm_foam_face(const double *y, int n, double *c, double *s);
  * cell whose centre falls outside one of its faces' planes). *volume (may
  * be NULL) gets the cell volume. -1 for a type that is not 3D. */
 int vm_cell_foam(int type, const double *x, double *volume);
+/* The least of those face pyramid volumes over the cell volume (scale-free;
+ * > 0 when none is wrong; -INFINITY for a cell of volume 0, NAN for a type
+ * that is not 3D). */
+double vm_cell_foam_margin(int type, const double *x);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,18 @@
+/* test/twisted_hex.h: a certified-valid hexahedron that OpenFOAM's
+ * checkMesh still fails: a thin, twisted cell of the n = 32 7pi/8 rotated
+ * cube untangled before the volume stage's face-pyramid guard, whose cell
+ * centre falls beyond one of its warped faces (1 face pyramid wrong). */
+#ifndef VARMESH_TEST_TWISTED_HEX_H
+#define VARMESH_TEST_TWISTED_HEX_H
+
+static const double twisted_hex[8][3] = {
+    {-0.45729024717077166, -0.2364533213282789, 0.38118552920902399},
+    {-0.45682493440537664, -0.23175476494469666, 0.38015841234296677},
+    {-0.45381322268269891, 0.011714660258201856, 0.37938162188009167},
+    {-0.45469852468575489, 0.012810057953368774, 0.38018938012104248},
+    {-0.31346187849018547, -0.27598072334332385, 0.37867416176966939},
+    {-0.31637607861941441, -0.27210011553148461, 0.37701683154363314},
+    {-0.36952186182598273, 0.01753068847451171, 0.40674047200182423},
+    {-0.37353111224278956, 0.0024083061026757809, 0.40607985470771685}};
+
+#endif
