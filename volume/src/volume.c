@@ -1382,8 +1382,10 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
       if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
     }
   }
-  if (st >= 0 && s.M == 0 && has_foam_cells(m) && !out_of_time(&s)) {
-    /* what the optimization's guard could not take away */
+  if (st >= 0 && s.M == 0 && s.rule == VM_RULE_CORNER && has_foam_cells(m) && !out_of_time(&s)) {
+    /* what the optimization's guard could not take away (under the corner
+     * rule, whose nodes a certified cell keeps positive: a node of another
+     * rule could turn over) */
     int64_t left = foam_relief(&s);
     if (left < 0) {
       st = (int)left;
