@@ -1241,8 +1241,8 @@ static int64_t foam_relief(ut_state *s) {
     int k = vm_elem_nverts(t);
     for (int round = 0; round < 20; round++) {
       cell_coords(m, m->xyz, e, y);
-      if (vm_cell_foam(t, y, NULL) == 0) break;
       double m0 = vm_cell_foam_margin(t, y), ext = 0;
+      if (m0 > 0) break; /* no face pyramid of the cell wrong */
       for (int i = 0; i < k; i++)
         for (int j = 0; j < k; j++) ext = fmax(ext, vm_dist3(y + 3 * i, y + 3 * j));
       double best = m0, bp[3];
