@@ -374,6 +374,58 @@ static int all_column_skew(const vm_prism *p, double *sk) {
   return VM_OK;
 }
 
+/* 1 + r + ... + r^(n-1) */
+static double geometric_sum(double r, int n) {
+  double s = 0, t = 1;
+  for (int k = 0; k < n; k++, t *= r) s += t;
+  return s;
+}
+
+/* Column v's own schedule: the shares frac_c[k] (k = 0..nl) of its length
+ * `len` at which its levels stand. A column at the full thickness (or
+ * beyond it) takes the schedule's shares `frac`. A column the stage had to
+ * shorten keeps the schedule's first height h1 (what the user asked for,
+ * from --first-height or --yplus: the wall's cells the same height
+ * everywhere, as a solver's wall treatment assumes) and the growth law,
+ * with its own ratio r_c in [1, r] so that h1 (1 + r_c + ... + r_c^(nl-1))
+ * = len; where even equal heights of h1 exceed len, equal heights len/nl.
+ * Scaling the whole schedule instead made a column shortened to a tenth of
+ * T put its first cell at a tenth of h1 (aspect ratios 10 times the
+ * others', OpenFOAM's small cell determinants). The same shares as `frac`
+ * when there are fewer levels than the schedule's or the column is at full
+ * thickness, so the change is continuous at len = T. */
+static void column_fractions(const vm_prism *p, int nl, double len, const double *frac,
+                             double *frac_c) {
+  int n = p->rep.layers_requested;
+  double tot = 0;
+  for (int k = 0; k < n; k++) tot += p->sched[k];
+  memcpy(frac_c, frac, (size_t)(nl + 1) * sizeof *frac_c);
+  frac_c[0] = 0;
+  frac_c[nl] = 1;
+  if (nl != n || nl < 2 || !(len > 0) || !(len < tot)) return;
+  double h1 = p->sched[0], r = p->rep.growth;
+  if (h1 * nl >= len) {
+    for (int k = 1; k < nl; k++) frac_c[k] = (double)k / nl;
+    return;
+  }
+  /* sum_k h1 r^k rises with r from nl h1 < len: bisect on [1, hi] */
+  double lo = 1, hi = r > 1 ? r : 1;
+  while (h1 * geometric_sum(hi, nl) < len && hi < 1e3) hi *= 2;
+  for (int it = 0; it < 100 && hi - lo > 1e-15 * hi; it++) {
+    double mid = 0.5 * (lo + hi);
+    if (h1 * geometric_sum(mid, nl) < len)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  double rc = 0.5 * (lo + hi), a = 0, h = h1;
+  for (int k = 1; k < nl; k++) {
+    a += h;
+    h *= rc;
+    frac_c[k] = a / len;
+  }
+}
+
 /* Column v's levels 1..nl-1 put along its polyline `old` (levels 0..nl,
  * arc lengths `arc`) at the shares frac[k]^gamma of its length. */
 static void place_levels(vm_prism *p, int64_t v, int nl, const double *old, const double *arc,
@@ -411,7 +463,9 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
  * (first levels of the fan columns at sharp edges 6-12 times the scheduled
  * height on the coarse aircraft, the next ones on it): the layer above
  * such a level is a wedge whose OpenFOAM cell centres jump sideways, and
- * its heights break the growth law. One column at a time, in vertex order;
+ * its heights break the growth law. A column shorter than T takes its own
+ * schedule (column_fractions: the first height kept). One column at a
+ * time, in vertex order, up to k.redistribute_sweeps sweeps;
  * a column whose prisms would fall below min(k.ortho_qmin, a tenth of
  * their quality before) or lose a corner tet goes back bit for bit. Returns the
  * count of columns moved in *count. */
@@ -420,57 +474,66 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
   int nl = p->nlev - 1, n = p->rep.layers_requested;
   size_t lsz = (size_t)(3 * nw);
   double tot = 0;
-  double *frac = vm_alloc_array(p->ctx, (size_t)(5 * (nl + 1)), sizeof *frac);
+  double *frac = vm_alloc_array(p->ctx, (size_t)(6 * (nl + 1)), sizeof *frac);
   if (!frac) return VM_ERR_NOMEM;
-  double *arc = frac + nl + 1, *old = arc + nl + 1;
+  double *arc = frac + nl + 1, *fc = arc + nl + 1, *old = fc + nl + 1;
   for (int k = 0; k < n; k++) tot += p->sched[k];
   frac[0] = 0;
   for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
-  for (int64_t v = 0; v < nw; v++) {
-    arc[0] = 0;
-    for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
-    for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
-    if (!(arc[nl] > 0)) continue;
-    /* the largest relative move: nothing to do where the column is on
-     * the schedule already */
-    double dev = 0;
-    for (int k = 1; k < nl; k++) {
-      double d = fabs(arc[k] / arc[nl] - frac[k]) / (frac[k] - frac[k - 1]);
-      dev = d > dev ? d : dev;
-    }
-    if (dev < p->k.redistribute_tol) continue;
-    double q0 = INFINITY;
-    for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-      double q = layers_quality(p, p->vt[j], 0, nl - 1);
-      q0 = q < q0 ? q : q0;
-    }
-    place_levels(p, v, nl, old, arc, frac, 1);
-    int ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare));
-    /* nor may the column raise the skewness of its cells' faces above
-     * k.skew_limit (what checkMesh fails at, with a margin) */
-    if (ok) {
-      double after = column_skew(p, v);
-      if (after > p->k.skew_limit) {
-        for (int k = 1; k < nl; k++) {
-          double tmp[3];
-          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
-          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
-          memcpy(old + 3 * k, tmp, sizeof tmp);
-        }
-        double before = column_skew(p, v);
-        for (int k = 1; k < nl; k++) {
-          double tmp[3];
-          memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
-          memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
-          memcpy(old + 3 * k, tmp, sizeof tmp);
-        }
-        ok = after <= before;
+  frac[nl] = 1;
+  /* sweeps: a column refused beside neighbours still off their schedule
+   * may fit once they are on it */
+  int now = 1;
+  for (int sweep = 0; sweep < p->k.redistribute_sweeps && now; sweep++) {
+    now = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      arc[0] = 0;
+      for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
+      for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
+      if (!(arc[nl] > 0)) continue;
+      column_fractions(p, nl, arc[nl], frac, fc);
+      /* the largest relative move: nothing to do where the column is on
+       * its schedule already */
+      double dev = 0;
+      for (int k = 1; k < nl; k++) {
+        double d = fabs(arc[k] / arc[nl] - fc[k]) / (fc[k] - fc[k - 1]);
+        dev = d > dev ? d : dev;
       }
+      if (dev < p->k.redistribute_tol) continue;
+      double q0 = INFINITY;
+      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+        double q = layers_quality(p, p->vt[j], 0, nl - 1);
+        q0 = q < q0 ? q : q0;
+      }
+      place_levels(p, v, nl, old, arc, fc, 1);
+      int ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare));
+      /* nor may the column raise the skewness of its cells' faces above
+       * k.skew_limit (what checkMesh fails at, with a margin) */
+      if (ok) {
+        double after = column_skew(p, v);
+        if (after > p->k.skew_limit) {
+          for (int k = 1; k < nl; k++) {
+            double tmp[3];
+            memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+            memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+            memcpy(old + 3 * k, tmp, sizeof tmp);
+          }
+          double before = column_skew(p, v);
+          for (int k = 1; k < nl; k++) {
+            double tmp[3];
+            memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+            memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+            memcpy(old + 3 * k, tmp, sizeof tmp);
+          }
+          ok = after <= before;
+        }
+      }
+      if (ok) {
+        moved++;
+        now = 1;
+      } else
+        for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
     }
-    if (ok)
-      moved++;
-    else
-      for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
   }
   vm_free(p->ctx, frac);
   *count = moved;
@@ -507,16 +570,17 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
   *before = *after = 0;
   if (nl < 2) return VM_OK;
   double *sk = vm_alloc_array(p->ctx, (size_t)nw, sizeof *sk);
-  double *frac = vm_alloc_array(p->ctx, (size_t)(5 * (nl + 1)), sizeof *frac);
+  double *frac = vm_alloc_array(p->ctx, (size_t)(6 * (nl + 1)), sizeof *frac);
   if (!sk || !frac) {
     vm_free(p->ctx, sk);
     vm_free(p->ctx, frac);
     return VM_ERR_NOMEM;
   }
-  double *arc = frac + nl + 1, *old = arc + nl + 1;
+  double *arc = frac + nl + 1, *fc = arc + nl + 1, *old = fc + nl + 1;
   for (int k = 0; k < n; k++) tot += p->sched[k];
   frac[0] = 0;
   for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
+  frac[nl] = 1;
   if (all_column_skew(p, sk) < 0) {
     vm_free(p->ctx, sk);
     vm_free(p->ctx, frac);
@@ -549,10 +613,11 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
+      column_fractions(p, nl, arc[nl], frac, fc);
       for (int g = 0; g < ng; g++) {
         double gamma = p->k.relief_gamma[g];
         if (!(gamma > 0)) continue;
-        place_levels(p, v, nl, old, arc, frac, gamma);
+        place_levels(p, v, nl, old, arc, fc, gamma);
         if (!column_valid(p, v, floor) || (p->smooth[v] && first_tilt(p, v) > tilt_max)) continue;
         double s1 = column_skew(p, v);
         if (s1 < best * (1 - 1e-3)) {
@@ -561,7 +626,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
         }
       }
       if (bestg >= 0) {
-        place_levels(p, v, nl, old, arc, frac, p->k.relief_gamma[bestg]);
+        place_levels(p, v, nl, old, arc, fc, p->k.relief_gamma[bestg]);
         moved_now++;
         /* the neighbours' cells changed with this column's */
         for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++)

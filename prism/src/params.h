@@ -184,6 +184,9 @@ typedef struct pr_params {
   double redistribute_tol;         /* 0.05: a column whose levels are all within 5 %
                                       of their layer's scheduled height of the
                                       schedule's place is left as it is */
+  int redistribute_sweeps;         /* 3: sweeps over the columns off their schedule
+                                      (one refused beside neighbours still off
+                                      theirs may fit once they are on it) */
   double redistribute_qshare;      /* 0.1: ... and whose prisms stay above a tenth
                                       of their quality before (a fan's wedge prism
                                       starts near 0.03 and loses more than half of
@@ -299,6 +302,7 @@ static inline pr_params pr_params_default(void) {
       .ortho_lean_deg = 4.5,
       .ortho_high_ratio = 0.5,
       .redistribute_tol = 0.05,
+      .redistribute_sweeps = 3,
       .redistribute_qshare = 0.1,
       .skew_limit = 3.6,
       .relief_gamma = {0.8, 0.65, 0.5, 0.4, 0.3, 0.2, 0.14, 0.1, 1.25, 1.6},

@@ -162,6 +162,55 @@ int main(void) {
     vm_mesh_destroy(&w);
   }
 
+  { /* two spheres 0.6 apart, T = 0.5, 8 layers: the columns shortened at
+     * the contact keep the schedule's first height (the wall's cells one
+     * height, as a solver's wall treatment assumes) and the growth law
+     * with a smaller ratio; scaling the whole schedule put their first
+     * level at len/T of it */
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    const double ca[3] = {-1.3, 0, 0}, cb[3] = {1.3, 0, 0};
+    CHECK(vm_gen_icosphere(w, ca, 1.0, 3, 0, NULL) == 0, "sphere");
+    CHECK(vm_gen_icosphere(w, cb, 1.0, 3, 0, NULL) == 0, "sphere");
+    run_out o = {0};
+    run(ctx, "two spheres, 8 layers", w, 0.5, 8, &o);
+    const double h1 = o.r.first_height;
+    int64_t nshort = 0, nkept = 0, nmono = 0;
+    double rmin = INFINITY, rmax = 0;
+    for (int64_t v = 0; o.res && v < o.nw; v++) {
+      double len = 0, h[64];
+      int nl = o.r.layers;
+      for (int k = 0; k < nl && k < 64; k++) {
+        const double *a = o.res->xyz + 3 * (k * o.nw + v),
+                     *b = o.res->xyz + 3 * ((k + 1) * o.nw + v);
+        h[k] = sqrt(pow(b[0] - a[0], 2) + pow(b[1] - a[1], 2) + pow(b[2] - a[2], 2));
+        len += h[k];
+      }
+      /* shortened, yet long enough for nl cells of h1 */
+      if (!(len < 0.9 * 0.5 && len > 1.1 * nl * h1)) continue;
+      nshort++;
+      double r = h[0] / h1;
+      rmin = fmin(rmin, r);
+      rmax = fmax(rmax, r);
+      if (fabs(r - 1) < 0.05) nkept++;
+      int mono = 1; /* heights rise with a ratio in [1, 1.2] */
+      for (int k = 1; k < nl; k++)
+        mono &= h[k] >= h[k - 1] * (1 - 1e-6) && h[k] <= 1.2 * h[k - 1] * (1 + 1e-6);
+      nmono += mono;
+    }
+    fprintf(stderr,
+            "two spheres, 8 layers: h1 %.4f; %lld shortened columns, first height / h1 %.3f..%.3f, "
+            "%lld within 5 %%, %lld with ratios in [1, 1.2]\n",
+            h1, (long long)nshort, rmin, rmax, (long long)nkept, (long long)nmono);
+    CHECK(nshort >= 20, "two spheres, 8 layers: only %lld shortened columns", (long long)nshort);
+    CHECK(nkept >= 0.9 * nshort, "two spheres, 8 layers: %lld of %lld shortened columns keep h1",
+          (long long)nkept, (long long)nshort);
+    CHECK(nmono >= 0.9 * nshort, "two spheres, 8 layers: %lld of %lld on a growth law in [1, 1.2]",
+          (long long)nmono, (long long)nshort);
+    vm_mesh_destroy(&o.res);
+    vm_mesh_destroy(&w);
+  }
+
   { /* two spheres with cutting stopped after one round: pairs are left,
      * yet restoring still brings the columns away from the contact to
      * full thickness (it used to stop at its first pass) and adds no pair
