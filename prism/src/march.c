@@ -381,6 +381,8 @@ static double geometric_sum(double r, int n) {
   return s;
 }
 
+static double first_tilt(const vm_prism *p, int64_t v);
+
 /* Column v's own schedule: the shares frac_c[k] (k = 0..nl) of its length
  * `len` at which its levels stand. A column at the full thickness (or
  * beyond it) takes the schedule's shares `frac`. A column the stage had to
@@ -393,20 +395,21 @@ static double geometric_sum(double r, int n) {
  * T put its first cell at a tenth of h1 (aspect ratios 10 times the
  * others', OpenFOAM's small cell determinants). The same shares as `frac`
  * when there are fewer levels than the schedule's or the column is at full
- * thickness, so the change is continuous at len = T. */
-static void column_fractions(const vm_prism *p, int nl, double len, const double *frac,
-                             double *frac_c) {
+ * thickness, so the change is continuous at len = T. Returns whether the
+ * column has a schedule of its own. */
+static int column_fractions(const vm_prism *p, int nl, double len, const double *frac,
+                            double *frac_c) {
   int n = p->rep.layers_requested;
   double tot = 0;
   for (int k = 0; k < n; k++) tot += p->sched[k];
   memcpy(frac_c, frac, (size_t)(nl + 1) * sizeof *frac_c);
   frac_c[0] = 0;
   frac_c[nl] = 1;
-  if (nl != n || nl < 2 || !(len > 0) || !(len < tot)) return;
+  if (nl != n || nl < 2 || !(len > 0) || !(len < tot)) return 0;
   double h1 = p->sched[0], r = p->rep.growth;
   if (h1 * nl >= len) {
     for (int k = 1; k < nl; k++) frac_c[k] = (double)k / nl;
-    return;
+    return 1;
   }
   /* sum_k h1 r^k rises with r from nl h1 < len: bisect on [1, hi] */
   double lo = 1, hi = r > 1 ? r : 1;
@@ -424,6 +427,7 @@ static void column_fractions(const vm_prism *p, int nl, double len, const double
     h *= rc;
     frac_c[k] = a / len;
   }
+  return 1;
 }
 
 /* Column v's levels 1..nl-1 put along its polyline `old` (levels 0..nl,
@@ -491,13 +495,15 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
-      column_fractions(p, nl, arc[nl], frac, fc);
-      /* the largest relative move: nothing to do where the column is on
-       * its schedule already */
-      double dev = 0;
+      int own = column_fractions(p, nl, arc[nl], frac, fc);
+      /* the largest relative move off the column's own schedule and off
+       * the common one: nothing to do where the column is on it already */
+      double dev = 0, dev_common = 0;
       for (int k = 1; k < nl; k++) {
         double d = fabs(arc[k] / arc[nl] - fc[k]) / (fc[k] - fc[k - 1]);
+        double e = fabs(arc[k] / arc[nl] - frac[k]) / (frac[k] - frac[k - 1]);
         dev = d > dev ? d : dev;
+        dev_common = e > dev_common ? e : dev_common;
       }
       if (dev < p->k.redistribute_tol) continue;
       double q0 = INFINITY;
@@ -505,42 +511,60 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
         double q = layers_quality(p, p->vt[j], 0, nl - 1);
         q0 = q < q0 ? q : q0;
       }
-      place_levels(p, v, nl, old, arc, fc, 1);
-      int ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare));
-      /* nor may the column raise the skewness of its cells' faces above
-       * k.skew_limit (what checkMesh fails at, with a margin) */
-      if (ok) {
-        double after = column_skew(p, v);
-        if (after > p->k.skew_limit) {
-          for (int k = 1; k < nl; k++) {
-            double tmp[3];
-            memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
-            memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
-            memcpy(old + 3 * k, tmp, sizeof tmp);
+      /* the column's own schedule first; refused, a shortened column tries
+       * the common one scaled to its length (its first height then
+       * len/T of h1), as all columns did before */
+      int ok = 0;
+      for (int pass = own ? 0 : 1; pass < 2 && !ok; pass++) {
+        if (pass == 1 && own && dev_common < p->k.redistribute_tol) break;
+        /* a smooth column's first side edge may not tilt more than it did
+         * or than k.tilt_limit_deg on its own schedule (its level 1,
+         * higher, moving up a bent polyline turns it; the stand-up after
+         * this could then no longer right it: 17.9 degrees on the demo
+         * aircraft at 20 %). The common schedule is left to the stand-up,
+         * as before (guarding it too refused 65 columns on the demo at 5 %
+         * and broke their growth law) */
+        int guard = pass == 0 && p->smooth[v];
+        double tilt0 = guard ? first_tilt(p, v) : 0;
+        double tilt_max = tilt0 > p->k.tilt_limit_deg ? tilt0 : p->k.tilt_limit_deg;
+        place_levels(p, v, nl, old, arc, pass == 0 ? fc : frac, 1);
+        ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare)) &&
+             !(guard && first_tilt(p, v) > tilt_max);
+        /* nor may the column raise the skewness of its cells' faces above
+         * k.skew_limit (what checkMesh fails at, with a margin) */
+        if (ok) {
+          double after = column_skew(p, v);
+          if (after > p->k.skew_limit) {
+            for (int k = 1; k < nl; k++) {
+              double tmp[3];
+              memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+              memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+              memcpy(old + 3 * k, tmp, sizeof tmp);
+            }
+            double before = column_skew(p, v);
+            for (int k = 1; k < nl; k++) {
+              double tmp[3];
+              memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
+              memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
+              memcpy(old + 3 * k, tmp, sizeof tmp);
+            }
+            ok = after <= before;
           }
-          double before = column_skew(p, v);
-          for (int k = 1; k < nl; k++) {
-            double tmp[3];
-            memcpy(tmp, p->lev + k * lsz + 3 * v, sizeof tmp);
-            memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, sizeof tmp);
-            memcpy(old + 3 * k, tmp, sizeof tmp);
-          }
-          ok = after <= before;
         }
+        if (!ok)
+          for (int k = 1; k < nl; k++)
+            memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
       }
       if (ok) {
         moved++;
         now = 1;
-      } else
-        for (int k = 1; k < nl; k++) memcpy(p->lev + k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
+      }
     }
   }
   vm_free(p->ctx, frac);
   *count = moved;
   return VM_OK;
 }
-
-static double first_tilt(const vm_prism *p, int64_t v);
 
 /* Skewness relief where a column's cells stay skewed beyond k.skew_limit:
  * at a sharp trailing edge the side face between the last prisms of the
