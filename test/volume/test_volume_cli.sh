@@ -199,5 +199,17 @@ rc=$?
 check '[ $rc -eq 4 ] && [ -s "$dir/long_out4.vmsh" ]' "--time-limit: exit 4, best state written (got $rc)"
 check 'grep -q "\"timed_out\": true" "$dir/tl.json" && grep -q "time limit reached" "$dir/tl.err"' \
   "--time-limit: said in the JSON and on stderr"
+# the time limit running out after the mesh is certified valid (a cube turned
+# so little that it starts valid; n = 24: the optimization takes longer than
+# the limit): a success, said on stderr and in the JSON
+"$gen" rotcube --n 24 --angle pi/32 "$dir/calm.vmsh"
+"$vol" --json --threads 1 --time-limit 0.5 "$dir/calm.vmsh" "$dir/calm_out.vmsh" \
+  >"$dir/calm.json" 2>"$dir/calm.err"
+rc=$?
+check '[ $rc -eq 0 ] && [ -s "$dir/calm_out.vmsh" ]' "--time-limit after certification: exit 0 (got $rc: $(tail -2 "$dir/calm.err"))"
+check 'grep -q "\"timed_out\": true" "$dir/calm.json" && grep -q "\"valid\": true" "$dir/calm.json" && grep -q "the time limit was reached after the mesh was certified valid" "$dir/calm.err"' \
+  "--time-limit after certification: timed_out and valid in the JSON, said on stderr"
+"$qual" --verify "$dir/calm_out.vmsh" >/dev/null 2>&1
+check '[ $? -eq 0 ]' "--time-limit after certification: vm-quality --verify accepts the mesh"
 check '[ -z "$(ls "$dir" | grep -i tmp)" ]' "no temporary files left after the interruptions"
 exit $fail
