@@ -374,18 +374,31 @@ static int all_column_skew(const vm_prism *p, double *sk) {
   return VM_OK;
 }
 
-/* 1 + r + ... + r^(n-1) */
-static double geometric_sum(double r, int n) {
-  double s = 0, t = 1;
-  for (int k = 0; k < n; k++, t *= r) s += t;
-  return s;
-}
-
 static double first_tilt(const vm_prism *p, int64_t v);
 
+/* The schedule's shares frac[k] (k = 0..nl) of the thickness at which
+ * levels stand, the same for every column at full thickness; returns the
+ * thickness (the heights' sum). */
+static double common_fractions(const vm_prism *p, int nl, double *frac) {
+  double tot = 0;
+  for (int k = 0; k < p->rep.layers_requested; k++) tot += p->sched[k];
+  frac[0] = 0;
+  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
+  frac[nl] = 1;
+  return tot;
+}
+
+/* The tilt smooth column v's first side edge may have after a move:
+ * k.tilt_limit_deg, or its tilt now if beyond (level 1 moving along a
+ * bent polyline turns it). */
+static double tilt_allowed(const vm_prism *p, int64_t v) {
+  double t = first_tilt(p, v);
+  return t > p->k.tilt_limit_deg ? t : p->k.tilt_limit_deg;
+}
+
 /* Column v's own schedule: the shares frac_c[k] (k = 0..nl) of its length
- * `len` at which its levels stand. A column at the full thickness (or
- * beyond it) takes the schedule's shares `frac`. A column the stage had to
+ * `len` at which its levels stand. A column at the full thickness `tot`
+ * (or beyond it) takes the schedule's shares `frac` (common_fractions). A column the stage had to
  * shorten keeps the schedule's first height h1 (what the user asked for,
  * from --first-height or --yplus: the wall's cells the same height
  * everywhere, as a solver's wall treatment assumes) and the growth law,
@@ -397,31 +410,16 @@ static double first_tilt(const vm_prism *p, int64_t v);
  * when there are fewer levels than the schedule's or the column is at full
  * thickness, so the change is continuous at len = T. Returns whether the
  * column has a schedule of its own. */
-static int column_fractions(const vm_prism *p, int nl, double len, const double *frac,
+static int column_fractions(const vm_prism *p, int nl, double len, const double *frac, double tot,
                             double *frac_c) {
-  int n = p->rep.layers_requested;
-  double tot = 0;
-  for (int k = 0; k < n; k++) tot += p->sched[k];
   memcpy(frac_c, frac, (size_t)(nl + 1) * sizeof *frac_c);
-  frac_c[0] = 0;
-  frac_c[nl] = 1;
-  if (nl != n || nl < 2 || !(len > 0) || !(len < tot)) return 0;
-  double h1 = p->sched[0], r = p->rep.growth;
+  if (nl != p->rep.layers_requested || nl < 2 || !(len > 0) || !(len < tot)) return 0;
+  double h1 = p->sched[0];
   if (h1 * nl >= len) {
     for (int k = 1; k < nl; k++) frac_c[k] = (double)k / nl;
     return 1;
   }
-  /* sum_k h1 r^k rises with r from nl h1 < len: bisect on [1, hi] */
-  double lo = 1, hi = r > 1 ? r : 1;
-  while (h1 * geometric_sum(hi, nl) < len && hi < 1e3) hi *= 2;
-  for (int it = 0; it < 100 && hi - lo > 1e-15 * hi; it++) {
-    double mid = 0.5 * (lo + hi);
-    if (h1 * geometric_sum(mid, nl) < len)
-      lo = mid;
-    else
-      hi = mid;
-  }
-  double rc = 0.5 * (lo + hi), a = 0, h = h1;
+  double rc = pr_growth_ratio(h1, nl, len, p->k.sched_bisect_iter), a = 0, h = h1;
   for (int k = 1; k < nl; k++) {
     a += h;
     h *= rc;
@@ -475,16 +473,12 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
  * count of columns moved in *count. */
 static int redistribute_columns(vm_prism *p, int64_t *count) {
   int64_t nw = p->nw, moved = 0;
-  int nl = p->nlev - 1, n = p->rep.layers_requested;
+  int nl = p->nlev - 1;
   size_t lsz = (size_t)(3 * nw);
-  double tot = 0;
   double *frac = vm_alloc_array(p->ctx, (size_t)(6 * (nl + 1)), sizeof *frac);
   if (!frac) return VM_ERR_NOMEM;
   double *arc = frac + nl + 1, *fc = arc + nl + 1, *old = fc + nl + 1;
-  for (int k = 0; k < n; k++) tot += p->sched[k];
-  frac[0] = 0;
-  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
-  frac[nl] = 1;
+  double tot = common_fractions(p, nl, frac);
   /* sweeps: a column refused beside neighbours still off their schedule
    * may fit once they are on it */
   int now = 1;
@@ -495,7 +489,7 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
-      int own = column_fractions(p, nl, arc[nl], frac, fc);
+      int own = column_fractions(p, nl, arc[nl], frac, tot, fc);
       /* the largest relative move off the column's own schedule and off
        * the common one: nothing to do where the column is on it already */
       double dev = 0, dev_common = 0;
@@ -525,8 +519,7 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
          * as before (guarding it too refused 65 columns on the demo at 5 %
          * and broke their growth law) */
         int guard = pass == 0 && p->smooth[v];
-        double tilt0 = guard ? first_tilt(p, v) : 0;
-        double tilt_max = tilt0 > p->k.tilt_limit_deg ? tilt0 : p->k.tilt_limit_deg;
+        double tilt_max = guard ? tilt_allowed(p, v) : 0;
         place_levels(p, v, nl, old, arc, pass == 0 ? fc : frac, 1);
         ok = column_valid(p, v, quality_floor(p, q0, p->k.redistribute_qshare)) &&
              !(guard && first_tilt(p, v) > tilt_max);
@@ -587,9 +580,8 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
  * column skewness before and after. */
 static int skew_relief(vm_prism *p, int64_t *count, double *before, double *after) {
   int64_t nw = p->nw, moved = 0;
-  int nl = p->nlev - 1, n = p->rep.layers_requested;
+  int nl = p->nlev - 1;
   size_t lsz = (size_t)(3 * nw);
-  double tot = 0;
   *count = 0;
   *before = *after = 0;
   if (nl < 2) return VM_OK;
@@ -601,10 +593,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
     return VM_ERR_NOMEM;
   }
   double *arc = frac + nl + 1, *fc = arc + nl + 1, *old = fc + nl + 1;
-  for (int k = 0; k < n; k++) tot += p->sched[k];
-  frac[0] = 0;
-  for (int k = 1; k < nl; k++) frac[k] = frac[k - 1] + p->sched[k - 1] / tot;
-  frac[nl] = 1;
+  double tot = common_fractions(p, nl, frac);
   if (all_column_skew(p, sk) < 0) {
     vm_free(p->ctx, sk);
     vm_free(p->ctx, frac);
@@ -631,13 +620,12 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
       /* a smooth column's first side edge may not tilt beyond the 5
        * degrees it is held to (its level 1 moving up along a bent
        * polyline turns it) */
-      double tilt0 = p->smooth[v] ? first_tilt(p, v) : 0;
-      double tilt_max = tilt0 > p->k.tilt_limit_deg ? tilt0 : p->k.tilt_limit_deg;
+      double tilt_max = p->smooth[v] ? tilt_allowed(p, v) : 0;
       arc[0] = 0;
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
-      column_fractions(p, nl, arc[nl], frac, fc);
+      column_fractions(p, nl, arc[nl], frac, tot, fc);
       for (int g = 0; g < ng; g++) {
         double gamma = p->k.relief_gamma[g];
         if (!(gamma > 0)) continue;

@@ -84,6 +84,19 @@ static int check_opts(vm_ctx *ctx, const vm_prism_opts *o) {
   return VM_OK;
 }
 
+double pr_growth_ratio(double h1, int n, double len, int iters) {
+  double lo = 1, hi = 2;
+  while (h1 * (pow(hi, n) - 1) / (hi - 1) < len) hi *= 2;
+  for (int it = 0; it < iters; it++) {
+    double mid = 0.5 * (lo + hi);
+    if (h1 * (pow(mid, n) - 1) / (mid - 1) < len)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 /* The schedule of layer heights h_k = h1 r^k summing to T. */
 static int build_schedule(vm_prism *p) {
   const vm_prism_opts *o = &p->o;
@@ -103,16 +116,7 @@ static int build_schedule(vm_prism *p) {
       r = 1;
       h1 = T / n;
     } else {
-      double lo = 1, hi = 2;
-      while (h1 * (pow(hi, n) - 1) / (hi - 1) < T) hi *= 2;
-      for (int it = 0; it < kp->sched_bisect_iter; it++) {
-        double mid = 0.5 * (lo + hi);
-        if (h1 * (pow(mid, n) - 1) / (mid - 1) < T)
-          lo = mid;
-        else
-          hi = mid;
-      }
-      r = 0.5 * (lo + hi);
+      r = pr_growth_ratio(h1, n, T, kp->sched_bisect_iter);
     }
   } else {
     h1 = r == 1 ? T / n : T * (r - 1) / (pow(r, n) - 1);

@@ -83,6 +83,9 @@ static inline int64_t pr_tri_across(const vm_prism *p, int64_t t, int i) {
   return -1;
 }
 
+/* The growth ratio r > 1 of n heights h1 r^k summing to len (h1 n < len),
+ * by `iters` bisection steps: the schedule's and a shortened column's. */
+double pr_growth_ratio(double h1, int n, double len, int iters);
 /* Time since creation. */
 double pr_elapsed(const vm_prism *p);
 /* Report progress (solver: 1 for a solve's iteration, see vm_prism_progress). */

@@ -175,8 +175,7 @@ static int guards_positive(void *user, const double *x) {
 /* The Bernstein coefficients of det J of hex e of m with the vertices at x. */
 static void hex_coefs(const vm_mesh *m, const double *x, int64_t e, double b[27]) {
   double xe[24];
-  for (int a = 0; a < 8; a++)
-    memcpy(xe + 3 * a, x + 3 * (int64_t)m->conn[m->eoff[e] + a], 3 * sizeof *xe);
+  cell_coords(m, x, e, xe);
   vm_hex_bernstein(xe, b, NULL);
 }
 
