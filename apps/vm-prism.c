@@ -218,6 +218,7 @@ typedef struct {
   double T_abs, T_rel;
   double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
   int growth_given;                   /* --growth given (else solved for a first height) */
+  double min_reach;                   /* --min-reach: percent, 0: never an exit for it */
   int json, fout;
   vm_prism_opts o;
   vm_write_opts wo;
@@ -287,6 +288,10 @@ static const vm_opt opts[] = {
      "refuse a wall oriented inwards (default: its triangles are turned, with a warning, so "
      "the layer grows outside)",
      .ival = 0},
+    {"--min-reach", NULL, VM_OPT_DOUBLE, A(min_reach), "P",
+     "exit 5 if fewer than P % of the columns the geometry leaves room for (exterior medial "
+     "radius >= 1.05 T) reach the full thickness (default 0: never; the mesh is still written)",
+     .lo = 0, .hi = 100},
     {"--time-limit", NULL, VM_OPT_DOUBLE, A(o.time_limit), "S", "seconds for the whole run",
      .lo = 1e-300, .hi = 1e300},
     VM_CLI_OPT_THREADS,
@@ -319,7 +324,8 @@ static const vm_cli_spec spec = {
     opts,
     "exit: 0 valid layers; 1 bad input (a self-intersecting wall, ...) or I/O;\n"
     "2 usage; 3 inverted prisms or intersections remain (the mesh is still\n"
-    "written); 4 interrupted or stopped by --time-limit (the mesh so far written)\n",
+    "written); 4 interrupted or stopped by --time-limit (the mesh so far written);\n"
+    "5 valid layers, but fewer columns with room reach T than --min-reach asks\n",
     {A(in), A(out)},
     2,
     "need IN and OUT"};
@@ -349,6 +355,10 @@ static int count_pairs(vm_cli *cli, const vm_mesh *res, int64_t wall_vertices, i
   return st;
 }
 
+/* Exit code of a valid run whose columns with room fall short of
+ * --min-reach. */
+enum { EXIT_SHORT = 5 };
+
 static void print_summary(const char *out, const vm_prism_report *r, int64_t npairs, int rc,
                           int interrupted, int timed_out) {
   int bad = r->inverted > 0 || npairs > 0;
@@ -358,11 +368,13 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
           "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
           "above 5 deg), intersecting pairs %lld, max "
           "growth %.3f, OpenFOAM non-orthogonality max %.1f deg (%lld faces beyond 70), "
-          "skewness max %.2f, %.2f s%s\n",
+          "skewness max %.2f, room for T at %.1f%% of columns (%.1f%% of those at full "
+          "thickness), fill of the allowed thickness %.3f, %.2f s%s\n",
           out, (long long)r->prisms, r->layers, r->first_height, r->growth, 100 * r->full_fraction,
           r->thick_min, r->thick_mean, (long long)r->inverted, r->sj_min, r->normal_dev_max,
           (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
-          r->growth_max, r->nonortho_max, (long long)r->nonortho_over70, r->skew_max, r->time_total,
+          r->growth_max, r->nonortho_max, (long long)r->nonortho_over70, r->skew_max,
+          100 * r->medial_room, 100 * r->medial_reach, r->medial_fill, r->time_total,
           rc == VM_EXIT_CHECK ? "  -- NOT VALID"
           : (interrupted || timed_out) && bad
               ? (timed_out ? "  -- time limit reached, NOT VALID" : "  -- interrupted, NOT VALID")
@@ -382,7 +394,7 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
          "\"wall_vertices\": %lld, "
          "\"wall_triangles\": %lld, \"prisms\": %lld, \"layers_requested\": %d, \"layers\": %d, "
          "\"thickness\": ",
-         rc == VM_EXIT_OK ? "true" : "false", verified ? "true" : "false",
+         rc == VM_EXIT_OK || rc == EXIT_SHORT ? "true" : "false", verified ? "true" : "false",
          interrupted ? "true" : "false", timed_out ? "true" : "false", (long long)r.wall_vertices,
          (long long)r.wall_triangles, (long long)r.prisms, r.layers_requested, r.layers);
   vm_json_double(stdout, r.thickness);
@@ -416,12 +428,50 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.nonortho_max);
   printf(", \"skewness_max\": ");
   vm_json_double(stdout, r.skew_max);
+  printf(", \"medial\": {\"room\": ");
+  vm_json_double(stdout, r.medial_room);
+  printf(", \"reach\": ");
+  vm_json_double(stdout, r.medial_reach);
+  printf(", \"short\": %lld, \"fill\": ", (long long)r.medial_short);
+  vm_json_double(stdout, r.medial_fill);
+  printf(", \"fill_rest\": ");
+  vm_json_double(stdout, r.medial_fill_rest);
+  printf(", \"time\": %.3f}", r.medial_time);
   printf(", \"springback_iterations\": %d, \"cut_rounds\": %d, \"cut_pairs_first\": %lld, "
          "\"time\": {",
          r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
   for (int k = 0; k < VM_PRISM_NPHASES; k++)
     printf("\"%s\": %.3f, ", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
   printf("\"total\": %.3f}}\n", r.time_total);
+}
+
+/* --report: the wall coloured by its columns' fill of the allowed
+ * thickness (the wall's vertices and triangles of the result, with the
+ * fill field). */
+static int report_fill(vm_ctx *ctx, vm_report *report, const vm_mesh *res, int64_t nw) {
+  const vm_field *ff = vm_mesh_find_field(res, VM_PRISM_FIELD_FILL, VM_FIELD_VERTEX);
+  const vm_field *ph = vm_mesh_find_field(res, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT);
+  if (!ff || !ph) return VM_OK;
+  vm_mesh *w = NULL;
+  vm_field *f;
+  int st = vm_mesh_create(ctx, &w);
+  if (st >= 0) st = vm_mesh_set_vertices(w, nw);
+  if (st >= 0) memcpy(w->xyz, res->xyz, (size_t)(3 * nw) * sizeof *w->xyz);
+  const int32_t *tag = ph->data;
+  for (int64_t e = 0; st >= 0 && e < res->ne; e++)
+    if (res->etype[e] == VM_TRI && tag[e] == VM_PRISM_TAG_WALL)
+      st = vm_mesh_add_element(w, VM_TRI, res->conn + res->eoff[e]);
+  if (st >= 0) st = vm_mesh_add_field(w, VM_PRISM_FIELD_FILL, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f);
+  if (st >= 0) {
+    memcpy(f->data, ff->data, (size_t)nw * sizeof(double));
+    st = vm_report_surface(report, "fill",
+                           "The wall coloured by its columns' fill of what the geometry allows: "
+                           "thickness / min(T, exterior medial radius), at most 1 (1: the "
+                           "column reached all the room it has).",
+                           w, VM_PRISM_FIELD_FILL, NULL);
+  }
+  vm_mesh_destroy(&w);
+  return st;
 }
 
 /* --report: the run's rows, then the standard pictures (cli_report.c). */
@@ -460,6 +510,18 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                       "max non-orthogonality %.1f deg, %lld faces beyond 70 deg, max skewness %.2f",
                       r.nonortho_max, (long long)r.nonortho_over70, r.skew_max);
   if (st2 >= 0)
+    st2 = vm_report_row(report,
+                        "room for T (exterior medial radius >= 1.05 T): columns, of those at "
+                        "full thickness, short",
+                        "%.1f %%, %.1f %%, %lld", 100 * r.medial_room, 100 * r.medial_reach,
+                        (long long)r.medial_short);
+  if (st2 >= 0)
+    st2 = vm_report_row(report,
+                        "fill of the allowed thickness, achieved / min(T, radius): mean, mean "
+                        "where there is no room for T",
+                        "%.3f, %.3f", r.medial_fill, r.medial_fill_rest);
+  if (st2 >= 0) st2 = report_fill(cli->ctx, report, res, r.wall_vertices);
+  if (st2 >= 0)
     st2 = vm_report_row(report, "springback iterations, cutting rounds (pairs at first)",
                         "%d, %d (%lld)", r.springback_iter, r.cut_rounds,
                         (long long)r.cut_pairs_first);
@@ -471,8 +533,9 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
   if (st2 >= 0)
     st2 = vm_report_row(report, "time per phase", "%s (%.2f s in all)", times, r.time_total);
   if (st2 >= 0)
-    st2 = vm_report_row(report, "valid, verified (exact)", "%s, %s",
-                        rc == VM_EXIT_OK ? "yes" : "no", verified ? "yes" : "no");
+    st2 =
+        vm_report_row(report, "valid, verified (exact)", "%s, %s",
+                      rc == VM_EXIT_OK || rc == EXIT_SHORT ? "yes" : "no", verified ? "yes" : "no");
   int rrc = vm_cli_report_result(cli, rep, dir, st2, "prism layers", res, "thickness", hist,
                                  "Convergence of the run: the functional F per solver "
                                  "iteration (springback, the solves after cutting, "
@@ -603,6 +666,13 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INTERRUPTED;
   else if (r.inverted > 0 || npairs > 0)
     rc = VM_EXIT_CHECK;
+  if (st >= 0 && r.medial_short > 0) {
+    int64_t room = (int64_t)llround(r.medial_room * (double)r.wall_vertices);
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "%lld of the %lld columns the geometry leaves room for (exterior medial radius >= "
+           "1.05 T) end short of T (%.1f %% reach it)",
+           (long long)r.medial_short, (long long)room, 100 * r.medial_reach);
+  }
   int verified = 0;
   if (rc == VM_EXIT_OK) {
     /* before success is reported, vm-quality --verify's exact checks (CGAL
@@ -616,6 +686,13 @@ int main(int argc, char **argv) {
               "vm-prism: %s: verify: every corner tet positive, no outer faces crossing "
               "each other or the wall (exact)\n",
               a.out);
+  }
+  if (rc == VM_EXIT_OK && a.min_reach > 0 && 100 * r.medial_reach < a.min_reach) {
+    fprintf(stderr,
+            "vm-prism: %s: %.1f %% of the columns with room reach the full thickness, fewer than "
+            "--min-reach %g %% (the mesh is written)\n",
+            a.out, 100 * r.medial_reach, a.min_reach);
+    rc = EXIT_SHORT;
   }
   if (!cli.quiet) print_summary(a.out, &r, npairs, rc, st == VM_ERR_INTERRUPTED, timed_out);
   if (rc == VM_EXIT_INTERRUPTED) /* said even with -q: the mesh written is not the one asked for */

@@ -1,11 +1,12 @@
-/* bench/bench_prism.c: the prism stage on plane.stl and the generated
- * aircraft at T = 5% and 20% of the model's length, 20 layers: per case
- * prisms, time, columns at full thickness, achieved/requested thickness,
- * inverted prisms, minimum scaled Jacobian, deviation from the wall normal,
- * intersecting pairs (Embree and, independently, CGAL's exact check) and
- * the largest growth ratio.
- * usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N]
- *                    [--only plane|aircraft] [--frac F] [--verbose]
+/* bench/bench_prism.c: the prism stage on plane.stl, the generated
+ * aircraft and two spheres with a narrow gap at T = 5% and 20% of the model's length, 20 layers:
+ * per case prisms, time, columns at full thickness, achieved/requested thickness, the room the
+ * geometry leaves (columns whose exterior medial radius is at least 1.05 T, the share of those at
+ * full thickness, the fill of the allowed thickness), inverted prisms, minimum scaled Jacobian,
+ * deviation from the wall normal, intersecting pairs (Embree and, independently, CGAL's exact
+ * check) and the largest growth ratio. usage: bench_prism [--data DIR] [--layers N] [--growth R]
+ * [--res N]
+ *                    [--only plane|aircraft|spheres] [--frac F] [--verbose]
  * VM_BENCH_DUMP=FILE writes "x y z thickness/T" per wall vertex of each case
  * (the last case run wins). */
 #include <math.h>
@@ -18,6 +19,7 @@
 #include "varmesh/io.h"
 #include "varmesh/prism.h"
 #include "varmesh/quadrature.h"
+#include "varmesh/shapes.h"
 #include "varmesh/verify.h"
 
 static void progress(void *user, const vm_prism_progress *pg) {
@@ -142,13 +144,16 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
     vm_verify_prism_layer(res, &cg_pairs, &cg_wall, NULL);
     vm_verify_orientation(res, VM_RULE_CORNER, &cg_bad, NULL, NULL);
   }
-  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %.3f / %.3f / %.3f | %lld / %lld | "
+  printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %5.1f%% / %6.2f%% (%lld) / %.3f "
+         "(%.3f) | %.3f / %.3f / %.3f | %lld / %lld | "
          "%.3f | %5.2f (%lld > 5) "
          "| %lld / %lld+%lld | %.3f | %d%s |\n",
          name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction,
-         r.thick_min, r.thick_mean, r.thick_max, (long long)r.inverted, (long long)cg_bad, r.sj_min,
-         r.normal_dev_max, (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs,
-         (long long)cg_wall, r.growth_max, r.layers, st ? " (warn)" : "");
+         100 * r.medial_room, 100 * r.medial_reach, (long long)r.medial_short, r.medial_fill,
+         r.medial_fill_rest, r.thick_min, r.thick_mean, r.thick_max, (long long)r.inverted,
+         (long long)cg_bad, r.sj_min, r.normal_dev_max, (long long)r.normal_dev_over5,
+         (long long)emb, (long long)cg_pairs, (long long)cg_wall, r.growth_max, r.layers,
+         st ? " (warn)" : "");
   fflush(stdout);
   if (verbose) {
     fprintf(stderr, "  phases:");
@@ -185,7 +190,7 @@ int main(int argc, char **argv) {
       verbose = 1;
     else {
       fprintf(stderr, "usage: bench_prism [--data DIR] [--layers N] [--growth R] [--res N] "
-                      "[--only plane|aircraft] [--frac F] [--verbose]\n");
+                      "[--only plane|aircraft|spheres] [--frac F] [--verbose]\n");
       return 2;
     }
   }
@@ -199,12 +204,13 @@ int main(int argc, char **argv) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   vm_ctx_set_log(ctx, log_warn, NULL);
-  printf("| case | T/L | prisms | time s (wall / CPU) | full | thick/T min / mean / max | inverted "
+  printf("| case | T/L | prisms | time s (wall / CPU) | full | room for T / of those at T (short) "
+         "/ fill (where no room) | thick/T min / mean / max | inverted "
          "(own / CGAL) "
          "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL "
          "outer+wall) | max "
          "growth | layers |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   if (!only || !strcmp(only, "plane")) {
     vm_mesh *m = NULL;
     if (vm_mesh_read(ctx, path, VM_FMT_AUTO, &m)) {
@@ -226,6 +232,20 @@ int main(int argc, char **argv) {
         run_case(ctx, "aircraft", m, fracs[f], layers, growth, verbose);
       vm_mesh_destroy(&m);
     }
+  }
+  if (!only || !strcmp(only, "spheres")) {
+    /* a narrow gap: two unit spheres 0.6 apart (length 4.6): room for T
+     * everywhere at 5 %, a contact at 20 % */
+    vm_mesh *m = NULL;
+    const double ca[3] = {-1.3, 0, 0}, cb[3] = {1.3, 0, 0};
+    if (vm_mesh_create(ctx, &m) || vm_gen_icosphere(m, ca, 1.0, 4, 0, NULL) ||
+        vm_gen_icosphere(m, cb, 1.0, 4, 0, NULL)) {
+      fprintf(stderr, "spheres: %s\n", vm_ctx_error(ctx));
+    } else {
+      for (int f = 0; f < nfrac; f++)
+        run_case(ctx, "two spheres", m, fracs[f], layers, growth, verbose);
+    }
+    vm_mesh_destroy(&m);
   }
   vm_ctx_destroy(&ctx);
   return 0;

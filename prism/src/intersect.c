@@ -61,6 +61,14 @@ void pr_rt_destroy(pr_rt **prt) {
 
 /* The device's error since the last look, copied to the context (VM_OK if
  * none); `code` is what rtcGetDeviceError returned. */
+static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *what);
+
+RTCDevice pr_rt_device(pr_rt *rt) { return rt->dev; }
+
+int pr_rt_check(vm_ctx *ctx, pr_rt *rt, const char *what) {
+  return rt_status(ctx, rt, rtcGetDeviceError(rt->dev), what);
+}
+
 static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *what) {
   if (!rt->failed && code == RTC_ERROR_NONE) return VM_OK;
   int st;
@@ -74,18 +82,19 @@ static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *wha
 }
 
 typedef struct {
+  float *box; /* first (pr_box_bounds): 6 per primitive, rounded outwards and padded */
   const double *xyz;
   const int32_t *tri;
   const int32_t *group;
   double orient_tol_sq;
   int64_t ntri;
   const int32_t *map; /* primitive -> triangle (NULL: the identity) */
-  float *box;         /* 6 per primitive, rounded outwards and padded */
 } soup;
 
-static void tri_bounds(const struct RTCBoundsFunctionArguments *a) {
-  const soup *d = a->geometryUserPtr;
-  const float *b = d->box + 6 * (size_t)a->primID;
+void pr_box_bounds(const struct RTCBoundsFunctionArguments *a) {
+  /* the user data's first member is its box array */
+  const float *const *box = a->geometryUserPtr;
+  const float *b = *box + 6 * (size_t)a->primID;
   a->bounds_o->lower_x = b[0];
   a->bounds_o->lower_y = b[1];
   a->bounds_o->lower_z = b[2];
@@ -201,17 +210,6 @@ static int cmp_pair(const void *a, const void *b) {
   return (x[1] > y[1]) - (x[1] < y[1]);
 }
 
-static float down(double v) {
-  float f = (float)v;
-  if ((double)f > v) f = nextafterf(f, -INFINITY);
-  return f;
-}
-static float up(double v) {
-  float f = (float)v;
-  if ((double)f < v) f = nextafterf(f, INFINITY);
-  return f;
-}
-
 /* (edge, triangle) hits: every edge of the soup in `edges` (NULL: all
  * ned) cast against the triangles in `prims` (NULL: all ntri), appended to
  * the list *found_out of 2 * *nfound_out values (malloc'd; NULL, 0 to
@@ -225,7 +223,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
   if (!prims) nprim = so->ntri;
   if (!edges) nedge = so->ned;
   if (nprim < 1 || nedge < 1) return VM_OK;
-  soup d = {xyz, tri, group, so->k.orient_tol_sq, so->ntri, prims, NULL};
+  soup d = {NULL, xyz, tri, group, so->k.orient_tol_sq, so->ntri, prims};
   d.box = vm_alloc_array(ctx, (size_t)nprim * 6, sizeof *d.box);
   if (!d.box) return VM_ERR_NOMEM;
   double glo[3] = {INFINITY, INFINITY, INFINITY}, ghi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -247,8 +245,8 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
         hi[k] = v > hi[k] ? v : hi[k];
       }
     for (int k = 0; k < 3; k++) {
-      d.box[6 * q + k] = down(lo[k] - pad);
-      d.box[6 * q + 3 + k] = up(hi[k] + pad);
+      d.box[6 * q + k] = pr_float_down(lo[k] - pad);
+      d.box[6 * q + 3 + k] = pr_float_up(hi[k] + pad);
     }
   }
   RTCDevice dev = so->rt->dev;
@@ -260,7 +258,7 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
   RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
   rtcSetGeometryUserPrimitiveCount(g, (unsigned int)nprim);
   rtcSetGeometryUserData(g, &d);
-  rtcSetGeometryBoundsFunction(g, tri_bounds, NULL);
+  rtcSetGeometryBoundsFunction(g, pr_box_bounds, NULL);
   rtcSetGeometryIntersectFunction(g, edge_intersect);
   rtcSetGeometryOccludedFunction(g, edge_occluded);
   rtcCommitGeometry(g);

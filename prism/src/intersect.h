@@ -4,10 +4,30 @@
 #ifndef VARMESH_PRISM_INTERSECT_H
 #define VARMESH_PRISM_INTERSECT_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "params.h"
 #include "varmesh/ctx.h"
+
+/* v rounded to a float below (down) or above (up) it: Embree's boxes and
+ * radii hold what the double-precision tests need. */
+static inline float pr_float_down(double v) {
+  float f = (float)v;
+  if ((double)f > v) f = nextafterf(f, -INFINITY);
+  return f;
+}
+static inline float pr_float_up(double v) {
+  float f = (float)v;
+  if ((double)f < v) f = nextafterf(f, INFINITY);
+  return f;
+}
+
+/* Embree's bounds callback for a user geometry whose user data begins
+ * with a `float *` array of 6 values per primitive (lower x, y, z, upper
+ * x, y, z). */
+struct RTCBoundsFunctionArguments;
+void pr_box_bounds(const struct RTCBoundsFunctionArguments *a);
 
 /* An Embree device with an error callback: created once per run, shared
  * by every query of the run. An error Embree reports (on any thread) is
@@ -16,6 +36,12 @@
 typedef struct pr_rt pr_rt;
 int pr_rt_create(vm_ctx *ctx, pr_rt **out);
 void pr_rt_destroy(pr_rt **rt);
+/* The device, for queries of other files (an RTCDevice of embree3). */
+struct RTCDeviceTy *pr_rt_device(pr_rt *rt);
+/* The device's error since the last look (rtcGetDeviceError and the
+ * callback's), copied to the context as VM_ERR_BACKEND naming `what`;
+ * VM_OK if none. */
+int pr_rt_check(vm_ctx *ctx, pr_rt *rt, const char *what);
 
 /* A triangle soup with its edges, for repeated intersection queries at
  * changing coordinates (the topology is fixed): ntri triangles (3 vertex

@@ -239,6 +239,22 @@ typedef struct pr_params {
   int solve_chunks;                /* 6: chunks at most (each restarts Newton, which
                                       gets further than one long solve) */
 
+  /* the room the geometry leaves (medial.c, the report) */
+  double medial_cap;     /* 4: balls start at 4 T; a radius of 4 T means "at
+                            least": the figures only compare it with T */
+  double medial_sep_deg; /* 30: triangles whose normal is within 30 degrees of
+                            the vertex normal do not stop its ball (a faceted
+                            concave surface would stop every ball at once) */
+  int medial_iter;       /* 100: shrinking steps at most (a ball halves at
+                            worst near a concave fold) */
+  double medial_rel_tol; /* 1e-10: a ball is empty if no obstacle is nearer its
+                            centre than (1 - 1e-10) r^2, squared (p itself is
+                            at r) */
+  double medial_floor;   /* 1e-6: a radius below 1e-6 of the mean edge length
+                            is 0 (a concave fold's vertex) */
+  double medial_room;    /* 1.05: a column has room for T where its radius is
+                            at least 1.05 T */
+
   pr_isect_params isect;
 } pr_params;
 
@@ -291,6 +307,12 @@ static inline pr_params pr_params_default(void) {
       .split_max_frac = 0.9,
       .min_target_height = 1e-4,
       .tilt_limit_deg = 5,
+      .medial_cap = 4,
+      .medial_sep_deg = 30,
+      .medial_iter = 100,
+      .medial_rel_tol = 1e-10,
+      .medial_floor = 1e-6,
+      .medial_room = 1.05,
       .ortho_qmin = 0.3,
       .ortho_round_share = 0.5,
       .ortho_alone_share = 0.25,

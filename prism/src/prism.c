@@ -424,9 +424,9 @@ void vm_prism_destroy(vm_prism **pp) {
   pr_layer_faces_destroy(ctx, &p->faces);
   pr_rt_destroy(&p->rt);
   vm_mesh_destroy(&p->layer);
-  void *arrays[] = {p->wall,   p->tri,    p->fnrm, p->vnrm,   p->dir, p->elen,
-                    p->smooth, p->vt_off, p->vt,   p->vv_off, p->vv,  p->edge,
-                    p->etri,   p->h,      p->cap,  p->cut,    p->lev, p->sched};
+  void *arrays[] = {p->wall,   p->tri, p->fnrm,   p->vnrm,  p->dir,   p->elen, p->smooth,
+                    p->vt_off, p->vt,  p->vv_off, p->vv,    p->edge,  p->etri, p->h,
+                    p->cap,    p->cut, p->lev,    p->sched, p->medial};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;
@@ -464,6 +464,13 @@ int vm_prism_run(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm
   vm_prism *p = NULL;
   int st = vm_prism_create(ctx, wall, opts, &p);
   if (st < 0) return st;
+  double t0 = pr_elapsed(p);
+  const double *radius;
+  if ((st = vm_prism_medial_radius(p, &radius)) < 0) {
+    vm_prism_destroy(&p);
+    return st;
+  }
+  p->rep.medial_time = pr_elapsed(p) - t0;
   st = run_phases(p);
   /* the figures first: time_total is the run's, not the result's */
   vm_prism_report r;

@@ -5,6 +5,13 @@
 
 #include "state.h"
 
+/* The layer's fill of what the geometry allows at a column of thickness
+ * d: min(1, d / min(T, radius)) (1 where the radius is 0). */
+static double pr_fill(double d, double T, double radius) {
+  double allowed = radius < T ? radius : T;
+  return allowed > 0 && d < allowed ? d / allowed : 1;
+}
+
 /* Levels of the current state: after marching the levels; before, the
  * single layer (2 levels, pointing into the layer mesh). */
 static const double *levels(const vm_prism *p, int *nlev) {
@@ -75,6 +82,22 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
     double d = vm_dist3(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
     for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
   }
+  if (p->medial) {
+    double *mr, *fl;
+    if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_MEDIAL, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
+      goto fail;
+    mr = f->data;
+    if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_FILL, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
+      goto fail;
+    fl = f->data;
+    for (int64_t v = 0; v < nw; v++) {
+      double fill = pr_fill(th[v], p->o.thickness, p->medial[v]);
+      for (int64_t k = 0; k < nlev; k++) {
+        mr[k * nw + v] = p->medial[v];
+        fl[k * nw + v] = fill;
+      }
+    }
+  }
   if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
@@ -107,6 +130,26 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
       tsum += d;
     }
     R.full_fraction = (double)full / (double)nw;
+    if (p->medial) {
+      int64_t room = 0, reach = 0;
+      double fsum = 0, frest = 0;
+      for (int64_t v = 0; v < nw; v++) {
+        double d = vm_dist3(p->wall + 3 * v, top + 3 * v);
+        double fill = pr_fill(d, T, p->medial[v]);
+        fsum += fill;
+        if (p->medial[v] >= p->k.medial_room * T) {
+          room++;
+          reach += d >= (1 - p->o.full_tol) * T;
+        } else {
+          frest += fill;
+        }
+      }
+      R.medial_room = (double)room / (double)nw;
+      R.medial_reach = room ? (double)reach / (double)room : 1;
+      R.medial_short = room - reach;
+      R.medial_fill = fsum / (double)nw;
+      R.medial_fill_rest = room < nw ? frest / (double)(nw - room) : 1;
+    }
     R.thick_min = tmin;
     R.thick_mean = tsum / (double)nw;
     R.thick_max = tmax;

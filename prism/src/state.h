@@ -51,6 +51,8 @@ struct vm_prism {
   double *lev;   /* nlev * 3 * nw */
   double *sched; /* heights of the schedule (nlayers) */
 
+  double *medial; /* nw exterior medial radii (medial.c), NULL until asked */
+
   vm_prism_report rep;
 };
 
@@ -122,6 +124,15 @@ int pr_check_valid(vm_prism *p, const char *when);
  * intersecting top or side face in `mark` (nw, may be NULL); the number of
  * intersecting face pairs in *npairs (cutting.c). */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
+
+/* ---- the room the geometry leaves (medial.c) ---- */
+
+/* The exterior medial radius of every wall vertex (radius, nw), at most
+ * `cap` (see medial.c). */
+int pr_medial_radius(vm_prism *p, double cap, double *radius);
+/* The point q of triangle (a, b, c) nearest to p. */
+void pr_closest_on_triangle(const double *p, const double *a, const double *b, const double *c,
+                            double *q);
 
 /* ---- the non-orthogonality relief (ortho.c) ---- */
 

@@ -34,6 +34,24 @@ check 'grep -q "\"valid\": true" "$dir/a.json"' "--json says valid"
 check 'grep -q "\"inverted_corner_tets\": 0," "$dir/a.json"' "--json: no inverted corner tet"
 check 'grep -q "\"intersecting_pairs\": 0," "$dir/a.json"' "--json: no intersecting pair"
 check 'grep -q "\"layers\": 4," "$dir/a.json"' "--json: 4 layers"
+# the room the geometry leaves: shares in [0, 1], the fill at most 1; a
+# column short of T where there is room is warned of, and --min-reach
+# turns it into exit 5 (the mesh still written, still valid)
+reach=$(grep -o '"reach": [0-9.e+-]*' "$dir/a.json" | awk '{print $2}')
+nshort=$(grep -o '"short": [0-9]*' "$dir/a.json" | awk '{print $2}')
+check 'grep -Eq "\"medial\": \{\"room\": 0\.[0-9]+, \"reach\": (0\.[0-9]+|1), \"short\": [0-9]+, \"fill\": (0\.[0-9]+|1)," "$dir/a.json"' "--json: the room figures ($(grep -o '"medial": {[^}]*}' "$dir/a.json"))"
+if [ "${nshort:-0}" -gt 0 ]; then
+  check 'grep -q "warning: $nshort of the [0-9]* columns the geometry leaves room for" "$dir/a.err"' "the short columns with room are warned of"
+  rm -f "$dir/mr.vmsh"
+  "${prism[@]}" -q -t 0.05 -n 4 --min-reach 100 --json "$dir/a.stl" "$dir/mr.vmsh" >"$dir/mr.json" 2>"$dir/mr.err"
+  rc=$?
+  check '[ $rc -eq 5 ] && [ -s "$dir/mr.vmsh" ] && grep -q "\"valid\": true" "$dir/mr.json" && grep -q "fewer than --min-reach 100 %" "$dir/mr.err"' "--min-reach 100 with $nshort short columns: exit 5, the mesh written (got $rc)"
+  "${prism[@]}" -q -t 0.05 -n 4 --min-reach 50 "$dir/a.stl" "$dir/mr.vmsh" 2>/dev/null
+  check '[ $? -eq 0 ]' "--min-reach 50 with $reach of them at T: exit 0"
+else
+  echo "FAIL: the coarse aircraft at 4 layers has no short column with room (reach $reach): --min-reach is not tested"
+  fail=1
+fi
 check 'grep -q "^springback" "$dir/a.err"' "progress on stderr"
 # a solve's iterations carry their functional F, marching's splits their
 # layer heights (marching's solves used to print F under "height": values

@@ -72,6 +72,36 @@ static int run(vm_ctx *ctx, const char *name, vm_mesh *w, double T, int layers, 
     int64_t ni = boundary_intersections(out->res);
     CHECK(ni == 0, "%s: %lld intersecting boundary face pairs (independent check)", name,
           (long long)ni);
+    /* the room figures from the output's fields: thickness and radius */
+    const vm_field *fr = vm_mesh_find_field(out->res, VM_PRISM_FIELD_MEDIAL, VM_FIELD_VERTEX);
+    const vm_field *fl = vm_mesh_find_field(out->res, VM_PRISM_FIELD_FILL, VM_FIELD_VERTEX);
+    const vm_field *ft = vm_mesh_find_field(out->res, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX);
+    CHECK(fr && fl && ft, "%s: no medial_radius / fill / thickness field", name);
+    if (fr && fl && ft) {
+      const double *rad = fr->data, *fill = fl->data, *th = ft->data;
+      int64_t room = 0, reach = 0, bad = 0;
+      double fsum = 0;
+      for (int64_t v = 0; v < out->nw; v++) {
+        double allowed = fmin(T, rad[v]);
+        double f = allowed > 0 ? fmin(1, th[v] / allowed) : 1;
+        bad += fabs(f - fill[v]) > 1e-12 || rad[v] < 0 || rad[v] > 4 * T;
+        fsum += f;
+        if (rad[v] >= 1.05 * T) {
+          room++;
+          reach += th[v] >= 0.99 * T;
+        }
+      }
+      fprintf(stderr,
+              "%s: room for T %.3f, of those at T %.4f (%lld short), fill %.4f (rest %.4f)\n", name,
+              r->medial_room, r->medial_reach, (long long)r->medial_short, r->medial_fill,
+              r->medial_fill_rest);
+      CHECK(bad == 0, "%s: %lld columns with a wrong fill or radius", name, (long long)bad);
+      CHECK_NEAR(r->medial_room, (double)room / (double)out->nw, 1e-12, "room share");
+      CHECK_NEAR(r->medial_reach, room ? (double)reach / (double)room : 1, 1e-12, "reach share");
+      CHECK(r->medial_short == room - reach, "%s: short %lld, fields %lld", name,
+            (long long)r->medial_short, (long long)(room - reach));
+      CHECK_NEAR(r->medial_fill, fsum / (double)out->nw, 1e-12, "fill");
+    }
   }
   free(w0);
   return 0;

@@ -23,6 +23,10 @@ extern "C" {
 #define VM_PRISM_FIELD_LAYER "layer"         /* i32 per element: 0 at the wall; -1 on faces */
 #define VM_PRISM_FIELD_THICKNESS "thickness" /* f64 per vertex: achieved column thickness */
 #define VM_PRISM_FIELD_PHYS "gmsh:physical"  /* i32 per element: family tag below */
+#define VM_PRISM_FIELD_MEDIAL                                                                      \
+  "medial_radius"                  /* f64 per vertex: the column's exterior                        \
+                                      medial radius (vm_prism_medial_radius) */
+#define VM_PRISM_FIELD_FILL "fill" /* f64 per vertex: min(1, thickness / min(T, medial_radius)) */
 enum {
   VM_PRISM_TAG_WALL = 1,  /* wall triangles (the input surface) */
   VM_PRISM_TAG_OUTER = 2, /* outer boundary triangles */
@@ -136,6 +140,16 @@ typedef struct vm_prism_report {
    * outer surface included; checkMesh fails at 4) */
   int64_t nonortho_over70;
   double nonortho_max, skew_max;
+  /* the room the geometry leaves (vm_prism_medial_radius; all 0 if it was
+   * not computed): a column has room for T where its wall vertex's
+   * exterior medial radius is at least 1.05 T */
+  double medial_room;            /* share of the columns with room */
+  double medial_reach;           /* of those, the share at full thickness (1 if none) */
+  int64_t medial_short;          /* columns with room short of full thickness */
+  double medial_fill;            /* mean over all columns of min(1, achieved / min(T, radius)):
+                                    the layer's fill of what the geometry allows */
+  double medial_fill_rest;       /* the same over the columns without room (1 if none) */
+  double medial_time;            /* seconds spent computing the radii */
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
   int reoriented; /* the wall was oriented inwards and its triangles were turned */
@@ -201,6 +215,20 @@ const vm_mesh *vm_prism_layer(const vm_prism *p);
  * Wall vertices are FIXED and bit-identical to the input. Free with
  * vm_mesh_destroy. Before marching, the single layer is returned. */
 int vm_prism_result(vm_prism *p, vm_mesh **out);
+
+/* The exterior medial radius of every wall vertex (nw values, owned by p):
+ * the radius of the largest ball that touches the wall at the vertex from
+ * outside, its centre on the vertex's angle-weighted normal, and holds no
+ * other point of the wall (shrinking balls on Embree point queries, exact
+ * distances in double; triangles within 30 degrees of the vertex normal do
+ * not stop a ball, so a faceted concave surface reads as its curvature
+ * radius, not 0). Radii are at most 4 T (a ball that never shrinks). A
+ * straight column taller than its radius meets the column of another wall
+ * point: where it is below T the geometry does not allow the full
+ * thickness. Computed at the first call (vm_prism_run calls it after
+ * vm_prism_create); the figures of vm_prism_get_report use it. Errors:
+ * VM_ERR_NOMEM, VM_ERR_BACKEND. */
+int vm_prism_medial_radius(vm_prism *p, const double **radius);
 
 /* Figures of the run so far (final figures after vm_prism_march). */
 int vm_prism_get_report(vm_prism *p, vm_prism_report *r);
