@@ -267,7 +267,7 @@ static const vm_opt opts[] = {
      "reference length of --reynolds (default the model's length)", .lo = 1e-300, .hi = 1e300},
     {"--springback-iter", NULL, VM_OPT_INT, A(o.springback_iter), "N",
      "implicit iterations of the springback (default 100; up to 3N while the line search keeps "
-     "cutting the step)",
+     "cutting the step or F still falls by more than 1 % per 10 iterations)",
      .lo = 0, .hi = 100000000},
     {"--resolve-iter", NULL, VM_OPT_INT, A(o.resolve_iter), "N",
      "implicit iterations after each cutting round (default 6)", .lo = 0, .hi = 100000000},

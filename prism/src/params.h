@@ -103,6 +103,13 @@ typedef struct pr_params {
   double budget_step_share; /* 0.25: a solve past its budget goes on while its
                                accepted steps sum to less than this share of
                                the budget (the line search still cutting) */
+  int budget_fall_window;   /* 10: ... or while F fell by more than ... */
+  double budget_fall;       /* 0.01: ... 1 % of itself over the last 10
+                               iterations (up to the solve's cap: the demo
+                               aircraft's springback at T = 5 % stopped at its
+                               budget with F falling 11 % per 10 iterations
+                               and 2.2 % of the columns with room short of T;
+                               run on to 1 % it settles) */
   double rel_decrease_tol;  /* 1e-5: the solves stop when F falls by less
                                than this, relative ... */
   int rel_decrease_count;   /* 2: ... this many times in a row */
@@ -283,6 +290,8 @@ static inline pr_params pr_params_default(void) {
       .thin_grade = 0.5,
       .thin_grade_sweeps = 2,
       .budget_step_share = 0.25,
+      .budget_fall_window = 10,
+      .budget_fall = 0.01,
       .rel_decrease_tol = 1e-5,
       .rel_decrease_count = 2,
       .springback_grow = 8,

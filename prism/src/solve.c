@@ -4,6 +4,8 @@
 
 #include "state.h"
 
+enum { FALL_WINDOW_MAX = 64 };
+
 typedef struct {
   vm_prism *p;
   vm_prism_phase ph;
@@ -11,11 +13,17 @@ typedef struct {
   int budget;   /* > 0: stop after this many iterations once the steps sum to a share of it */
   double share; /* that share (k.budget_step_share) */
   double steps; /* sum of the accepted step lengths (at most 1 each) */
+  /* ... and once F falls slowly: by less than `fall` of itself over the
+   * last `window` iterations (F after iteration i in F[i % (window + 1)]) */
+  int window, last;
+  double fall, F[FALL_WINDOW_MAX + 1];
 } monitor_data;
 
 static void monitor(void *user, const vm_iter_info *it) {
   monitor_data *d = user;
   d->steps += it->tau < 1 ? it->tau : 1;
+  d->F[it->iter % (d->window + 1)] = it->F;
+  d->last = it->iter;
   /* in the cutting phase the progress steps are rounds (pairs left), not
    * the iterations of the local re-solves */
   if (d->ph != VM_PRISM_PHASE_CUT)
@@ -25,7 +33,14 @@ static void monitor(void *user, const vm_iter_info *it) {
 static int budget_spent(void *user, int iter, const double *x) {
   (void)x;
   const monitor_data *d = user;
-  return iter > d->budget && d->steps >= d->share * d->budget;
+  if (!(iter > d->budget && d->steps >= d->share * d->budget)) return 0;
+  /* still falling fast: the solve is not done (the demo aircraft's F fell
+   * 11 % in the 10 iterations past the budget and settled 50 later) */
+  if (d->window > 0 && d->last >= d->window) {
+    double f0 = d->F[(d->last - d->window) % (d->window + 1)], f1 = d->F[d->last % (d->window + 1)];
+    if (isfinite(f0) && isfinite(f1) && f0 - f1 > d->fall * fabs(f0)) return 0;
+  }
+  return 1;
 }
 
 int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
@@ -43,7 +58,9 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
   mo.rel_decrease_tol = p->k.rel_decrease_tol;
   mo.rel_decrease_count = p->k.rel_decrease_count;
   mo.stats_every = 0;
-  monitor_data md = {p, ph, 0, budget, p->k.budget_step_share, 0};
+  monitor_data md = {p, ph, 0, budget, p->k.budget_step_share, 0, 0, 0, 0, {0}};
+  md.window = p->k.budget_fall_window < FALL_WINDOW_MAX ? p->k.budget_fall_window : FALL_WINDOW_MAX;
+  md.fall = p->k.budget_fall;
   mo.monitor = monitor;
   mo.user = &md;
   if (budget > 0) mo.before_iteration = budget_spent;

@@ -73,7 +73,8 @@ typedef struct vm_prism_opts {
   int springback_iter;   /* implicit iterations of the springback at full height
                             (default 100; it stops earlier once F stagnates, and
                             goes on, up to 3 times as many, while the accepted
-                            steps sum to less than a quarter of it) */
+                            steps sum to less than a quarter of it or F still
+                            falls by more than 1 % over 10 iterations) */
   int resolve_iter;      /* implicit iterations after each cutting round, around
                             the cut columns only (default 6) */
   int max_cut_rounds;    /* default 400; rounds with few pairs are cheap */
