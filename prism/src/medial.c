@@ -43,8 +43,10 @@ typedef struct {
   double q[3];
 } ball_query;
 
-void pr_closest_on_triangle(const double *p, const double *a, const double *b, const double *c,
-                            double *q) {
+/* The point q of triangle (a, b, c) nearest to p (Voronoi regions of the
+ * vertices, then the edges, then the inside). */
+static void closest_on_triangle(const double *p, const double *a, const double *b, const double *c,
+                                double *q) {
   double ab[3], ac[3], ap[3];
   vm_sub3(b, a, ab);
   vm_sub3(c, a, ac);
@@ -101,8 +103,8 @@ static bool ball_point(struct RTCPointQueryFunctionArguments *a) {
   if (vm_dot3(g->fnrm + 3 * t, b->n) > b->cos_sep) return false;
   const int32_t *v = g->tri + 3 * t;
   double q[3];
-  pr_closest_on_triangle(b->c, g->xyz + 3 * (int64_t)v[0], g->xyz + 3 * (int64_t)v[1],
-                         g->xyz + 3 * (int64_t)v[2], q);
+  closest_on_triangle(b->c, g->xyz + 3 * (int64_t)v[0], g->xyz + 3 * (int64_t)v[1],
+                      g->xyz + 3 * (int64_t)v[2], q);
   double d[3];
   vm_sub3(q, b->c, d);
   double d2 = vm_dot3(d, d);

@@ -130,9 +130,6 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
 /* The exterior medial radius of every wall vertex (radius, nw), at most
  * `cap` (see medial.c). */
 int pr_medial_radius(vm_prism *p, double cap, double *radius);
-/* The point q of triangle (a, b, c) nearest to p. */
-void pr_closest_on_triangle(const double *p, const double *a, const double *b, const double *c,
-                            double *q);
 
 /* ---- the non-orthogonality relief (ortho.c) ---- */
 
