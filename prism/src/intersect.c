@@ -63,8 +63,6 @@ void pr_rt_destroy(pr_rt **prt) {
  * none); `code` is what rtcGetDeviceError returned. */
 static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *what);
 
-RTCDevice pr_rt_device(pr_rt *rt) { return rt->dev; }
-
 int pr_rt_check(vm_ctx *ctx, pr_rt *rt, const char *what) {
   return rt_status(ctx, rt, rtcGetDeviceError(rt->dev), what);
 }
@@ -82,7 +80,7 @@ static int rt_status(vm_ctx *ctx, pr_rt *rt, enum RTCError code, const char *wha
 }
 
 typedef struct {
-  float *box; /* first (pr_box_bounds): 6 per primitive, rounded outwards and padded */
+  float *box; /* first (pr_tri_scene): 6 per primitive, rounded outwards and padded */
   const double *xyz;
   const int32_t *tri;
   const int32_t *group;
@@ -91,8 +89,8 @@ typedef struct {
   const int32_t *map; /* primitive -> triangle (NULL: the identity) */
 } soup;
 
-void pr_box_bounds(const struct RTCBoundsFunctionArguments *a) {
-  /* the user data's first member is its box array */
+static void box_bounds(const struct RTCBoundsFunctionArguments *a) {
+  /* the user data's first member is its box array (pr_tri_scene) */
   const float *const *box = a->geometryUserPtr;
   const float *b = *box + 6 * (size_t)a->primID;
   a->bounds_o->lower_x = b[0];
@@ -101,6 +99,39 @@ void pr_box_bounds(const struct RTCBoundsFunctionArguments *a) {
   a->bounds_o->upper_x = b[3];
   a->bounds_o->upper_y = b[4];
   a->bounds_o->upper_z = b[5];
+}
+
+RTCScene pr_tri_scene(pr_rt *rt, const double *xyz, const int32_t *tri, const int32_t *prims,
+                      int64_t nprim, double pad, float *box, void *data,
+                      RTCIntersectFunctionN isect, RTCOccludedFunctionN occl) {
+  for (int64_t q = 0; q < nprim; q++) {
+    int64_t t = prims ? prims[q] : q;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < 3; i++)
+      for (int k = 0; k < 3; k++) {
+        double v = xyz[3 * (int64_t)tri[3 * t + i] + k];
+        lo[k] = v < lo[k] ? v : lo[k];
+        hi[k] = v > hi[k] ? v : hi[k];
+      }
+    for (int k = 0; k < 3; k++) {
+      box[6 * q + k] = pr_float_down(lo[k] - pad);
+      box[6 * q + 3 + k] = pr_float_up(hi[k] + pad);
+    }
+  }
+  RTCScene scene = rtcNewScene(rt->dev);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+  RTCGeometry g = rtcNewGeometry(rt->dev, RTC_GEOMETRY_TYPE_USER);
+  rtcSetGeometryUserPrimitiveCount(g, (unsigned int)nprim);
+  rtcSetGeometryUserData(g, data);
+  rtcSetGeometryBoundsFunction(g, box_bounds, NULL);
+  if (isect) rtcSetGeometryIntersectFunction(g, isect);
+  if (occl) rtcSetGeometryOccludedFunction(g, occl);
+  rtcCommitGeometry(g);
+  rtcAttachGeometry(scene, g);
+  rtcReleaseGeometry(g);
+  rtcCommitScene(scene);
+  return scene;
 }
 
 /* orient(a, b, c, d) = (a - d) . ((b - d) x (c - d)), with a tolerance
@@ -235,36 +266,11 @@ static int collect_hits(vm_ctx *ctx, const pr_soup *so, const double *xyz, const
     }
   /* padding covers the rounding of the rays to float */
   double pad = so->k.box_pad * (ghi[0] - glo[0] + ghi[1] - glo[1] + ghi[2] - glo[2]);
-  for (int64_t q = 0; q < nprim; q++) {
-    int64_t t = prims ? prims[q] : q;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < 3; i++)
-      for (int k = 0; k < 3; k++) {
-        double v = xyz[3 * (int64_t)tri[3 * t + i] + k];
-        lo[k] = v < lo[k] ? v : lo[k];
-        hi[k] = v > hi[k] ? v : hi[k];
-      }
-    for (int k = 0; k < 3; k++) {
-      d.box[6 * q + k] = pr_float_down(lo[k] - pad);
-      d.box[6 * q + 3 + k] = pr_float_up(hi[k] + pad);
-    }
-  }
   RTCDevice dev = so->rt->dev;
   const int chunk = so->k.ray_chunk;
   const double extend = so->k.ray_extend;
-  RTCScene scene = rtcNewScene(dev);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-  rtcSetGeometryUserPrimitiveCount(g, (unsigned int)nprim);
-  rtcSetGeometryUserData(g, &d);
-  rtcSetGeometryBoundsFunction(g, pr_box_bounds, NULL);
-  rtcSetGeometryIntersectFunction(g, edge_intersect);
-  rtcSetGeometryOccludedFunction(g, edge_occluded);
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(scene, g);
-  rtcReleaseGeometry(g);
-  rtcCommitScene(scene);
+  RTCScene scene =
+      pr_tri_scene(so->rt, xyz, tri, prims, nprim, pad, d.box, &d, edge_intersect, edge_occluded);
   enum RTCError err = rtcGetDeviceError(dev);
   /* (edge, triangle) hits, appended by the threads in any order (the
    * pairs made of them are sorted) */

@@ -4,6 +4,7 @@
 #ifndef VARMESH_PRISM_INTERSECT_H
 #define VARMESH_PRISM_INTERSECT_H
 
+#include <embree3/rtcore.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -23,12 +24,6 @@ static inline float pr_float_up(double v) {
   return f;
 }
 
-/* Embree's bounds callback for a user geometry whose user data begins
- * with a `float *` array of 6 values per primitive (lower x, y, z, upper
- * x, y, z). */
-struct RTCBoundsFunctionArguments;
-void pr_box_bounds(const struct RTCBoundsFunctionArguments *a);
-
 /* An Embree device with an error callback: created once per run, shared
  * by every query of the run. An error Embree reports (on any thread) is
  * kept, and the query that sees it copies the message to the context's
@@ -36,12 +31,21 @@ void pr_box_bounds(const struct RTCBoundsFunctionArguments *a);
 typedef struct pr_rt pr_rt;
 int pr_rt_create(vm_ctx *ctx, pr_rt **out);
 void pr_rt_destroy(pr_rt **rt);
-/* The device, for queries of other files (an RTCDevice of embree3). */
-struct RTCDeviceTy *pr_rt_device(pr_rt *rt);
 /* The device's error since the last look (rtcGetDeviceError and the
  * callback's), copied to the context as VM_ERR_BACKEND naming `what`;
  * VM_OK if none. */
 int pr_rt_check(vm_ctx *ctx, pr_rt *rt, const char *what);
+
+/* A committed scene of one user geometry over nprim triangles of (xyz,
+ * tri): primitive q is triangle prims[q] (prims NULL: q). Their boxes,
+ * rounded outwards to float and padded by `pad`, are written to `box` (6
+ * floats per primitive), which must be the first member of the user data
+ * `data` (the bounds callback reads them there). isect and occl are the
+ * geometry's ray callbacks (NULL for point queries only). The caller
+ * releases the scene and checks the device (pr_rt_check). */
+RTCScene pr_tri_scene(pr_rt *rt, const double *xyz, const int32_t *tri, const int32_t *prims,
+                      int64_t nprim, double pad, float *box, void *data,
+                      RTCIntersectFunctionN isect, RTCOccludedFunctionN occl);
 
 /* A triangle soup with its edges, for repeated intersection queries at
  * changing coordinates (the topology is fixed): ntri triangles (3 vertex

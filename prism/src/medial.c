@@ -21,14 +21,13 @@
  * the cylinder holds it), and a fold of the wall sharper than the angle (a
  * wing root without a fillet) still counts, as it should: two straight
  * columns on either side of it meet at the height the ball gives. */
-#include <embree3/rtcore.h>
 #include <math.h>
 #include <string.h>
 
 #include "state.h"
 
 typedef struct {
-  float *box; /* first (pr_box_bounds): 6 per triangle, rounded outwards */
+  float *box; /* first (pr_tri_scene): 6 per triangle, rounded outwards */
   const double *xyz;
   const int32_t *tri;
   const double *fnrm;
@@ -129,31 +128,7 @@ int pr_medial_radius(vm_prism *p, double cap, double *radius) {
   wall_geom g = {NULL, p->wall, p->tri, p->fnrm};
   g.box = vm_alloc_array(ctx, (size_t)nt * 6, sizeof *g.box);
   if (!g.box) return VM_ERR_NOMEM;
-  for (int64_t t = 0; t < nt; t++) {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < 3; i++)
-      for (int k = 0; k < 3; k++) {
-        double x = p->wall[3 * (int64_t)p->tri[3 * t + i] + k];
-        lo[k] = x < lo[k] ? x : lo[k];
-        hi[k] = x > hi[k] ? x : hi[k];
-      }
-    for (int k = 0; k < 3; k++) {
-      g.box[6 * t + k] = pr_float_down(lo[k]);
-      g.box[6 * t + 3 + k] = pr_float_up(hi[k]);
-    }
-  }
-  RTCDevice dev = pr_rt_device(p->rt);
-  RTCScene scene = rtcNewScene(dev);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-  RTCGeometry geo = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-  rtcSetGeometryUserPrimitiveCount(geo, (unsigned int)nt);
-  rtcSetGeometryUserData(geo, &g);
-  rtcSetGeometryBoundsFunction(geo, pr_box_bounds, NULL);
-  rtcCommitGeometry(geo);
-  rtcAttachGeometry(scene, geo);
-  rtcReleaseGeometry(geo);
-  rtcCommitScene(scene);
+  RTCScene scene = pr_tri_scene(p->rt, p->wall, p->tri, NULL, nt, 0, g.box, &g, NULL, NULL);
   st = pr_rt_check(ctx, p->rt, "scene build (medial radius)");
   const double cos_sep = cos(p->k.medial_sep_deg * PR_PI / 180);
   const int max_iter = p->k.medial_iter;

@@ -120,30 +120,28 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     size_t lsz = (size_t)(3 * nw);
     double T = p->o.thickness;
     const double *top = L + (size_t)(nlev - 1) * lsz;
-    int64_t full = 0;
-    double tmin = INFINITY, tmax = 0, tsum = 0;
+    int64_t full = 0, room = 0, reach = 0;
+    double tmin = INFINITY, tmax = 0, tsum = 0, fsum = 0, frest = 0;
     for (int64_t v = 0; v < nw; v++) {
-      double d = vm_dist3(p->wall + 3 * v, top + 3 * v) / T;
-      if (d >= 1 - p->o.full_tol) full++;
+      double len = vm_dist3(p->wall + 3 * v, top + 3 * v), d = len / T;
+      int at_full = d >= 1 - p->o.full_tol;
+      full += at_full;
       tmin = d < tmin ? d : tmin;
       tmax = d > tmax ? d : tmax;
       tsum += d;
+      if (!p->medial) continue;
+      /* the room the geometry leaves (medial.c) */
+      double fill = pr_fill(len, T, p->medial[v]);
+      fsum += fill;
+      if (p->medial[v] >= p->k.medial_room * T) {
+        room++;
+        reach += at_full;
+      } else {
+        frest += fill;
+      }
     }
     R.full_fraction = (double)full / (double)nw;
     if (p->medial) {
-      int64_t room = 0, reach = 0;
-      double fsum = 0, frest = 0;
-      for (int64_t v = 0; v < nw; v++) {
-        double d = vm_dist3(p->wall + 3 * v, top + 3 * v);
-        double fill = pr_fill(d, T, p->medial[v]);
-        fsum += fill;
-        if (p->medial[v] >= p->k.medial_room * T) {
-          room++;
-          reach += d >= (1 - p->o.full_tol) * T;
-        } else {
-          frest += fill;
-        }
-      }
       R.medial_room = (double)room / (double)nw;
       R.medial_reach = room ? (double)reach / (double)room : 1;
       R.medial_short = room - reach;
