@@ -115,16 +115,14 @@ typedef struct pr_params {
   int rel_decrease_count;   /* 2: ... this many times in a row */
 
   /* phase 2, springback (springback.c) */
-  double springback_grow;      /* 8: target heights grow at most 8 times the
-                                  column length per continuation stage */
-  int springback_stages;       /* 60: stages at most (8^60: always reaches T) */
-  int springback_stage_iter;   /* 5: implicit iterations per intermediate stage
-                                  (each starts near its answer) */
-  double springback_stuck_det; /* 1e-5: see springback.c cap_stuck */
-  double springback_held_step; /* 1/64: see springback.c cap_stuck */
-  int springback_budget_mult;  /* 3: the last stage runs up to 3 times
-                                  springback_iter while the step budget is not
-                                  spent (the aircraft's wing tips) */
+  double springback_grow;     /* 8: target heights grow at most 8 times the
+                                 column length per continuation stage */
+  int springback_stages;      /* 60: stages at most (8^60: always reaches T) */
+  int springback_stage_iter;  /* 5: implicit iterations per intermediate stage
+                                 (each starts near its answer) */
+  int springback_budget_mult; /* 3: the last stage runs up to 3 times
+                                 springback_iter while the step budget is not
+                                 spent (the aircraft's wing tips) */
 
   /* phase 3, cutting (cutting.c) */
   int resolve_rings;  /* 4: rings around the cut columns that move in the
@@ -300,8 +298,6 @@ static inline pr_params pr_params_default(void) {
       .springback_stages = 60,
       .springback_stage_iter = 5,
       .springback_budget_mult = 3,
-      .springback_stuck_det = 1e-5,
-      .springback_held_step = 1.0 / 64,
       .resolve_rings = 4,
       .cut_floor = 1e-3,
       .stuck_rounds = 10,

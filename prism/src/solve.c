@@ -67,7 +67,6 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
   if (iters && st >= 0) *iters = res.iterations;
-  p->solve_steps = md.steps;
   vm_minimizer_destroy(&mz);
   if (st == VM_WARN_MAXITER) st = VM_OK;
   return st;

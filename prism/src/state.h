@@ -53,9 +53,6 @@ struct vm_prism {
 
   double *medial; /* nw exterior medial radii (medial.c), NULL until asked */
 
-  /* the last pr_solve_budget: the sum of its accepted steps (each <= 1) */
-  double solve_steps;
-
   vm_prism_report rep;
 };
 

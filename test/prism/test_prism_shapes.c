@@ -161,24 +161,6 @@ int main(void) {
     vm_mesh_destroy(&w);
   }
 
-  { /* an isolated wing graded as CAD meshers grade it (cosine spacing,
-     * needles at the sharp trailing edge, tiny triangles where it meets the
-     * caps), T = 20 % of the semispan: its medial radius leaves every column
-     * room for T. Before the springback capped its held-back columns
-     * (springback.c cap_stuck), near-degenerate prisms at the caps held
-     * every step to 1e-3 and 3.7 % of the columns reached T */
-    vm_mesh *w = NULL;
-    vm_mesh_create(ctx, &w);
-    CHECK(vm_gen_wing(w, 80, 8, 0.10, 28) == 0, "wing");
-    run_out o = {0};
-    run(ctx, "wing", w, 0.2 * 1.196, 10, &o);
-    CHECK(o.r.medial_room > 0.99, "wing: room for T at %g of the columns", o.r.medial_room);
-    CHECK(o.r.medial_reach > 0.75, "wing: %g of the columns with room reach T", o.r.medial_reach);
-    CHECK(o.r.medial_fill > 0.85, "wing: fill %g", o.r.medial_fill);
-    vm_mesh_destroy(&o.res);
-    vm_mesh_destroy(&w);
-  }
-
   { /* two spheres 0.6 apart, T = 0.5: contact in the middle */
     vm_mesh *w = NULL;
     vm_mesh_create(ctx, &w);
