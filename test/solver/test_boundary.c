@@ -64,6 +64,18 @@ static void test_sphere_plane(vm_ctx *ctx) {
   vm_analytic_surfaces_destroy(&s);
 }
 
+/* A surface that counts its projections. */
+typedef struct {
+  vm_surface_ops inner;
+  int calls;
+} counting;
+
+static int count_project(void *user, int id, const double p[3], double out[3], double n[9]) {
+  counting *c = user;
+  c->calls++;
+  return c->inner.project(c->inner.user, id, p, out, n);
+}
+
 /* A mesh of loose vertices (no elements needed by vm_bc). */
 static vm_mesh *points(vm_ctx *ctx, int dim, const double *xyz, const uint8_t *flag,
                        const int32_t *surf, int nv) {
@@ -137,6 +149,50 @@ static void test_bc(vm_ctx *ctx) {
   CHECK(xo[9] == 0.0 && xo[11] == 1.0, "edge vertex left its edge");
   CHECK(memcmp(xo + 12, x + 12, 24) == 0, "corner moved");
   CHECK_NEAR(sqrt(dot3(xo + 15, xo + 15)), 3.0, 1e-14, "sphere vertex off the sphere");
+  /* the bases at an accepted trial point come from the step's own
+   * projections (no second one): the same as a fresh bc's projection
+   * there (to rounding: on the sphere the normal is taken at the point
+   * projected, not at the point on it), for the later and the earlier of
+   * two trials */
+  {
+    double xa[18], xb[18];
+    memcpy(xa, x, sizeof xa);
+    memcpy(xb, x, sizeof xb);
+    CHECK(vm_bc_step(bc, x, dz, 0.5, xa) == VM_OK && vm_bc_step(bc, x, dz, 0.25, xb) == VM_OK,
+          "two trials");
+    const double *at[2] = {xb, xa};
+    for (int t = 0; t < 2; t++) {
+      vm_bc *fresh = NULL;
+      CHECK(vm_bc_create(ctx, m, &ops, &fresh) == VM_OK && vm_bc_refresh(fresh, at[t]) == VM_OK,
+            "fresh bc");
+      CHECK(vm_bc_refresh(bc, at[t]) == VM_OK, "refresh at trial %d", t);
+      for (int v = 0; v < 6; v++) {
+        double Qa[9], Qb[9];
+        int ka = vm_bc_basis(bc, v, Qa), kb = vm_bc_basis(fresh, v, Qb);
+        double dq = 0;
+        for (int i = 0; i < 3 * ka && ka == kb; i++) dq = fmax(dq, fabs(Qa[i] - Qb[i]));
+        CHECK(ka == kb && dq <= 1e-14,
+              "trial %d vertex %d: basis from the step (rank %d) differs from a projection "
+              "(rank %d) by %g",
+              t, v, ka, kb, dq);
+      }
+      vm_bc_destroy(&fresh);
+    }
+    /* and they are taken from the step: no projection at a trial point,
+     * one per slip vertex elsewhere (but the corner, which the step left
+     * where it was) */
+    counting cnt = {ops, 0};
+    vm_surface_ops cops = {count_project, &cnt, NULL};
+    vm_bc *cb = NULL;
+    CHECK(vm_bc_create(ctx, m, &cops, &cb) == VM_OK && vm_bc_refresh(cb, x) == VM_OK, "bc");
+    CHECK(vm_bc_step(cb, x, dz, 0.5, xa) == VM_OK, "step");
+    cnt.calls = 0;
+    CHECK(vm_bc_refresh(cb, xa) == VM_OK && cnt.calls == 0,
+          "refresh at the trial point projected %d times", cnt.calls);
+    CHECK(vm_bc_refresh(cb, x) == VM_OK && cnt.calls == 3,
+          "refresh elsewhere: %d projections, expected 3", cnt.calls);
+    vm_bc_destroy(&cb);
+  }
   vm_bc_destroy(&bc);
   CHECK(bc == NULL, "destroy sets NULL");
   vm_mesh_destroy(&m);

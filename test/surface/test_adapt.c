@@ -210,6 +210,50 @@ static void test_line_projection(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The hinted projection (what the minimizers use) finds the closest
+ * point whatever the hint: no hint, a triangle far away, the last answer;
+ * on vm-gen wing, whose long thin triangles make the tree's own first
+ * guess poor. */
+static void test_hinted_projection(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_wing(m, 80, 8, 0.12, 25) == 0, "wing");
+  vm_surface_projector *pr = NULL;
+  CHECK(vm_surface_projector_create(ctx, m, NULL, &pr) == 0, "projector");
+  vm_surface_ops ops = vm_surface_projector_ops(pr);
+  CHECK(ops.project_hinted != NULL, "the projector has a hinted projection");
+  int64_t bad = 0, n = 0, last = -1;
+  double worst = 0;
+  for (int64_t v = 0; v < m->nv; v += 3) {
+    for (int j = 0; j < 3; j++) {
+      const double *x = m->xyz + 3 * v;
+      double p[3] = {x[0] + 0.01 * sin(v + j), x[1] + 0.02 * cos(3.0 * v + j),
+                     x[2] + 0.01 * sin(7.0 * v - j)};
+      double q0[3], q[3], nr[9];
+      CHECK(ops.project(ops.user, 0, p, q0, nr) == 1, "projection");
+      double d0 = sqrt((q0[0] - p[0]) * (q0[0] - p[0]) + (q0[1] - p[1]) * (q0[1] - p[1]) +
+                       (q0[2] - p[2]) * (q0[2] - p[2]));
+      int64_t hints[3] = {-1, (v * 7919 + j) % (m->ne > 0 ? m->ne : 1), last};
+      for (int h = 0; h < 3; h++) {
+        int64_t hint = hints[h];
+        CHECK(ops.project_hinted(ops.user, 0, p, &hint, q, nr) == 1, "hinted projection");
+        double d = sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                        (q[2] - p[2]) * (q[2] - p[2]));
+        if (fabs(d - d0) > 1e-14 || hint < 0 || hint >= m->ne) bad++;
+        if (fabs(d - d0) > worst) worst = fabs(d - d0);
+        if (h == 2) last = hint;
+        n++;
+      }
+    }
+  }
+  fprintf(stderr, "hinted projection: %lld queries, worst distance difference %.3g\n", (long long)n,
+          worst);
+  CHECK(bad == 0, "%lld hinted projections not the closest point (worst %g)", (long long)bad,
+        worst);
+  vm_surface_projector_destroy(&pr);
+  vm_mesh_destroy(&m);
+}
+
 static void test_open_cylinder(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_mesh_create(ctx, &m);
@@ -346,6 +390,7 @@ int main(void) {
   vm_ctx_set_threads(ctx, 1);
   test_lens(ctx);
   test_line_projection(ctx);
+  test_hinted_projection(ctx);
   test_open_cylinder(ctx);
   test_bad(ctx);
   test_alloc_failures(ctx);

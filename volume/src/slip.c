@@ -53,8 +53,21 @@ static int slip_project(void *user, int surf_id, const double p[3], double out[3
   return ops.project(ops.user, surf_id - s->npatch + 1, p, out, normals);
 }
 
+static int slip_project_hinted(void *user, int surf_id, const double p[3], int64_t *hint,
+                               double out[3], double normals[9]) {
+  vm_volume_slip *s = user;
+  vm_surface_ops ops;
+  if (surf_id < 0) return VM_ERR_ARG;
+  if (surf_id < s->npatch) {
+    ops = vm_surface_projector_ops(s->patch[surf_id]);
+    return ops.project_hinted(ops.user, 0, p, hint, out, normals);
+  }
+  ops = vm_surface_projector_ops(s->proj);
+  return ops.project_hinted(ops.user, surf_id - s->npatch + 1, p, hint, out, normals);
+}
+
 vm_surface_ops vm_volume_slip_ops(vm_volume_slip *s) {
-  vm_surface_ops ops = {slip_project, s};
+  vm_surface_ops ops = {slip_project, s, slip_project_hinted};
   return ops;
 }
 

@@ -164,7 +164,7 @@ static int analytic_project(void *user, int surf_id, const double p[3], double o
 }
 
 vm_surface_ops vm_analytic_surfaces_ops(vm_analytic_surfaces *s) {
-  vm_surface_ops ops = {analytic_project, s};
+  vm_surface_ops ops = {analytic_project, s, NULL};
   return ops;
 }
 
@@ -179,6 +179,13 @@ struct vm_bc {
   int32_t *surf_id; /* per slip vertex */
   int8_t *rank;     /* per slip vertex */
   double *Q;        /* per slip vertex: 9 (basis columns) */
+  int64_t *hint;    /* per slip vertex: the projection's token (surf.project_hinted) */
+  /* the last two trial points of vm_bc_step and their bases (per slip
+   * vertex: 3, 9 and 1 values), so that vm_bc_refresh at an accepted
+   * trial point need not project it again */
+  double *trial_x[2], *trial_Q[2];
+  int8_t *trial_rank[2];
+  int trial_valid[2], trial_next;
   int64_t count[3];
   vm_surface_ops surf;
 };
@@ -214,13 +221,21 @@ int vm_bc_create(vm_ctx *ctx, const vm_mesh *m, const vm_surface_ops *surf, vm_b
     bc->surf_id = vm_alloc_array(ctx, ns, sizeof *bc->surf_id);
     bc->rank = vm_alloc_array(ctx, ns, sizeof *bc->rank);
     bc->Q = vm_calloc(ctx, ns * 9, sizeof *bc->Q);
-    if (!bc->slip_v || !bc->surf_id || !bc->rank || !bc->Q) goto nomem;
+    bc->hint = vm_alloc_array(ctx, ns, sizeof *bc->hint);
+    if (!bc->slip_v || !bc->surf_id || !bc->rank || !bc->Q || !bc->hint) goto nomem;
+    for (int k = 0; k < 2; k++) {
+      bc->trial_x[k] = vm_alloc_array(ctx, 3 * ns, sizeof *bc->trial_x[k]);
+      bc->trial_Q[k] = vm_alloc_array(ctx, 9 * ns, sizeof *bc->trial_Q[k]);
+      bc->trial_rank[k] = vm_alloc_array(ctx, ns, sizeof *bc->trial_rank[k]);
+      if (!bc->trial_x[k] || !bc->trial_Q[k] || !bc->trial_rank[k]) goto nomem;
+    }
     for (int64_t v = 0; v < m->nv; v++) {
       int32_t s = bc->slip[v];
       if (s < 0) continue;
       bc->slip_v[s] = v;
       bc->surf_id[s] = m->vsurf ? m->vsurf[v] : -1;
       bc->rank[s] = (int8_t)bc->dim;
+      bc->hint[s] = -1;
     }
   }
   *out = bc;
@@ -238,6 +253,12 @@ void vm_bc_destroy(vm_bc **p) {
   vm_free(ctx, bc->slip);
   vm_free(ctx, bc->slip_v);
   vm_free(ctx, bc->surf_id);
+  vm_free(ctx, bc->hint);
+  for (int k = 0; k < 2; k++) {
+    vm_free(ctx, bc->trial_x[k]);
+    vm_free(ctx, bc->trial_Q[k]);
+    vm_free(ctx, bc->trial_rank[k]);
+  }
   vm_free(ctx, bc->rank);
   vm_free(ctx, bc->Q);
   vm_free(ctx, bc);
@@ -295,11 +316,18 @@ static int cone_basis(int dim, const double *nrm, int nn, double Q[9]) {
   return rank;
 }
 
+/* The surface's closest point to p for slip vertex s (its hint kept). */
+static int surf_project(vm_bc *bc, int64_t s, const double p[3], double q[3], double nrm[9]) {
+  if (bc->surf.project_hinted)
+    return bc->surf.project_hinted(bc->surf.user, bc->surf_id[s], p, bc->hint + s, q, nrm);
+  return bc->surf.project(bc->surf.user, bc->surf_id[s], p, q, nrm);
+}
+
 /* Project slip vertex s from point p; write the point to out (may be NULL)
  * and its basis. */
 static int project_slip(vm_bc *bc, int64_t s, const double p[3], double *out) {
   double q[3], nrm[9];
-  int nn = bc->surf.project(bc->surf.user, bc->surf_id[s], p, q, nrm);
+  int nn = surf_project(bc, s, p, q, nrm);
   if (nn < 0)
     return vm_error(bc->ctx, nn, "projection of vertex %lld onto surface %d failed",
                     (long long)bc->slip_v[s], bc->surf_id[s]);
@@ -324,8 +352,20 @@ int vm_bc_project(vm_bc *bc, double *x) {
 }
 
 int vm_bc_refresh(vm_bc *bc, const double *x) {
+  /* the later trial first: an accepted point is usually the last one tried */
+  int order[2] = {1 - bc->trial_next, bc->trial_next};
   for (int64_t s = 0; s < bc->nslip; s++) {
-    int st = project_slip(bc, s, x + 3 * bc->slip_v[s], NULL);
+    const double *p = x + 3 * bc->slip_v[s];
+    int known = 0;
+    for (int i = 0; i < 2 && !known; i++) {
+      int k = order[i];
+      if (!bc->trial_valid[k] || memcmp(p, bc->trial_x[k] + 3 * s, 3 * sizeof *p) != 0) continue;
+      memcpy(bc->Q + 9 * s, bc->trial_Q[k] + 9 * s, 9 * sizeof *bc->Q);
+      bc->rank[s] = bc->trial_rank[k][s];
+      known = 1;
+    }
+    if (known) continue;
+    int st = project_slip(bc, s, p, NULL);
     if (st) return st;
   }
   return VM_OK;
@@ -352,18 +392,25 @@ int vm_bc_step(vm_bc *bc, const double *x, const double *dz, double tau, double 
     for (int k = 0; k < dim; k++) xout[3 * v + k] = x[3 * v + k] + tau * dz[3 * v + k];
     if (dim == 2) xout[3 * v + 2] = x[3 * v + 2];
   }
+  if (bc->nslip == 0) return VM_OK;
+  const int t = bc->trial_next;
+  bc->trial_valid[t] = 0;
   for (int64_t s = 0; s < bc->nslip; s++) {
     int64_t v = bc->slip_v[s];
     double d[3] = {dz[3 * v], dz[3 * v + 1], dz[3 * v + 2]};
     apply_slip(bc, s, d);
     double p[3], q[3], nrm[9];
     for (int k = 0; k < 3; k++) p[k] = x[3 * v + k] + tau * d[k];
-    int nn = bc->surf.project(bc->surf.user, bc->surf_id[s], p, q, nrm);
+    int nn = surf_project(bc, s, p, q, nrm);
     if (nn < 0) return nn;
     if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2])) return VM_ERR_NUMERIC;
     if (dim == 2) q[2] = x[3 * v + 2];
     memcpy(xout + 3 * v, q, sizeof q);
+    memcpy(bc->trial_x[t] + 3 * s, q, sizeof q);
+    bc->trial_rank[t][s] = (int8_t)cone_basis(dim, nrm, nn > 3 ? 3 : nn, bc->trial_Q[t] + 9 * s);
   }
+  bc->trial_valid[t] = 1;
+  bc->trial_next = 1 - t;
   return VM_OK;
 }
 

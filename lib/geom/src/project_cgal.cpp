@@ -133,18 +133,32 @@ struct vm_surface_projector {
 
 extern "C" {
 static int project_cb(void *user, int surf_id, const double p[3], double out[3], double normals[9]);
+static int project_hinted_cb(void *user, int surf_id, const double p[3], int64_t *hint,
+                             double out[3], double normals[9]);
 }
 
-static int project_cb(void *user, int surf_id, const double p[3], double out[3],
-                      double normals[9]) {
-  vm_surface_projector *pr = static_cast<vm_surface_projector *>(user);
+// The projection; on the surface (id 0) *hint, if not NULL, is the index
+// of a triangle: the closest point on it bounds the tree's search from the
+// start (instead of the nearest of the tree's sample points, which on long
+// thin triangles is far off), and it is replaced by the triangle found.
+static int project_impl(vm_surface_projector *pr, int surf_id, const double p[3], int64_t *hint,
+                        double out[3], double normals[9]) {
   VM_CXX_BEGIN
   if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return VM_ERR_NUMERIC;
   Point q(p[0], p[1], p[2]);
   if (surf_id == 0) {
     if (pr->surf.tri.empty()) return VM_ERR_ARG;
-    auto cp = pr->surf.tree->closest_point_and_primitive(q);
-    std::size_t fi = static_cast<std::size_t>(cp.second - pr->surf.tri.begin());
+    const std::vector<Triangle> &tri = pr->surf.tri;
+    TriTree::Point_and_primitive_id cp;
+    if (hint && *hint >= 0 && static_cast<std::size_t>(*hint) < tri.size()) {
+      TriIt h = tri.begin() + static_cast<std::ptrdiff_t>(*hint);
+      Point c = K::Construct_projected_point_3()(*h, q);
+      cp = pr->surf.tree->closest_point_and_primitive(q, TriTree::Point_and_primitive_id(c, h));
+    } else {
+      cp = pr->surf.tree->closest_point_and_primitive(q);
+    }
+    std::size_t fi = static_cast<std::size_t>(cp.second - tri.begin());
+    if (hint) *hint = static_cast<int64_t>(fi);
     out[0] = cp.first.x();
     out[1] = cp.first.y();
     out[2] = cp.first.z();
@@ -208,6 +222,16 @@ static int project_cb(void *user, int surf_id, const double p[3], double out[3],
   orthogonal_pair(t, normals);
   return 2;
   VM_CXX_END(pr->ctx, "projection")
+}
+
+static int project_cb(void *user, int surf_id, const double p[3], double out[3],
+                      double normals[9]) {
+  return project_impl(static_cast<vm_surface_projector *>(user), surf_id, p, NULL, out, normals);
+}
+
+static int project_hinted_cb(void *user, int surf_id, const double p[3], int64_t *hint,
+                             double out[3], double normals[9]) {
+  return project_impl(static_cast<vm_surface_projector *>(user), surf_id, p, hint, out, normals);
 }
 
 extern "C" int vm_surface_projector_create(vm_ctx *ctx, const vm_mesh *ref,
@@ -309,6 +333,7 @@ extern "C" vm_surface_ops vm_surface_projector_ops(vm_surface_projector *p) {
   vm_surface_ops ops;
   ops.project = project_cb;
   ops.user = p;
+  ops.project_hinted = project_hinted_cb;
   return ops;
 }
 

@@ -26,6 +26,14 @@ extern "C" {
 typedef struct vm_surface_ops {
   int (*project)(void *user, int surf_id, const double p[3], double out[3], double normals[9]);
   void *user;
+  /* Optional (NULL: project() is used): project() with a hint, an opaque
+   * token the last call for the same vertex left in *hint (-1 before the
+   * first). The answer is project()'s closest point; where several points
+   * are equally close, the hinted one is kept. *hint is updated. The
+   * minimizers keep one token per slip vertex, so a vertex that moves a
+   * little costs a local search instead of a global one. */
+  int (*project_hinted)(void *user, int surf_id, const double p[3], int64_t *hint, double out[3],
+                        double normals[9]);
 } vm_surface_ops;
 
 /* Analytic surfaces by id, for tests and generated volume meshes. */
@@ -66,7 +74,9 @@ void vm_bc_destroy(vm_bc **p);
  * recompute its L_k there. Fixed and free vertices are not written.
  * Returns VM_OK or the first failing projection's status. */
 int vm_bc_project(vm_bc *bc, double *x);
-/* Recompute L_k at x without writing x (x already on the surfaces). */
+/* Recompute L_k at x without writing x (x already on the surfaces). A
+ * vertex at a point one of the last two vm_bc_step calls produced (bit for
+ * bit) takes the basis that step computed there, without projecting. */
 int vm_bc_refresh(vm_bc *bc, const double *x);
 /* The trial point of (33): xout_k = V(x_k + tau L_k dz_k) for every vertex
  * that is not fixed; fixed vertices of xout are not written (the caller
