@@ -198,6 +198,15 @@ void vm_json_double(FILE *f, double x) {
     fputs("null", f);
 }
 
+void vm_json_doubles(FILE *f, const double *x, int n) {
+  fputc('[', f);
+  for (int k = 0; k < n; k++) {
+    if (k) fputs(", ", f);
+    vm_json_double(f, x[k]);
+  }
+  fputc(']', f);
+}
+
 void vm_json_string(FILE *f, const char *s) {
   fputc('"', f);
   for (; *s; s++) {

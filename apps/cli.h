@@ -173,6 +173,8 @@ int vm_cli_int(const vm_cli *cli, const char *opt, const char *s, long lo, long 
 
 /* Print a double as JSON (null for NaN/Inf). */
 void vm_json_double(FILE *f, double x);
+/* Print n doubles as a JSON array. */
+void vm_json_doubles(FILE *f, const double *x, int n);
 /* Print a JSON string literal with escapes. */
 void vm_json_string(FILE *f, const char *s);
 

@@ -148,6 +148,16 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* One deviation figure of the summary: "<pre>rel", "<pre>abs", "<pre>at". */
+static void json_deviation(const char *pre, double rel, double abs, const double at[3]) {
+  printf("\"%srel\": ", pre);
+  vm_json_double(stdout, rel);
+  printf(", \"%sabs\": ", pre);
+  vm_json_double(stdout, abs);
+  printf(", \"%sat\": ", pre);
+  vm_json_doubles(stdout, at, 3);
+}
+
 static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary *s, int rc,
                        double t0) {
   const vm_repair_report *rr = &s->repair;
@@ -264,6 +274,15 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
          "\"folds_found\": %lld, \"backed_off_vertices\": %lld",
          (long long)s->self_intersections, (long long)s->remesh_refused, (long long)s->folds_found,
          (long long)s->adapt_backed_off);
+  if (s->deviation_measured) {
+    printf(", \"deviation\": {");
+    json_deviation("", s->deviation_rel, s->deviation_abs, s->deviation_at);
+    printf(", ");
+    json_deviation("feature_", s->deviation_feature_rel, s->deviation_feature_abs,
+                   s->deviation_feature_at);
+    printf(", \"feature_vertices\": %lld, \"corners_moved\": %lld}",
+           (long long)s->deviation_features, (long long)s->corners_moved);
+  }
   printf(", \"min_angle\": ");
   vm_json_double(stdout, vm_surface_min_angle(m));
   printf(", \"time\": ");
@@ -318,6 +337,13 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        s->self_intersections < 0 ? " (not checked: quads)" : "",
                        s->remesh_refused ? "yes" : "no", (long long)s->folds_found,
                        (long long)s->adapt_backed_off);
+  if (st >= 0 && s->deviation_measured)
+    st = vm_report_row(*report, "deviation from the input (of the local edge length)",
+                       "%.3g (%g); at %lld feature vertices %.3g (%g); corners and tips moved: "
+                       "%lld",
+                       s->deviation_rel, s->deviation_abs, (long long)s->deviation_features,
+                       s->deviation_feature_rel, s->deviation_feature_abs,
+                       (long long)s->corners_moved);
   if (st >= 0)
     st = vm_report_row(*report, "smallest angle: input, output", "%.2f, %.2f deg",
                        s->min_angle_input, vm_surface_min_angle(m));

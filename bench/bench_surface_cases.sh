@@ -57,8 +57,8 @@ print("%d %.2f %d" % (nf, mn, under))
 PY
 }
 
-echo "| case | build | triangles in / out | smallest angle in / out | under 15 deg in / out | Hausdorff % diag | opposing | intersecting pairs | corners+tips moved (farthest / local edge) | CPU s | exit |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| case | build | triangles in / out | smallest angle in / out | under 15 deg in / out | Hausdorff % diag | opposing | intersecting pairs | corners+tips moved (farthest / local edge) | local deviation / edge: anywhere, features | CPU s | exit |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 for c in $cases; do
   read -r nin ain uin <<<"$(angles "$tmp/$c.stl")"
   for b in ${before:+before} ${SIZES:-after}; do
@@ -70,7 +70,7 @@ for c in $cases; do
     rc=$?
     cpu=$(awk '{printf "%.1f", $1 + $2}' "$tmp/time")
     if [ ! -s "$out" ]; then
-      echo "| $c | $b | $nin / - | $ain / - | $uin / - | | | | | $cpu | $rc: $(tail -n 1 "$tmp/err")|"
+      echo "| $c | $b | $nin / - | $ain / - | $uin / - | | | | | | $cpu | $rc: $(tail -n 1 "$tmp/err")|"
       continue
     fi
     read -r nout aout uout <<<"$(angles "$out")"
@@ -79,6 +79,9 @@ for c in $cases; do
     opp=$(sed -n 's/.*opposing the input.s normal \([0-9]*\).*/\1/p' <<<"$ev")
     corners=$(sed -n 's/.*tips of the input: \([0-9]*\) ([0-9]* cone points), \([0-9]*\) without.*farthest [0-9.e+-]* = \([0-9.]*\) of.*/\2 of \1 (\3)/p' <<<"$ev")
     pairs=$(sed -n 's/.*"self_intersections": \(-*[0-9]*\), "remesh_refused.*/\1/p' "$tmp/json")
-    echo "| $c | $b | $nin / $nout | $ain / $aout | $uin / $uout | $haus | $opp | $pairs | $corners | $cpu | $rc |"
+    dev=$($py -c 'import json, sys
+d = json.load(open(sys.argv[1])).get("deviation")
+print("%.3g, %.3g" % (d["rel"], d["feature_rel"]) if d else "")' "$tmp/json" 2>/dev/null)
+    echo "| $c | $b | $nin / $nout | $ain / $aout | $uin / $uout | $haus | $opp | $pairs | $corners | $dev | $cpu | $rc |"
   done
 done

@@ -156,6 +156,119 @@ static int64_t count_opposing(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref,
   return k;
 }
 
+/* The local deviation of m from ref (the summary's deviation_* figures,
+ * cone points as corners by o's angles). */
+static int deviation(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, const vm_surface_opts *o,
+                     vm_surface_summary *s) {
+  const int64_t nv = ref->nv;
+  vm_surface_features f;
+  memset(&f, 0, sizeof f);
+  vm_surface_projector *pm = NULL, *pr = NULL;
+  double *h = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *h);
+  int32_t *deg = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *deg);
+  double *dist = vm_alloc_array(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *dist);
+  double *ctr = vm_alloc_array(ctx, 3 * (size_t)(m->ne > 0 ? m->ne : 1), sizeof *ctr);
+  double *cd = vm_alloc_array(ctx, (size_t)(m->ne > 0 ? m->ne : 1), sizeof *cd);
+  double *clen = vm_alloc_array(ctx, (size_t)(m->ne > 0 ? m->ne : 1), sizeof *clen);
+  int st = h && deg && dist && ctr && cd && clen ? VM_OK : VM_ERR_NOMEM;
+  int64_t ncones = 0;
+  if (!st)
+    st = vm_surface_detect_features_cones(ref, o->adapt.feature_angle, o->adapt.corner_angle,
+                                          o->adapt.cone_angle, &f, &ncones);
+  if (!st) st = vm_surface_projector_create(ctx, m, NULL, &pm);
+  if (!st) st = vm_surface_projector_create(ctx, ref, NULL, &pr);
+  if (st) goto done;
+  /* the local size: each element edge counted from both of its elements
+   * (every edge of a closed surface twice, so the mean is unchanged) */
+  for (int64_t e = 0; e < ref->ne; e++) {
+    const int32_t *c = ref->conn + ref->eoff[e];
+    int k = (int)(ref->eoff[e + 1] - ref->eoff[e]);
+    for (int i = 0; i < k; i++) {
+      int32_t a = c[i], b = c[(i + 1) % k];
+      double d[3];
+      vm_sub3(ref->xyz + 3 * (int64_t)b, ref->xyz + 3 * (int64_t)a, d);
+      double l = vm_norm3(d);
+      h[a] += l;
+      h[b] += l;
+      deg[a]++;
+      deg[b]++;
+    }
+  }
+  if ((st = vm_surface_projector_distance(pm, nv, ref->xyz, dist))) goto done;
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    int k = (int)(m->eoff[e + 1] - m->eoff[e]);
+    double *q = ctr + 3 * e, len = 0;
+    q[0] = q[1] = q[2] = 0;
+    for (int i = 0; i < k; i++) {
+      const double *a = m->xyz + 3 * (int64_t)c[i], *b = m->xyz + 3 * (int64_t)c[(i + 1) % k];
+      double d[3];
+      vm_sub3(b, a, d);
+      len += vm_norm3(d) / k;
+      for (int j = 0; j < 3; j++) q[j] += a[j] / k;
+    }
+    clen[e] = len;
+  }
+  if ((st = vm_surface_projector_distance(pr, m->ne, ctr, cd))) goto done;
+  s->deviation_measured = 1;
+  s->deviation_features = 0;
+  s->corners_moved = 0;
+  for (int64_t v = 0; v < nv; v++) {
+    if (!deg[v]) continue;
+    double hv = h[v] / deg[v], r = hv > 0 ? dist[v] / hv : 0;
+    const double *p = ref->xyz + 3 * v;
+    if (r > s->deviation_rel) {
+      s->deviation_rel = r;
+      memcpy(s->deviation_at, p, sizeof s->deviation_at);
+    }
+    if (dist[v] > s->deviation_abs) s->deviation_abs = dist[v];
+    if (f.vclass[v] == VM_FEATURE_SMOOTH) continue;
+    s->deviation_features++;
+    if (r > s->deviation_feature_rel || s->deviation_features == 1) {
+      if (r > s->deviation_feature_rel) s->deviation_feature_rel = r;
+      memcpy(s->deviation_feature_at, p, sizeof s->deviation_feature_at);
+    }
+    if (dist[v] > s->deviation_feature_abs) s->deviation_feature_abs = dist[v];
+  }
+  for (int64_t e = 0; e < m->ne; e++) {
+    double r = clen[e] > 0 ? cd[e] / clen[e] : 0;
+    if (r > s->deviation_rel) {
+      s->deviation_rel = r;
+      memcpy(s->deviation_at, ctr + 3 * e, sizeof s->deviation_at);
+    }
+    if (cd[e] > s->deviation_abs) s->deviation_abs = cd[e];
+  }
+  /* corners and cone points: still vertices, bit for bit */
+  {
+    double *pts = vm_alloc_array(ctx, 3 * (size_t)(f.ncorner + 1), sizeof *pts);
+    int64_t n = 0, first = -1;
+    if (!pts) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    for (int64_t v = 0; v < nv && n < f.ncorner; v++)
+      if (f.vclass[v] == VM_FEATURE_CORNER)
+        memcpy(pts + 3 * n++, ref->xyz + 3 * v, 3 * sizeof *pts);
+    int64_t lost = lost_points(ctx, m, pts, n, &first);
+    vm_free(ctx, pts);
+    if (lost < 0)
+      st = (int)lost;
+    else
+      s->corners_moved = lost;
+  }
+done:
+  vm_surface_projector_destroy(&pm);
+  vm_surface_projector_destroy(&pr);
+  vm_surface_features_free(ctx, &f);
+  vm_free(ctx, h);
+  vm_free(ctx, deg);
+  vm_free(ctx, dist);
+  vm_free(ctx, ctr);
+  vm_free(ctx, cd);
+  vm_free(ctx, clen);
+  return st;
+}
+
 /* The remeshing step: with size INPUT the input's own vertices, slivers
  * removed by flips and collapses; with size UNIFORM CGAL's isotropic
  * remeshing first, then the same. Features, and cone points as corners,
@@ -313,7 +426,11 @@ static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
   vm_surface_features fin;
   memset(&fin, 0, sizeof fin);
   vm_surface_projector *proj = NULL;
-  int st = vm_surface_detect_features(ref, o->adapt.feature_angle, o->adapt.corner_angle, &fin);
+  /* the input's corners and cone points stay fixed wherever they are
+   * vertices (vm_surface_projector_assign), also where the sliver removal
+   * left one smooth on m */
+  int st = vm_surface_detect_features_cones(ref, o->adapt.feature_angle, o->adapt.corner_angle,
+                                            o->adapt.cone_angle, &fin, NULL);
   if (!st) st = vm_surface_projector_create(ctx, ref, &fin, &proj);
   if (st >= 0) st = vm_surface_adapt(m, proj, &o->adapt, &s->adapt);
   vm_surface_projector_destroy(&proj);
@@ -653,6 +770,17 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
     }
     double at[3] = {0, 0, 0};
     int64_t k = b ? b : count_opposing(ctx, m, ref, at);
+    if (k >= 0) {
+      int d = deviation(ctx, m, ref, &o, s);
+      if (d < 0) k = d;
+    }
+    if (k >= 0)
+      vm_log(ctx, VM_LOG_INFO,
+             "deviation from the input: at most %.3g of the local edge length (%.3g, near (%g, "
+             "%g, %g)); at its %lld feature vertices %.3g (%.3g); corners and tips moved: %lld",
+             s->deviation_rel, s->deviation_abs, s->deviation_at[0], s->deviation_at[1],
+             s->deviation_at[2], (long long)s->deviation_features, s->deviation_feature_rel,
+             s->deviation_feature_abs, (long long)s->corners_moved);
     vm_mesh_destroy(&tmp);
     if (k < 0)
       st = (int)k;

@@ -142,18 +142,33 @@ static void test_cube(vm_ctx *ctx) {
   vm_cleanup_report r2;
   CHECK(vm_surface_cleanup(m, &f, &o, &r2) == 0 && r2.flips == 0 && r2.collapses == 0,
         "second run: %lld flips, %lld collapses", (long long)r2.flips, (long long)r2.collapses);
+  /* the whole stage on the needled cube: every face is flat, so the
+   * result lies on the input wherever it is measured (deviation 0), and
+   * the corners stay */
+  {
+    vm_mesh *w = NULL;
+    vm_mesh_clone(in, &w);
+    vm_surface_opts so = vm_surface_opts_default();
+    so.adapt.max_iter = 20;
+    vm_surface_summary sum;
+    CHECK(vm_surface_run(ctx, w, &so, &sum) == 0, "cube through the stage: %s", vm_ctx_error(ctx));
+    CHECK(sum.deviation_measured && sum.deviation_rel <= 1e-12 &&
+              sum.deviation_feature_rel <= 1e-12 && sum.corners_moved == 0 &&
+              sum.deviation_features == 12 * (N - 1) + 8,
+          "cube: deviation %g (features %g at %lld vertices), corners moved %lld",
+          sum.deviation_rel, sum.deviation_feature_rel, (long long)sum.deviation_features,
+          (long long)sum.corners_moved);
+    vm_mesh_destroy(&w);
+  }
   vm_surface_features_free(ctx, &f);
   vm_mesh_destroy(&in);
   vm_mesh_destroy(&m);
 }
 
-static void test_sphere(vm_ctx *ctx) {
-  vm_mesh *m = NULL;
-  double c[3] = {0, 0, 0};
-  vm_mesh_create(ctx, &m);
-  CHECK(vm_gen_icosphere(m, c, 1.0, 4, 0, NULL) == 0, "icosphere");
-  /* needles: every 17th vertex 95 % of the way to its first neighbour,
-   * back on the sphere */
+/* Needles on the unit icosphere m: every 37th triangle's first vertex 95 %
+ * of the way to its second, back on the sphere (bench/surface_shapes.py's
+ * slivers). Returns how many were pulled. */
+static int64_t pull_needles(vm_mesh *m) {
   int64_t pulled = 0;
   for (int64_t e = 0; e < m->ne; e += 37) {
     const int32_t *t = m->conn + 3 * e;
@@ -163,6 +178,15 @@ static void test_sphere(vm_ctx *ctx) {
     for (int r = 0; r < 3; r++) p[r] /= l;
     pulled++;
   }
+  return pulled;
+}
+
+static void test_sphere(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  double c[3] = {0, 0, 0};
+  vm_mesh_create(ctx, &m);
+  CHECK(vm_gen_icosphere(m, c, 1.0, 4, 0, NULL) == 0, "icosphere");
+  int64_t pulled = pull_needles(m);
   vm_mesh *in = NULL;
   vm_mesh_clone(m, &in);
   vm_surface_features f;
@@ -185,7 +209,66 @@ static void test_sphere(vm_ctx *ctx) {
   CHECK(vm_surface_hausdorff(in, m, 0.01, &ab, &ba) == 0, "hausdorff");
   CHECK(ab <= 2 * tol && ba <= 2 * tol, "moved %g / %g, tolerance %g", ab, ba, tol);
   vm_surface_features_free(ctx, &f);
+  /* the whole stage: the needles' sharp corners in the input stay where
+   * they are, also those the sliver removal left on a smooth patch (the
+   * adaptation used to slide them away: 2 of 4 on the level-3 sphere, 0.5
+   * of the local edge) */
+  for (int level = 3; level <= 4; level++) {
+    vm_mesh *w = NULL;
+    vm_mesh_create(ctx, &w);
+    vm_gen_icosphere(w, c, 1.0, level, 0, NULL);
+    pull_needles(w);
+    vm_surface_opts so = vm_surface_opts_default();
+    so.adapt.max_iter = 40;
+    vm_surface_summary sum;
+    CHECK(vm_surface_run(ctx, w, &so, &sum) == 0, "needled sphere through the stage: %s",
+          vm_ctx_error(ctx));
+    vm_mesh_destroy(&w);
+    fprintf(stderr,
+            "needled sphere (level %d) through the stage: %lld feature vertices, deviation %.3g "
+            "there, %.3g anywhere; corners moved %lld\n",
+            level, (long long)sum.deviation_features, sum.deviation_feature_rel, sum.deviation_rel,
+            (long long)sum.corners_moved);
+    CHECK(sum.deviation_measured && sum.deviation_features > 0 && sum.corners_moved == 0 &&
+              sum.deviation_feature_rel < 0.01,
+          "needled sphere (level %d): %lld corners moved, deviation at features %g", level,
+          (long long)sum.corners_moved, sum.deviation_feature_rel);
+  }
   vm_mesh_destroy(&in);
+  vm_mesh_destroy(&m);
+
+  /* the deviation the stage reports, where it has a known size: the unit
+   * sphere (level 4, edges of about h = 0.08) remeshed uniformly to edges
+   * of L = 0.4 has triangles whose centroids lie about L^2 / (6 R) inside
+   * it: L / 6 of their own edge, and (L^2 / 6) / h of the input's edge at
+   * the input's vertices there */
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, c, 1.0, 4, 0, NULL);
+  double h = 0;
+  for (int64_t e = 0; e < m->ne; e++)
+    for (int k = 0; k < 3; k++) {
+      const double *a = m->xyz + 3 * (int64_t)m->conn[3 * e + k],
+                   *b = m->xyz + 3 * (int64_t)m->conn[3 * e + (k + 1) % 3];
+      h += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                (a[2] - b[2]) * (a[2] - b[2])) /
+           (3.0 * (double)m->ne);
+    }
+  vm_surface_opts so = vm_surface_opts_default();
+  so.step = VM_SURFACE_REMESH;
+  so.size = VM_SURFACE_SIZE_UNIFORM;
+  so.remesh_opts.target_edge_length = 0.4;
+  vm_surface_summary sum;
+  CHECK(vm_surface_run(ctx, m, &so, &sum) == 0, "uniform remeshing: %s", vm_ctx_error(ctx));
+  double sag = 0.4 * 0.4 / 6;
+  fprintf(stderr,
+          "sphere at L = 0.4: deviation %.4f (%.4f of the local edge), L^2 / 6 = %.4f, over h = "
+          "%.4f: %.4f\n",
+          sum.deviation_abs, sum.deviation_rel, sag, h, sag / h);
+  CHECK(sum.deviation_measured && sum.deviation_abs >= 0.7 * sag &&
+            sum.deviation_abs <= 1.5 * sag && sum.deviation_rel >= 0.7 * sag / h &&
+            sum.deviation_rel <= 1.5 * sag / h && sum.deviation_features == 0,
+        "sphere at L = 0.4: deviation %g (%g of the local edge), expected about %g (%g)",
+        sum.deviation_abs, sum.deviation_rel, sag, sag / h);
   vm_mesh_destroy(&m);
 }
 
@@ -300,8 +383,14 @@ static void test_cones(vm_ctx *ctx) {
     double mn = vm_surface_min_angle(w);
     CHECK(mn >= sum.min_angle_input, "size %d: smallest angle %.3f -> %.3f", size,
           sum.min_angle_input, mn);
-    fprintf(stderr, "spindle size %d: %lld -> %lld vertices, smallest angle %.2f -> %.2f\n", size,
-            (long long)sum.nv_before_remesh, (long long)w->nv, sum.min_angle_input, mn);
+    fprintf(stderr,
+            "spindle size %d: %lld -> %lld vertices, smallest angle %.2f -> %.2f; deviation "
+            "%.3g, at %lld feature vertices %.3g\n",
+            size, (long long)sum.nv_before_remesh, (long long)w->nv, sum.min_angle_input, mn,
+            sum.deviation_rel, (long long)sum.deviation_features, sum.deviation_feature_rel);
+    CHECK(sum.deviation_measured && sum.corners_moved == 0 && sum.deviation_feature_rel <= 0.15,
+          "size %d: %lld corners or tips moved, deviation at features %g of the local edge", size,
+          (long long)sum.corners_moved, sum.deviation_feature_rel);
     vm_mesh_destroy(&w);
   }
   vm_mesh_destroy(&m);

@@ -19,6 +19,8 @@ check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
 rc=$?
 check '[ $rc -eq 0 ] && grep -q "\"size\": \"input\"" "$dir/sp.json" && grep -q "\"cones\": 2," "$dir/sp.json"' \
   "spindle: exit 0, input size, two cone points (got $rc: $(cat "$dir/sp.err"))"
+check 'grep -q "\"feature_vertices\": [1-9][0-9]*, \"corners_moved\": 0}" "$dir/sp.json"' \
+  "spindle: the local deviation is measured at its feature vertices, no corner or tip moved"
 below_in=$(sed -n 's/.*"below_in": \([0-9]*\).*/\1/p' "$dir/sp.json")
 below=$(sed -n 's/.*"below": \([0-9]*\).*/\1/p' "$dir/sp.json")
 check '[ -n "$below" ] && [ "$below" -lt "$below_in" ]' "spindle: fewer slivers ($below_in -> $below)"

@@ -348,27 +348,35 @@ extern "C" int vm_surface_projector_assign(vm_surface_projector *p, const vm_mes
   vm_ctx *ctx = p->ctx;
   VM_CXX_BEGIN
   const double tol2 = tol * tol;
+  // the reference corners by x, for a window search around each vertex
+  std::vector<Point> corner(p->corner);
+  std::sort(corner.begin(), corner.end(),
+            [](const Point &a, const Point &b) { return a.x() < b.x(); });
+  auto at_corner = [&](const Point &q) {
+    auto it = std::lower_bound(corner.begin(), corner.end(), q.x() - tol,
+                               [](const Point &a, double x) { return a.x() < x; });
+    for (; it != corner.end() && it->x() <= q.x() + tol; ++it)
+      if (CGAL::squared_distance(*it, q) <= tol2) return true;
+    return false;
+  };
   for (int64_t v = 0; v < m->nv; v++) {
     int c = f->vclass[v];
-    if (c == VM_FEATURE_SMOOTH) {
-      vsurf[v] = 0;
-      continue;
-    }
     if (c == VM_FEATURE_CORNER) {
       vsurf[v] = -1;
       continue;
     }
-    vsurf[v] = 0;
-    if (!p->segtree) continue;
     Point q(m->xyz[3 * v], m->xyz[3 * v + 1], m->xyz[3 * v + 2]);
+    vsurf[v] = 0;
+    // a reference corner stays where it is, whatever the vertex is on m
+    // (the sliver removal can leave a corner of the input smooth)
+    if (at_corner(q)) {
+      vsurf[v] = -1;
+      continue;
+    }
+    if (c == VM_FEATURE_SMOOTH || !p->segtree) continue;
     auto cp = p->segtree->closest_point_and_primitive(q);
     if (CGAL::squared_distance(cp.first, q) > tol2) continue;
     vsurf[v] = p->seg_line[static_cast<std::size_t>(cp.second - p->seg.begin())];
-    for (const Point &k : p->corner)
-      if (CGAL::squared_distance(k, q) <= tol2) {
-        vsurf[v] = -1;
-        break;
-      }
   }
   return VM_OK;
   VM_CXX_END(ctx, "projector")

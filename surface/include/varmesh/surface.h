@@ -102,6 +102,22 @@ typedef struct vm_surface_summary {
                                min(the smallest angle before it, 20 degrees) */
   int64_t angle_restored;   /* vertices put back where it did */
   double fold_at[3];        /* a point of the first pair found */
+  /* How far the result lies from the (repaired) input, locally: at every
+   * input vertex its distance to the result over its local size h (the
+   * mean length of its input edges), and at every result triangle's
+   * centroid its distance to the input over the triangle's mean edge
+   * length. Measured when the surface moved (remeshing, sliver removal or
+   * adaptation); deviation_measured 0 otherwise. */
+  int deviation_measured;
+  double deviation_rel;         /* the largest relative distance, anywhere */
+  double deviation_abs;         /* the largest distance, anywhere */
+  double deviation_at[3];       /* where deviation_rel was found */
+  double deviation_feature_rel; /* the largest over the input's feature vertices (corners,
+                                   cone points, feature lines: o->adapt's angles) */
+  double deviation_feature_abs;
+  double deviation_feature_at[3];
+  int64_t deviation_features; /* feature vertices measured */
+  int64_t corners_moved;      /* input corners and cone points not kept bit for bit */
 } vm_surface_summary;
 
 /* Run opts->step on the surface m (dim 3, triangles and/or quads) in

@@ -33,7 +33,7 @@ int32_t vm_surface_projector_nlines(const vm_surface_projector *p);
 
 /* The surface each vertex of a mesh m (with features f, lying on or near
  * the reference) slides on: vsurf[v] (m->nv values) = -1 for CORNER
- * vertices of f and for LINE vertices within `tol` of a reference corner
+ * vertices of f and for any vertex within `tol` of a reference corner
  * (they stay fixed); k >= 1 for a LINE vertex within `tol` of reference
  * line k (the nearest); 0 for SMOOTH vertices and for LINE vertices with
  * no reference feature within `tol` (they slide on the surface). */
