@@ -182,7 +182,7 @@ static void test_bc(vm_ctx *ctx) {
      * one per slip vertex elsewhere (but the corner, which the step left
      * where it was) */
     counting cnt = {ops, 0};
-    vm_surface_ops cops = {count_project, &cnt, NULL};
+    vm_surface_ops cops = {count_project, &cnt, NULL, 0};
     vm_bc *cb = NULL;
     CHECK(vm_bc_create(ctx, m, &cops, &cb) == VM_OK && vm_bc_refresh(cb, x) == VM_OK, "bc");
     CHECK(vm_bc_step(cb, x, dz, 0.5, xa) == VM_OK, "step");

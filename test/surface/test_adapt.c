@@ -254,6 +254,30 @@ static void test_hinted_projection(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The projections of the slip vertices run on several threads: the same
+ * result, bit for bit, with 1 and 2 threads (each vertex keeps its own
+ * hint, and a failed projection does not stop the others), on vm-gen wing
+ * (2,880 vertices: more than the 1,024 a parallel pass needs). */
+static void test_threads_same(vm_ctx *ctx) {
+  vm_mesh *m[2] = {NULL, NULL};
+  for (int k = 0; k < 2; k++) {
+    vm_mesh_create(ctx, &m[k]);
+    CHECK(vm_gen_wing(m[k], 160, 8, 0.12, 25) == 0, "wing");
+    vm_ctx_set_threads(ctx, k + 1);
+    vm_adapt_opts o = vm_adapt_opts_default();
+    o.max_iter = 30;
+    vm_adapt_result r;
+    CHECK(vm_surface_adapt(m[k], NULL, &o, &r) == 0 && r.iterations > 0, "adapt, %d thread(s): %s",
+          k + 1, vm_ctx_error(ctx));
+  }
+  vm_ctx_set_threads(ctx, 0);
+  CHECK(m[0]->nv == m[1]->nv &&
+            memcmp(m[0]->xyz, m[1]->xyz, 3 * (size_t)m[0]->nv * sizeof(double)) == 0,
+        "1 and 2 threads give different vertices");
+  vm_mesh_destroy(&m[0]);
+  vm_mesh_destroy(&m[1]);
+}
+
 static void test_open_cylinder(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_mesh_create(ctx, &m);
@@ -391,6 +415,7 @@ int main(void) {
   test_lens(ctx);
   test_line_projection(ctx);
   test_hinted_projection(ctx);
+  test_threads_same(ctx);
   test_open_cylinder(ctx);
   test_bad(ctx);
   test_alloc_failures(ctx);

@@ -67,7 +67,7 @@ static int slip_project_hinted(void *user, int surf_id, const double p[3], int64
 }
 
 vm_surface_ops vm_volume_slip_ops(vm_volume_slip *s) {
-  vm_surface_ops ops = {slip_project, s, slip_project_hinted};
+  vm_surface_ops ops = {slip_project, s, slip_project_hinted, 1};
   return ops;
 }
 

@@ -164,7 +164,7 @@ static int analytic_project(void *user, int surf_id, const double p[3], double o
 }
 
 vm_surface_ops vm_analytic_surfaces_ops(vm_analytic_surfaces *s) {
-  vm_surface_ops ops = {analytic_project, s, NULL};
+  vm_surface_ops ops = {analytic_project, s, NULL, 1};
   return ops;
 }
 
@@ -323,54 +323,6 @@ static int surf_project(vm_bc *bc, int64_t s, const double p[3], double q[3], do
   return bc->surf.project(bc->surf.user, bc->surf_id[s], p, q, nrm);
 }
 
-/* Project slip vertex s from point p; write the point to out (may be NULL)
- * and its basis. */
-static int project_slip(vm_bc *bc, int64_t s, const double p[3], double *out) {
-  double q[3], nrm[9];
-  int nn = surf_project(bc, s, p, q, nrm);
-  if (nn < 0)
-    return vm_error(bc->ctx, nn, "projection of vertex %lld onto surface %d failed",
-                    (long long)bc->slip_v[s], bc->surf_id[s]);
-  if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2]))
-    return vm_error(bc->ctx, VM_ERR_NUMERIC, "projection of vertex %lld is not finite",
-                    (long long)bc->slip_v[s]);
-  if (bc->dim == 2) q[2] = p[2];
-  if (out) memcpy(out, q, sizeof q);
-  bc->rank[s] = (int8_t)cone_basis(bc->dim, nrm, nn > 3 ? 3 : nn, bc->Q + 9 * s);
-  return VM_OK;
-}
-
-int vm_bc_project(vm_bc *bc, double *x) {
-  for (int64_t s = 0; s < bc->nslip; s++) {
-    double *p = x + 3 * bc->slip_v[s];
-    double q[3];
-    int st = project_slip(bc, s, p, q);
-    if (st) return st;
-    memcpy(p, q, sizeof q);
-  }
-  return VM_OK;
-}
-
-int vm_bc_refresh(vm_bc *bc, const double *x) {
-  /* the later trial first: an accepted point is usually the last one tried */
-  int order[2] = {1 - bc->trial_next, bc->trial_next};
-  for (int64_t s = 0; s < bc->nslip; s++) {
-    const double *p = x + 3 * bc->slip_v[s];
-    int known = 0;
-    for (int i = 0; i < 2 && !known; i++) {
-      int k = order[i];
-      if (!bc->trial_valid[k] || memcmp(p, bc->trial_x[k] + 3 * s, 3 * sizeof *p) != 0) continue;
-      memcpy(bc->Q + 9 * s, bc->trial_Q[k] + 9 * s, 9 * sizeof *bc->Q);
-      bc->rank[s] = bc->trial_rank[k][s];
-      known = 1;
-    }
-    if (known) continue;
-    int st = project_slip(bc, s, p, NULL);
-    if (st) return st;
-  }
-  return VM_OK;
-}
-
 /* r = Q Q^T r for slip vertex s. */
 static void apply_slip(const vm_bc *bc, int64_t s, double r[3]) {
   const double *Q = bc->Q + 9 * s;
@@ -380,6 +332,110 @@ static void apply_slip(const vm_bc *bc, int64_t s, double r[3]) {
     for (int k = 0; k < 3; k++) out[k] += t * Q[3 * j + k];
   }
   memcpy(r, out, sizeof out);
+}
+
+/* Project slip vertex s from p: the point to q (in 2D with p's z), its
+ * basis to Q and *rank. Returns VM_OK or the failure's status, reporting
+ * nothing (the callers may run in parallel). */
+static int slip_point(vm_bc *bc, int64_t s, const double p[3], double q[3], double Q[9],
+                      int8_t *rank) {
+  double nrm[9];
+  int nn = surf_project(bc, s, p, q, nrm);
+  if (nn < 0) return nn;
+  if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2])) return VM_ERR_NUMERIC;
+  if (bc->dim == 2) q[2] = p[2];
+  *rank = (int8_t)cone_basis(bc->dim, nrm, nn > 3 ? 3 : nn, Q);
+  return VM_OK;
+}
+
+enum { SLIP_PROJECT, SLIP_REFRESH, SLIP_STEP };
+
+/* One slip vertex of vm_bc_project / _refresh / _step (the mode). */
+static int slip_vertex(vm_bc *bc, int mode, int64_t s, double *x, const double *dz, double tau,
+                       double *xout) {
+  const int64_t v = bc->slip_v[s];
+  double *pv = x + 3 * v, q[3];
+  if (mode == SLIP_PROJECT) {
+    int st = slip_point(bc, s, pv, q, bc->Q + 9 * s, bc->rank + s);
+    if (!st) memcpy(pv, q, sizeof q);
+    return st;
+  }
+  if (mode == SLIP_REFRESH) {
+    /* the later trial first: an accepted point is usually the last one tried */
+    for (int i = 0; i < 2; i++) {
+      int k = i ? bc->trial_next : 1 - bc->trial_next;
+      if (!bc->trial_valid[k] || memcmp(pv, bc->trial_x[k] + 3 * s, sizeof q) != 0) continue;
+      memcpy(bc->Q + 9 * s, bc->trial_Q[k] + 9 * s, 9 * sizeof *bc->Q);
+      bc->rank[s] = bc->trial_rank[k][s];
+      return VM_OK;
+    }
+    return slip_point(bc, s, pv, q, bc->Q + 9 * s, bc->rank + s);
+  }
+  const int t = bc->trial_next;
+  double d[3] = {dz[3 * v], dz[3 * v + 1], dz[3 * v + 2]}, p[3];
+  apply_slip(bc, s, d);
+  for (int k = 0; k < 3; k++) p[k] = pv[k] + tau * d[k];
+  int st = slip_point(bc, s, p, q, bc->trial_Q[t] + 9 * s, bc->trial_rank[t] + s);
+  if (st) return st;
+  if (bc->dim == 2) q[2] = pv[2];
+  memcpy(xout + 3 * v, q, sizeof q);
+  memcpy(bc->trial_x[t] + 3 * s, q, sizeof q);
+  return VM_OK;
+}
+
+/* Every slip vertex in the mode, on several threads where the surfaces
+ * allow it (vm_surface_ops.reentrant). Every vertex is done even after a
+ * failure, so that the hints, and with them the results, do not depend on
+ * the number of threads; the status is the first failing vertex's, in
+ * vertex order. */
+static int slip_all(vm_bc *bc, int mode, double *x, const double *dz, double tau, double *xout,
+                    int64_t *failed) {
+  const int64_t ns = bc->nslip;
+  int nt = bc->surf.reentrant ? vm_nthreads(bc->ctx) : 1;
+  int64_t bad = ns;
+  const int par = nt > 1 && ns >= 1024;
+  // clang-format off
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 64) reduction(min: bad) if (par)
+  // clang-format on
+  for (int64_t s = 0; s < ns; s++)
+    if (slip_vertex(bc, mode, s, x, dz, tau, xout) != VM_OK && s < bad) bad = s;
+  *failed = bad < ns ? bad : -1;
+  if (bad == ns) return VM_OK;
+  /* the status again, on this thread (the surface's answer for that
+   * point does not depend on the others) */
+  const int64_t v = bc->slip_v[bad];
+  double q[3], Q[9], p[3];
+  int8_t r;
+  memcpy(p, x + 3 * v, sizeof p);
+  if (mode == SLIP_STEP) {
+    double d[3] = {dz[3 * v], dz[3 * v + 1], dz[3 * v + 2]};
+    apply_slip(bc, bad, d);
+    for (int k = 0; k < 3; k++) p[k] += tau * d[k];
+  }
+  int st = slip_point(bc, bad, p, q, Q, &r);
+  return st ? st : VM_ERR_NUMERIC;
+}
+
+/* The error of a failed projection of vm_bc_project / _refresh. */
+static int slip_error(vm_bc *bc, int st, int64_t s) {
+  if (st == VM_ERR_NUMERIC)
+    return vm_error(bc->ctx, st, "projection of vertex %lld is not finite",
+                    (long long)bc->slip_v[s]);
+  return vm_error(bc->ctx, st, "projection of vertex %lld onto surface %d failed",
+                  (long long)bc->slip_v[s], bc->surf_id[s]);
+}
+
+int vm_bc_project(vm_bc *bc, double *x) {
+  int64_t s;
+  int st = slip_all(bc, SLIP_PROJECT, x, NULL, 0, NULL, &s);
+  return st ? slip_error(bc, st, s) : VM_OK;
+}
+
+int vm_bc_refresh(vm_bc *bc, const double *x) {
+  int64_t s;
+  /* x is only read in this mode */
+  int st = slip_all(bc, SLIP_REFRESH, (double *)x, NULL, 0, NULL, &s);
+  return st ? slip_error(bc, st, s) : VM_OK;
 }
 
 int vm_bc_step(vm_bc *bc, const double *x, const double *dz, double tau, double *xout) {
@@ -395,20 +451,10 @@ int vm_bc_step(vm_bc *bc, const double *x, const double *dz, double tau, double 
   if (bc->nslip == 0) return VM_OK;
   const int t = bc->trial_next;
   bc->trial_valid[t] = 0;
-  for (int64_t s = 0; s < bc->nslip; s++) {
-    int64_t v = bc->slip_v[s];
-    double d[3] = {dz[3 * v], dz[3 * v + 1], dz[3 * v + 2]};
-    apply_slip(bc, s, d);
-    double p[3], q[3], nrm[9];
-    for (int k = 0; k < 3; k++) p[k] = x[3 * v + k] + tau * d[k];
-    int nn = surf_project(bc, s, p, q, nrm);
-    if (nn < 0) return nn;
-    if (!isfinite(q[0]) || !isfinite(q[1]) || !isfinite(q[2])) return VM_ERR_NUMERIC;
-    if (dim == 2) q[2] = x[3 * v + 2];
-    memcpy(xout + 3 * v, q, sizeof q);
-    memcpy(bc->trial_x[t] + 3 * s, q, sizeof q);
-    bc->trial_rank[t][s] = (int8_t)cone_basis(dim, nrm, nn > 3 ? 3 : nn, bc->trial_Q[t] + 9 * s);
-  }
+  int64_t s;
+  /* x is only read in this mode */
+  int st = slip_all(bc, SLIP_STEP, (double *)x, dz, tau, xout, &s);
+  if (st) return st;
   bc->trial_valid[t] = 1;
   bc->trial_next = 1 - t;
   return VM_OK;

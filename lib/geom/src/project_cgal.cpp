@@ -334,6 +334,7 @@ extern "C" vm_surface_ops vm_surface_projector_ops(vm_surface_projector *p) {
   ops.project = project_cb;
   ops.user = p;
   ops.project_hinted = project_hinted_cb;
+  ops.reentrant = 1; // const queries of the trees (CGAL builds them under a lock)
   return ops;
 }
 

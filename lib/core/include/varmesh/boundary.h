@@ -22,7 +22,8 @@ extern "C" {
  * 0 if nothing constrains the point; negative (a VM_ERR_ status) if the
  * projection failed (unknown id, point at a sphere's centre, ...). A
  * surface with one normal per point just writes normals[0..2] and
- * returns 1. Called from one thread at a time. */
+ * returns 1. Called from one thread at a time unless `reentrant` says
+ * otherwise. */
 typedef struct vm_surface_ops {
   int (*project)(void *user, int surf_id, const double p[3], double out[3], double normals[9]);
   void *user;
@@ -34,6 +35,9 @@ typedef struct vm_surface_ops {
    * little costs a local search instead of a global one. */
   int (*project_hinted)(void *user, int surf_id, const double p[3], int64_t *hint, double out[3],
                         double normals[9]);
+  /* Nonzero: project() and project_hinted() may run on several threads at
+   * once, for different points and hints (0, the default: one at a time). */
+  int reentrant;
 } vm_surface_ops;
 
 /* Analytic surfaces by id, for tests and generated volume meshes. */
