@@ -65,7 +65,9 @@ static const vm_opt opts[] = {
      "remeshing in 'all' (auto: if the smallest angle is below --sliver-angle)", .choices = tri},
     {"--size", NULL, VM_OPT_CHOICE, A(size), NULL,
      "what the remeshing keeps: input (default: the input's vertices and grading, slivers "
-     "removed by edge flips and collapses); graded (isotropic remeshing to the input's own "
+     "removed by edge flips and collapses; where needles under --needle-angle are left, "
+     "curvature instead; named, always the input's vertices); graded (isotropic remeshing to the "
+     "input's own "
      "local edge lengths, grown by at most 25 % per edge length); curvature (isotropic "
      "remeshing to sizes from the curvature, about the input's number of triangles); uniform "
      "(isotropic remeshing to one edge length, CGAL; the default with --target-edge-length). "
@@ -81,6 +83,10 @@ static const vm_opt opts[] = {
      .lo = 1e-6, .hi = 360},
     {"--sliver-angle", NULL, VM_OPT_DOUBLE, A(so.sliver_angle), "DEG", "(default 15)", .lo = 1e-6,
      .hi = 180},
+    {"--needle-angle", NULL, VM_OPT_DOUBLE, A(so.needle_angle), "DEG",
+     "without --size: triangles under this angle left after the sliver removal make the "
+     "stage remesh by the curvature (default 1; 0: never)",
+     .lo = 0, .hi = 60},
     {"--target-edge-length", NULL, VM_OPT_CALL, 0, "L",
      "uniform remeshing edge length (default: the mean edge length)", .fn = opt_edge_length},
     {"--remesh-iter", NULL, VM_OPT_INT, A(so.remesh_opts.iterations), "N",
@@ -181,17 +187,17 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     vm_json_double(stdout, rr->volume);
     printf("}");
   }
-  printf(", \"size\": \"%s\", \"remeshed\": %s",
-         a->so.size == VM_SURFACE_SIZE_UNIFORM     ? "uniform"
-         : a->so.size == VM_SURFACE_SIZE_GRADED    ? "graded"
-         : a->so.size == VM_SURFACE_SIZE_CURVATURE ? "curvature"
-                                                   : "input",
-         s->remeshed ? "true" : "false");
-  if (s->remeshed && a->so.size == VM_SURFACE_SIZE_UNIFORM) {
+  printf(", \"size\": \"%s\", \"needles\": %lld, \"remeshed\": %s",
+         s->size_used == VM_SURFACE_SIZE_UNIFORM     ? "uniform"
+         : s->size_used == VM_SURFACE_SIZE_GRADED    ? "graded"
+         : s->size_used == VM_SURFACE_SIZE_CURVATURE ? "curvature"
+                                                     : "input",
+         (long long)s->needles_in, s->remeshed ? "true" : "false");
+  if (s->remeshed && s->size_used == VM_SURFACE_SIZE_UNIFORM) {
     printf(", \"target_edge_length\": ");
     vm_json_double(stdout, s->target_edge_length);
   }
-  if (s->remeshed && a->so.size != VM_SURFACE_SIZE_UNIFORM) {
+  if (s->remeshed && s->size_used != VM_SURFACE_SIZE_UNIFORM) {
     const vm_graded_report *g = &s->graded;
     printf(", \"graded\": {\"vertices_in\": %lld, \"vertices\": %lld, \"faces_in\": %lld, "
            "\"faces\": %lld, \"splits\": %lld, \"collapses\": %lld, \"flips\": %lld, "
@@ -310,9 +316,11 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        (long long)rr->stitched, rr->border_edges ? "open" : "closed",
                        (long long)rr->components, (long long)rr->self_intersections);
   if (st >= 0 && s->remeshed)
-    st = vm_report_row(*report, "remeshed", "uniform, target edge length %g, %lld -> %lld vertices",
-                       s->target_edge_length, (long long)s->nv_before_remesh,
-                       (long long)s->cleanup.nv_in);
+    st = vm_report_row(
+        *report, "remeshed", "%s%s%.3g, %lld -> %lld vertices", sizes[s->size_used],
+        s->size_used == VM_SURFACE_SIZE_UNIFORM ? ", target edge length " : ", sizes from ",
+        s->size_used == VM_SURFACE_SIZE_UNIFORM ? s->target_edge_length : s->graded.h_min,
+        (long long)s->nv_before_remesh, (long long)s->cleanup.nv_in);
   if (st >= 0 && s->cleaned)
     st =
         vm_report_row(*report, "slivers removed",
@@ -381,6 +389,8 @@ int main(int argc, char **argv) {
   a.so.size = a.size >= 0           ? a.size
               : a.edge_length_given ? VM_SURFACE_SIZE_UNIFORM
                                     : VM_SURFACE_SIZE_INPUT;
+  /* --size input named: the input's own vertices, needles or not */
+  if (a.size == VM_SURFACE_SIZE_INPUT) a.so.needle_angle = 0;
   if (a.so.size != VM_SURFACE_SIZE_UNIFORM && a.edge_length_given)
     vm_log(cli.ctx, VM_LOG_WARN,
            "--target-edge-length has no effect with --size %s (it is the uniform size)",

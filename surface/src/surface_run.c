@@ -18,6 +18,7 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.repair = VM_SURFACE_AUTO;
   o.remesh = VM_SURFACE_AUTO;
   o.sliver_angle = 15;
+  o.needle_angle = 1;
   o.size = VM_SURFACE_SIZE_INPUT;
   o.cleanup_opts = vm_cleanup_opts_default();
   o.graded_opts = vm_graded_opts_default();
@@ -274,8 +275,8 @@ done:
  * remeshing first, then the same. Features, and cone points as corners,
  * are kept. *input keeps m as it was (the reference surface of the
  * adaptation). */
-static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
-                  vm_mesh **input) {
+static int remesh_as(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
+                     vm_mesh **input) {
   vm_remesh_opts mo = o->remesh_opts;
   int uniform = o->size == VM_SURFACE_SIZE_UNIFORM;
   int graded = o->size == VM_SURFACE_SIZE_GRADED || o->size == VM_SURFACE_SIZE_CURVATURE;
@@ -387,6 +388,61 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
   vm_free(ctx, keep);
   vm_mesh_destroy(&m2);
   return st < 0 ? st : VM_OK;
+}
+
+/* Triangles of m under deg degrees. */
+static int64_t needles(const vm_mesh *m, double deg) {
+  int64_t n = 0;
+  for (int64_t e = 0; e < m->ne; e++) n += vm_surface_elem_min_angle(m, m->xyz, e) < deg;
+  return n;
+}
+
+/* The remeshing step (remesh_as); with size INPUT, where the sliver
+ * removal leaves needles (o->needle_angle), the repaired input remeshed to
+ * sizes from the curvature instead, to about the number of triangles the
+ * sliver removal left (o->triangles if given):
+ * isotropic triangles where the input had rows of needles, which a prism
+ * layer cannot stand on (a CAD-graded wing's trailing edge). */
+static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
+                  vm_mesh **input) {
+  int st = remesh_as(ctx, m, o, s, input);
+  s->size_used = s->remeshed ? o->size : VM_SURFACE_SIZE_INPUT;
+  if (st < 0 || o->size != VM_SURFACE_SIZE_INPUT || !(o->needle_angle > 0) || !all_triangles(m))
+    return st;
+  s->needles_in = needles(m, o->needle_angle);
+  if (s->needles_in == 0) return st;
+  for (int k = 0; k < m->nfield; k++)
+    if (m->fields[k].location == VM_FIELD_ELEMENT) {
+      vm_log(ctx, VM_LOG_WARN,
+             "remesh: %lld triangles under %g deg are left; not remeshed, the surface has "
+             "element fields ('%s') a remeshing would drop",
+             (long long)s->needles_in, o->needle_angle, m->fields[k].name);
+      return st;
+    }
+  vm_log(ctx, VM_LOG_INFO,
+         "remesh: %lld triangles under %g deg are left after the sliver removal (needles it "
+         "cannot remove without moving the surface); remeshing the input to sizes from its "
+         "curvature instead (--size input keeps its own vertices)",
+         (long long)s->needles_in, o->needle_angle);
+  /* as many triangles as the sliver removal left, unless a count was asked
+   * for: no more than the input's own vertices would have given */
+  int64_t count = o->triangles > 0 ? o->triangles : m->ne;
+  vm_mesh *again = NULL, *in2 = NULL;
+  st = vm_mesh_clone(*input, &again);
+  if (st) return st;
+  vm_mesh tmp = *m;
+  *m = *again;
+  *again = tmp;
+  vm_mesh_destroy(&again);
+  vm_surface_opts o2 = *o;
+  o2.size = VM_SURFACE_SIZE_CURVATURE;
+  o2.triangles = count;
+  s->cleaned = 0;
+  memset(&s->cleanup, 0, sizeof s->cleanup);
+  st = remesh_as(ctx, m, &o2, s, &in2);
+  vm_mesh_destroy(&in2);
+  s->size_used = s->remeshed ? VM_SURFACE_SIZE_CURVATURE : VM_SURFACE_SIZE_INPUT;
+  return st;
 }
 
 /* The curvature fields alone, filtered as the adaptation would. */
@@ -727,11 +783,11 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
    * aircraft it folded the wing), so step all stops at the curvature
    * fields; the step adapt runs it on any surface */
   int sized = o.step == VM_SURFACE_ALL && s->remeshed &&
-              (o.size == VM_SURFACE_SIZE_GRADED || o.size == VM_SURFACE_SIZE_CURVATURE);
+              (s->size_used == VM_SURFACE_SIZE_GRADED || s->size_used == VM_SURFACE_SIZE_CURVATURE);
   if (sized)
     vm_log(ctx, VM_LOG_INFO,
            "adapt: not run: the %s remeshing sized the triangles (the step adapt runs it)",
-           o.size == VM_SURFACE_SIZE_GRADED ? "graded" : "curvature-sized");
+           s->size_used == VM_SURFACE_SIZE_GRADED ? "graded" : "curvature-sized");
   if (st >= 0 && (o.step == VM_SURFACE_CURVATURE || sized)) st = curvature(ctx, m, &o, s);
   if (st >= 0 && !sized && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT))
     st = adapt(ctx, m, input ? input : m, &o, s);

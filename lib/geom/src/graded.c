@@ -36,8 +36,9 @@ typedef struct {
   double *x, *h;
   uint8_t *vclass, *vdead, *vborder, *fdead;
   int32_t *vline;
-  vm_tm t; /* faces, a face of each vertex, directed edges */
-  hmap fe; /* feature edge (undirected) -> its line */
+  int64_t *hint; /* per vertex: the projector's hint (vm_surface_ops.project_hinted) */
+  vm_tm t;       /* faces, a face of each vertex, directed edges */
+  hmap fe;       /* feature edge (undirected) -> its line */
   vm_surface_ops ops;
   vm_surface_projector *proj;
   double *href; /* the size field at the input's vertices */
@@ -74,6 +75,7 @@ static int reserve(gmesh *g) {
         grow_arr(g->ctx, (void **)&g->vclass, c, 1) || grow_arr(g->ctx, (void **)&g->vdead, c, 1) ||
         grow_arr(g->ctx, (void **)&g->vborder, c, 1) ||
         grow_arr(g->ctx, (void **)&g->vline, c, sizeof *g->vline) ||
+        grow_arr(g->ctx, (void **)&g->hint, c, sizeof *g->hint) ||
         grow_arr(g->ctx, (void **)&g->t.vface, c, sizeof *g->t.vface))
       return VM_ERR_NOMEM;
     g->capv = (int64_t)c;
@@ -102,10 +104,11 @@ static double hab(const gmesh *g, int32_t a, int32_t b) { return 0.5 * (g->h[a] 
  * point, unless it is farther than `reach` or (on the surface) its normal
  * disagrees with n (then p itself is taken: a thin part's other side is
  * never the answer). Returns 1 if projected. */
-static int project(const gmesh *g, int line, const double p[3], const double n[3], double reach,
-                   double out[3]) {
+static int project(const gmesh *g, int64_t *hint, int line, const double p[3], const double n[3],
+                   double reach, double out[3]) {
   double q[3], nr[9];
-  int k = g->ops.project(g->ops.user, line, p, q, nr);
+  int k = line == 0 ? g->ops.project_hinted(g->ops.user, 0, p, hint, q, nr)
+                    : g->ops.project(g->ops.user, line, p, q, nr);
   if (k < 0 || !(vm_dist3(p, q) <= reach) || (line == 0 && n && cos_between(nr, n) < 0.5)) {
     memcpy(out, p, 3 * sizeof *out);
     return 0;
@@ -122,15 +125,18 @@ static int faces_input(const gmesh *g, int32_t a, int32_t b, int32_t c) {
   tri_normal(g->x, a, b, c, n);
   for (int r = 0; r < 3; r++)
     ctr[r] = (g->x[3 * (int64_t)a + r] + g->x[3 * (int64_t)b + r] + g->x[3 * (int64_t)c + r]) / 3;
-  if (g->ops.project(g->ops.user, 0, ctr, q, nr) < 0) return 0;
+  int64_t hint = g->hint[a]; /* a's, not updated: near the centroid */
+  if (g->ops.project_hinted(g->ops.user, 0, ctr, &hint, q, nr) < 0) return 0;
   return cos_between(n, nr) >= 0.5;
 }
 
 /* The size field where p lies: interpolated on the input at p's closest
  * point (fallback if that fails). */
-static double size_at(const gmesh *g, const double p[3], double fallback) {
+static double size_at(const gmesh *g, int32_t v, const double p[3], double fallback) {
   double h;
-  if (!g->href || vm_surface_projector_interpolate(g->proj, g->href, 1, p, &h) || !(h > 0))
+  int64_t hint = g->hint[v];
+  if (!g->href || vm_surface_projector_interpolate_hinted(g->proj, g->href, p, &hint, &h) ||
+      !(h > 0))
     return fallback;
   return h;
 }
@@ -164,8 +170,9 @@ static int split(gmesh *g, int32_t a, int32_t b) {
     for (int r = 0; r < 3; r++) n[r] += n1[r];
   }
   double l = len(g, a, b);
-  project(g, line, mid, line ? NULL : n, 0.25 * l, p);
   int32_t m = (int32_t)g->nv++;
+  g->hint[m] = g->hint[a];
+  project(g, g->hint + m, line, mid, line ? NULL : n, 0.25 * l, p);
   memcpy(g->x + 3 * (int64_t)m, p, 3 * sizeof *p);
   /* the projected point must not turn the new triangles over */
   double q[3];
@@ -182,7 +189,7 @@ static int split(gmesh *g, int32_t a, int32_t b) {
   ok = ok && faces_input(g, a, m, c) && faces_input(g, m, b, c) &&
        (d < 0 || (faces_input(g, b, m, d) && faces_input(g, m, a, d)));
   if (!ok) memcpy(g->x + 3 * (int64_t)m, mid, sizeof mid);
-  g->h[m] = size_at(g, g->x + 3 * (int64_t)m, hab(g, a, b));
+  g->h[m] = size_at(g, m, g->x + 3 * (int64_t)m, hab(g, a, b));
   g->vclass[m] = line ? VM_FEATURE_LINE : VM_FEATURE_SMOOTH;
   g->vline[m] = line;
   g->vdead[m] = 0;
@@ -464,7 +471,7 @@ static int smooth_vertex(gmesh *g, int32_t v) {
     for (int r = 0; r < 3; r++) target[r] = old[r] + dlt[r] - dn * nv[r];
   }
   double q[3];
-  if (!project(g, line, target, line ? NULL : nv, 0.5 * elen, q)) return 0;
+  if (!project(g, g->hint + v, line, target, line ? NULL : nv, 0.5 * elen, q)) return 0;
   double before = ring_min(g, F, n);
   memcpy(p, q, sizeof q);
   int ok = 1;
@@ -480,7 +487,7 @@ static int smooth_vertex(gmesh *g, int32_t v) {
     memcpy(p, old, sizeof old);
     return 0;
   }
-  g->h[v] = size_at(g, q, g->h[v]);
+  g->h[v] = size_at(g, v, q, g->h[v]);
   g->moves++;
   return 1;
 }
@@ -693,6 +700,7 @@ static void gfree(gmesh *g) {
   vm_free(ctx, g->vborder);
   vm_free(ctx, g->fdead);
   vm_free(ctx, g->vline);
+  vm_free(ctx, g->hint);
   vm_free(ctx, g->t.vface);
   vm_free(ctx, g->t.tri);
   hm_free(ctx, &g->t.he);
@@ -740,11 +748,12 @@ int vm_surface_remesh_graded(vm_mesh *m, vm_surface_features *f, const vm_graded
   g.vdead = vm_calloc(ctx, (size_t)g.capv, 1);
   g.vborder = vm_calloc(ctx, (size_t)g.capv, 1);
   g.vline = vm_calloc(ctx, (size_t)g.capv, sizeof *g.vline);
+  g.hint = vm_alloc_array(ctx, (size_t)g.capv, sizeof *g.hint);
   g.t.vface = vm_alloc_array(ctx, (size_t)g.capv, sizeof *g.t.vface);
   g.t.tri = vm_alloc_array(ctx, (size_t)g.capf, 3 * sizeof *g.t.tri);
   g.fdead = vm_calloc(ctx, (size_t)g.capf, 1);
-  if (!g.x || !g.h || !g.vclass || !g.vdead || !g.vborder || !g.vline || !g.t.vface || !g.t.tri ||
-      !g.fdead || hm_init(ctx, &g.t.he, 3 * (size_t)g.nf) ||
+  if (!g.x || !g.h || !g.vclass || !g.vdead || !g.vborder || !g.vline || !g.hint || !g.t.vface ||
+      !g.t.tri || !g.fdead || hm_init(ctx, &g.t.he, 3 * (size_t)g.nf) ||
       hm_init(ctx, &g.fe, (size_t)f->nedge + 1)) {
     st = VM_ERR_NOMEM;
     goto done;
@@ -754,6 +763,7 @@ int vm_surface_remesh_graded(vm_mesh *m, vm_surface_features *f, const vm_graded
   for (int64_t v = 0; v < g.nv; v++) {
     g.vline[v] = f->vclass[v] == VM_FEATURE_LINE ? f->vline[v] : 0;
     g.t.vface[v] = -1;
+    g.hint[v] = -1;
   }
   int64_t dup = 0;
   for (int64_t e = 0; e < g.nf; e++) {

@@ -137,6 +137,23 @@ static int project_hinted_cb(void *user, int surf_id, const double p[3], int64_t
                              double out[3], double normals[9]);
 }
 
+// The closest point of the surface to q and its triangle: from the hint
+// triangle's closest point if *hint is one (and then *hint updated).
+static TriTree::Point_and_primitive_id closest(const vm_surface_projector *p, const Point &q,
+                                               int64_t *hint) {
+  const std::vector<Triangle> &tri = p->surf.tri;
+  TriTree::Point_and_primitive_id cp;
+  if (hint && *hint >= 0 && static_cast<std::size_t>(*hint) < tri.size()) {
+    TriIt h = tri.begin() + static_cast<std::ptrdiff_t>(*hint);
+    Point c = K::Construct_projected_point_3()(*h, q);
+    cp = p->surf.tree->closest_point_and_primitive(q, TriTree::Point_and_primitive_id(c, h));
+  } else {
+    cp = p->surf.tree->closest_point_and_primitive(q);
+  }
+  if (hint) *hint = static_cast<int64_t>(cp.second - tri.begin());
+  return cp;
+}
+
 // The projection; on the surface (id 0) *hint, if not NULL, is the index
 // of a triangle: the closest point on it bounds the tree's search from the
 // start (instead of the nearest of the tree's sample points, which on long
@@ -148,17 +165,8 @@ static int project_impl(vm_surface_projector *pr, int surf_id, const double p[3]
   Point q(p[0], p[1], p[2]);
   if (surf_id == 0) {
     if (pr->surf.tri.empty()) return VM_ERR_ARG;
-    const std::vector<Triangle> &tri = pr->surf.tri;
-    TriTree::Point_and_primitive_id cp;
-    if (hint && *hint >= 0 && static_cast<std::size_t>(*hint) < tri.size()) {
-      TriIt h = tri.begin() + static_cast<std::ptrdiff_t>(*hint);
-      Point c = K::Construct_projected_point_3()(*h, q);
-      cp = pr->surf.tree->closest_point_and_primitive(q, TriTree::Point_and_primitive_id(c, h));
-    } else {
-      cp = pr->surf.tree->closest_point_and_primitive(q);
-    }
-    std::size_t fi = static_cast<std::size_t>(cp.second - tri.begin());
-    if (hint) *hint = static_cast<int64_t>(fi);
+    auto cp = closest(pr, q, hint);
+    std::size_t fi = static_cast<std::size_t>(cp.second - pr->surf.tri.begin());
     out[0] = cp.first.x();
     out[1] = cp.first.y();
     out[2] = cp.first.z();
@@ -396,27 +404,42 @@ extern "C" int vm_surface_projector_distance(vm_surface_projector *p, int64_t n,
   VM_CXX_END(ctx, "projector")
 }
 
+// The field at the closest point of q, linear in its triangle.
+static double interpolate_at(const vm_surface_projector *p, const double *field, const Point &q,
+                             int64_t *hint) {
+  auto cp = closest(p, q, hint);
+  std::size_t fi = static_cast<std::size_t>(cp.second - p->surf.tri.begin());
+  const Triangle &t = p->surf.tri[fi];
+  // barycentric coordinates of the closest point (it lies in the triangle)
+  Vector e1 = t[1] - t[0], e2 = t[2] - t[0], r = cp.first - t[0];
+  double d11 = e1 * e1, d12 = e1 * e2, d22 = e2 * e2, r1 = r * e1, r2 = r * e2;
+  double det = d11 * d22 - d12 * d12;
+  double b1 = det > 0 ? (d22 * r1 - d12 * r2) / det : 0.0;
+  double b2 = det > 0 ? (d11 * r2 - d12 * r1) / det : 0.0;
+  b1 = std::min(1.0, std::max(0.0, b1));
+  b2 = std::min(1.0 - b1, std::max(0.0, b2));
+  const int32_t *v = &p->surf.tv[3 * fi];
+  return (1 - b1 - b2) * field[v[0]] + b1 * field[v[1]] + b2 * field[v[2]];
+}
+
 extern "C" int vm_surface_projector_interpolate(vm_surface_projector *p, const double *field,
                                                 int64_t n, const double *pts, double *out) {
   if (!p || !field || n < 0 || (n > 0 && (!pts || !out))) return VM_ERR_ARG;
   vm_ctx *ctx = p->ctx;
   VM_CXX_BEGIN
-  for (int64_t i = 0; i < n; i++) {
-    Point q(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
-    auto cp = p->surf.tree->closest_point_and_primitive(q);
-    std::size_t fi = static_cast<std::size_t>(cp.second - p->surf.tri.begin());
-    const Triangle &t = p->surf.tri[fi];
-    // barycentric coordinates of the closest point (it lies in the triangle)
-    Vector e1 = t[1] - t[0], e2 = t[2] - t[0], r = cp.first - t[0];
-    double d11 = e1 * e1, d12 = e1 * e2, d22 = e2 * e2, r1 = r * e1, r2 = r * e2;
-    double det = d11 * d22 - d12 * d12;
-    double b1 = det > 0 ? (d22 * r1 - d12 * r2) / det : 0.0;
-    double b2 = det > 0 ? (d11 * r2 - d12 * r1) / det : 0.0;
-    b1 = std::min(1.0, std::max(0.0, b1));
-    b2 = std::min(1.0 - b1, std::max(0.0, b2));
-    const int32_t *v = &p->surf.tv[3 * fi];
-    out[i] = (1 - b1 - b2) * field[v[0]] + b1 * field[v[1]] + b2 * field[v[2]];
-  }
+  for (int64_t i = 0; i < n; i++)
+    out[i] = interpolate_at(p, field, Point(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]), NULL);
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+extern "C" int vm_surface_projector_interpolate_hinted(vm_surface_projector *p, const double *field,
+                                                       const double pt[3], int64_t *hint,
+                                                       double *out) {
+  if (!p || !field || !pt || !hint || !out) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  VM_CXX_BEGIN
+  *out = interpolate_at(p, field, Point(pt[0], pt[1], pt[2]), hint);
   return VM_OK;
   VM_CXX_END(ctx, "projector")
 }

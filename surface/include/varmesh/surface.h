@@ -45,6 +45,12 @@ typedef struct vm_surface_opts {
   int remesh;                   /* in step all; AUTO (default): if the smallest angle
                                    is below sliver_angle */
   double sliver_angle;          /* degrees (default 15) */
+  double needle_angle;          /* size INPUT: where triangles under this many degrees
+                                   are left after the sliver removal (needles it cannot
+                                   remove without moving the surface: the stretched rows
+                                   of a CAD-graded wing), the input is remeshed to sizes
+                                   from the curvature instead, about its number of
+                                   triangles (a message says so; default 1, 0: never) */
   int size;                     /* what "remesh" means: VM_SURFACE_SIZE_INPUT (default):
                                    the input's own vertices and grading, slivers removed
                                    by flips and collapses (vm_surface_cleanup);
@@ -77,6 +83,10 @@ typedef struct vm_surface_summary {
   int64_t nv_before_remesh;
   int cleaned;                 /* the sliver cleanup ran */
   vm_cleanup_report cleanup;   /* its figures */
+  int size_used;               /* the size the surface was remeshed to in the end
+                                  (VM_SURFACE_SIZE_INPUT: the input's own vertices) */
+  int64_t needles_in;          /* size INPUT: triangles under needle_angle after the sliver
+                                  removal, which made the stage remesh by the curvature */
   vm_graded_report graded;     /* the graded remeshing's figures (size GRADED) */
   int64_t cones;               /* cone points kept as corners */
   int64_t remesh_lost_corners; /* corners and tips the uniform remeshing lost, */

@@ -49,6 +49,11 @@ int vm_surface_projector_distance(vm_surface_projector *p, int64_t n, const doub
  * interpolation in the triangle the closest point lies in. */
 int vm_surface_projector_interpolate(vm_surface_projector *p, const double *field, int64_t n,
                                      const double *pts, double *out);
+/* The same at one point, with a hint as vm_surface_ops.project_hinted's
+ * (-1: none; updated): the triangle found last for a nearby point makes
+ * the search local. */
+int vm_surface_projector_interpolate_hinted(vm_surface_projector *p, const double *field,
+                                            const double pt[3], int64_t *hint, double *out);
 
 #ifdef __cplusplus
 }
