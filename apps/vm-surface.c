@@ -396,7 +396,7 @@ int main(int argc, char **argv) {
            "--target-edge-length has no effect with --size %s (it is the uniform size)",
            sizes[a.so.size]);
   if (a.triangles > 0) {
-    if (a.so.size == VM_SURFACE_SIZE_INPUT)
+    if (a.so.size == VM_SURFACE_SIZE_INPUT && a.so.needle_angle <= 0)
       vm_log(cli.ctx, VM_LOG_WARN, "--triangles has no effect with --size input");
     a.so.triangles = a.triangles;
   }
