@@ -158,13 +158,13 @@ static int64_t count_opposing(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref,
 }
 
 /* The local deviation of m from ref (the summary's deviation_* figures,
- * cone points as corners by o's angles). */
-static int deviation(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, const vm_surface_opts *o,
-                     vm_surface_summary *s) {
+ * cone points as corners by o's angles); pr: a projector onto ref. */
+static int deviation(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, vm_surface_projector *pr,
+                     const vm_surface_opts *o, vm_surface_summary *s) {
   const int64_t nv = ref->nv;
   vm_surface_features f;
   memset(&f, 0, sizeof f);
-  vm_surface_projector *pm = NULL, *pr = NULL;
+  vm_surface_projector *pm = NULL;
   double *h = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *h);
   int32_t *deg = vm_calloc(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *deg);
   double *dist = vm_alloc_array(ctx, (size_t)(nv > 0 ? nv : 1), sizeof *dist);
@@ -177,7 +177,6 @@ static int deviation(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, const vm
     st = vm_surface_detect_features_cones(ref, o->adapt.feature_angle, o->adapt.corner_angle,
                                           o->adapt.cone_angle, &f, &ncones);
   if (!st) st = vm_surface_projector_create(ctx, m, NULL, &pm);
-  if (!st) st = vm_surface_projector_create(ctx, ref, NULL, &pr);
   if (st) goto done;
   /* the local size: each element edge counted from both of its elements
    * (every edge of a closed surface twice, so the mean is unchanged) */
@@ -259,7 +258,6 @@ static int deviation(vm_ctx *ctx, const vm_mesh *m, const vm_mesh *ref, const vm
   }
 done:
   vm_surface_projector_destroy(&pm);
-  vm_surface_projector_destroy(&pr);
   vm_surface_features_free(ctx, &f);
   vm_free(ctx, h);
   vm_free(ctx, deg);
@@ -824,12 +822,16 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
       if (!b) memcpy(tmp->xyz, x0, 3 * (size_t)m->nv * sizeof *x0);
       ref = tmp;
     }
+    /* one projector onto the input for both */
     double at[3] = {0, 0, 0};
-    int64_t k = b ? b : count_opposing(ctx, m, ref, at);
+    vm_surface_projector *pr = NULL;
+    if (!b) b = vm_surface_projector_create(ctx, ref, NULL, &pr);
+    int64_t k = b ? b : vm_surface_count_opposing(m, pr, at);
     if (k >= 0) {
-      int d = deviation(ctx, m, ref, &o, s);
+      int d = deviation(ctx, m, ref, pr, &o, s);
       if (d < 0) k = d;
     }
+    vm_surface_projector_destroy(&pr);
     if (k >= 0)
       vm_log(ctx, VM_LOG_INFO,
              "deviation from the input: at most %.3g of the local edge length (%.3g, near (%g, "
