@@ -1,6 +1,7 @@
 /* apps/vm-prism.c: the prism stage: a closed triangulated wall (a .vmsh
  * from vm-surface, or STL/OBJ/OFF/PLY directly) in, a thick, valid,
  * multi-layer prismatic mesh out (Section 6.2 of the paper). */
+#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -215,6 +216,7 @@ static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *
 
 typedef struct {
   const char *in, *out, *report;
+  const char *region; /* --region-thickness FIELD:ID=X,... */
   double T_abs, T_rel;
   double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
   int growth_given;                   /* --growth given (else solved for a first height) */
@@ -238,6 +240,105 @@ static int opt_thickness_rel(vm_cli *cli, const vm_opt *opt, const char *value, 
   if (vm_cli_double(cli, opt->name, value, 1e-300, 10, &a->T_rel)) return VM_EXIT_USAGE;
   a->T_abs = 0;
   return VM_EXIT_OK;
+}
+
+/* --region-thickness SPEC on the wall m: one thickness per element into
+ * *out (m->ne, vm_free'd by the caller), the unit `unit` (1: absolute, or
+ * the model's length `length`), T the thickness elsewhere; *tmax the
+ * largest. */
+static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, double unit,
+                            double length, double T, double **out, double *tmax) {
+  *out = NULL;
+  const char *colon = strrchr(spec, ':');
+  if (!colon || colon == spec || !colon[1])
+    return vm_cli_usage_error(cli, "--region-thickness '%s': expects FIELD:ID=X,...", spec);
+  char name[256];
+  size_t nl = (size_t)(colon - spec);
+  if (nl >= sizeof name)
+    return vm_cli_usage_error(cli, "--region-thickness: the field name is too long");
+  memcpy(name, spec, nl);
+  name[nl] = 0;
+  const vm_field *f = vm_mesh_find_field(m, name, VM_FIELD_ELEMENT);
+  if (!f || f->type != VM_FIELD_I32 || f->ncomp != 1)
+    return vm_cli_usage_error(cli,
+                              "--region-thickness: the wall has no int element field '%s' (one "
+                              "value per face)",
+                              name);
+  const int32_t *id = f->data;
+  double *et = vm_alloc_array(cli->ctx, (size_t)(m->ne ? m->ne : 1), sizeof *et);
+  if (!et) return vm_cli_usage_error(cli, "--region-thickness: out of memory");
+  for (int64_t e = 0; e < m->ne; e++) et[e] = T;
+  *tmax = T;
+  const char *s = colon + 1;
+  for (int item = 1;; item++) {
+    char *end;
+    errno = 0;
+    long long k = strtoll(s, &end, 10);
+    if (end == s || *end != '=' || errno || k < INT32_MIN || k > INT32_MAX) {
+      vm_free(cli->ctx, et);
+      return vm_cli_usage_error(cli, "--region-thickness: item %d ('%s'): expects ID=X", item, s);
+    }
+    s = end + 1;
+    double x = strtod(s, &end);
+    if (end == s || (*end && *end != ',') || !(x > 0) || !isfinite(x * unit)) {
+      vm_free(cli->ctx, et);
+      return vm_cli_usage_error(cli,
+                                "--region-thickness: item %d: '%.*s' is not a positive thickness",
+                                item, (int)strcspn(s, ","), s);
+    }
+    if (!(x * unit >= 1e-9 * length)) {
+      vm_free(cli->ctx, et);
+      return vm_cli_usage_error(cli,
+                                "--region-thickness: item %d: %g is below 1e-9 of the model's "
+                                "length %g (the layers would vanish in rounding)",
+                                item, x * unit, length);
+    }
+    int64_t hit = 0;
+    for (int64_t e = 0; e < m->ne; e++)
+      if (id[e] == (int32_t)k) {
+        et[e] = x * unit;
+        hit += m->etype[e] == VM_TRI || m->etype[e] == VM_QUAD;
+      }
+    if (!hit)
+      vm_log(cli->ctx, VM_LOG_WARN, "--region-thickness: no wall face has %s = %lld", name, k);
+    if (x * unit > *tmax) *tmax = x * unit;
+    if (!*end) break;
+    s = end + 1;
+  }
+  *out = et;
+  return VM_EXIT_OK;
+}
+
+/* The smallest angle (degrees) of triangle e of m. */
+static double tri_min_angle(const vm_mesh *m, int64_t e) {
+  const int32_t *c = m->conn + m->eoff[e];
+  double amin = 180;
+  for (int i = 0; i < 3; i++) {
+    const double *p = m->xyz + 3 * (int64_t)c[i], *q = m->xyz + 3 * (int64_t)c[(i + 1) % 3],
+                 *r = m->xyz + 3 * (int64_t)c[(i + 2) % 3];
+    double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    double v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    double x[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    double a = atan2(sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]),
+                     u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) *
+               180 / 3.14159265358979323846;
+    if (a < amin) amin = a;
+  }
+  return amin;
+}
+
+/* Triangles of the wall m under `deg` degrees (vm-surface's needles), the
+ * smallest angle of all in *amin. */
+static int64_t wall_needles(const vm_mesh *m, double deg, double *amin) {
+  int64_t n = 0;
+  *amin = 180;
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_TRI) continue;
+    double a = tri_min_angle(m, e);
+    n += a < deg;
+    if (a < *amin) *amin = a;
+  }
+  return n;
 }
 
 #define A(f) offsetof(args, f)
@@ -265,6 +366,14 @@ static const vm_opt opts[] = {
      "Reynolds number over the reference length, for --yplus (10 to 1e12)", .lo = 10, .hi = 1e12},
     {"--ref-length", NULL, VM_OPT_DOUBLE, A(ref_length), "L",
      "reference length of --reynolds (default the model's length)", .lo = 1e-300, .hi = 1e300},
+    {"--region-thickness", NULL, VM_OPT_STRING, A(region), "FIELD:ID=X,...",
+     "thickness per region of the wall: the int element field FIELD (vm-gen's 'component', "
+     "'gmsh:physical', ...) and, for some of its values ID, the thickness X in the unit of "
+     "-t or -T (a share of the model's length by default); other faces keep -t / -T. The "
+     "layer count is the same everywhere; thinner regions keep the first height and grow "
+     "more slowly, and thicker columns are shortened near a border so the outer surface "
+     "rises at most at a slope of 0.5",
+     .error = "expects FIELD:ID=X,..."},
     {"--springback-iter", NULL, VM_OPT_INT, A(o.springback_iter), "N",
      "implicit iterations of the springback (default 100; up to 3N while the line search keeps "
      "cutting the step or F still falls by more than 1 % per 10 iterations)",
@@ -364,17 +473,19 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
   int bad = r->inverted > 0 || npairs > 0;
   fprintf(stderr,
           "vm-prism: %s: %lld prisms in %d layers (first %g, growth %g), %.1f%% of columns at "
-          "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, min "
+          "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, prisms not "
+          "positive in every 3-tet split %lld, min "
           "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
           "above 5 deg), intersecting pairs %lld, max "
           "growth %.3f, OpenFOAM non-orthogonality max %.1f deg (%lld faces beyond 70), "
           "skewness max %.2f, room for T at %.1f%% of columns (%.1f%% of those at full "
           "thickness), fill of the allowed thickness %.3f, %.2f s%s\n",
           out, (long long)r->prisms, r->layers, r->first_height, r->growth, 100 * r->full_fraction,
-          r->thick_min, r->thick_mean, (long long)r->inverted, r->sj_min, r->normal_dev_max,
-          (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
-          r->growth_max, r->nonortho_max, (long long)r->nonortho_over70, r->skew_max,
-          100 * r->medial_room, 100 * r->medial_reach, r->medial_fill, r->time_total,
+          r->thick_min, r->thick_mean, (long long)r->inverted, (long long)r->split_negative,
+          r->sj_min, r->normal_dev_max, (long long)r->normal_dev_over5,
+          (long long)r->smooth_vertices, (long long)npairs, r->growth_max, r->nonortho_max,
+          (long long)r->nonortho_over70, r->skew_max, 100 * r->medial_room, 100 * r->medial_reach,
+          r->medial_fill, r->time_total,
           rc == VM_EXIT_CHECK ? "  -- NOT VALID"
           : (interrupted || timed_out) && bad
               ? (timed_out ? "  -- time limit reached, NOT VALID" : "  -- interrupted, NOT VALID")
@@ -384,7 +495,8 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
 }
 
 static void print_json(const char *in, const char *out, const vm_prism_report *rp, double L,
-                       int64_t npairs, int rc, int verified, int interrupted, int timed_out) {
+                       int64_t npairs, int64_t needles, int rc, int verified, int interrupted,
+                       int timed_out) {
   const vm_prism_report r = *rp;
   printf("{\"input\": ");
   vm_json_string(stdout, in);
@@ -404,15 +516,17 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.first_height);
   printf(", \"growth\": ");
   vm_json_double(stdout, r.growth);
-  printf(", \"reoriented\": %s", r.reoriented ? "true" : "false");
+  printf(", \"reoriented\": %s, \"needles\": %lld", r.reoriented ? "true" : "false",
+         (long long)needles);
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
   printf(", \"thickness_min\": ");
   vm_json_double(stdout, r.thick_min);
   printf(", \"thickness_mean\": ");
   vm_json_double(stdout, r.thick_mean);
-  printf(", \"inverted_corner_tets\": %lld, \"intersecting_pairs\": %lld, \"sj_min\": ",
-         (long long)r.inverted, (long long)npairs);
+  printf(", \"inverted_corner_tets\": %lld, \"split_negative\": %lld, \"intersecting_pairs\": "
+         "%lld, \"sj_min\": ",
+         (long long)r.inverted, (long long)r.split_negative, (long long)npairs);
   vm_json_double(stdout, r.sj_min);
   printf(", \"normal_dev_max_deg\": ");
   vm_json_double(stdout, r.normal_dev_max);
@@ -496,8 +610,11 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
     st2 = vm_report_row(report, "thickness / T: min, mean, max", "%.3f, %.3f, %.3f", r.thick_min,
                         r.thick_mean, r.thick_max);
   if (st2 >= 0)
-    st2 = vm_report_row(report, "inverted corner tets, intersecting pairs, min scaled Jacobian",
-                        "%lld, %lld, %.3g", (long long)r.inverted, (long long)npairs, r.sj_min);
+    st2 = vm_report_row(report,
+                        "inverted corner tets, prisms not positive in every 3-tet split, "
+                        "intersecting pairs, min scaled Jacobian",
+                        "%lld, %lld, %lld, %.3g", (long long)r.inverted,
+                        (long long)r.split_negative, (long long)npairs, r.sj_min);
   if (st2 >= 0)
     st2 = vm_report_row(report, "first layer off the wall normal (smooth vertices)",
                         "max %.2f deg, %lld of %lld above 5 deg", r.normal_dev_max,
@@ -553,6 +670,7 @@ int main(int argc, char **argv) {
             .o = vm_prism_opts_default(),
             .wo = vm_write_opts_default()};
   vm_mesh *m = NULL, *res = NULL;
+  double *elem_T = NULL; /* --region-thickness: one per wall element */
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
@@ -589,6 +707,15 @@ int main(int argc, char **argv) {
                             o->thickness, L);
     goto done;
   }
+  if (a.region) {
+    double tmax = 0;
+    if ((rc = region_thickness(&cli, a.region, m, a.T_abs > 0 ? 1 : L, L, o->thickness, &elem_T,
+                               &tmax)) != VM_EXIT_OK)
+      goto done;
+    /* the schedule is the thickest region's */
+    o->thickness = tmax;
+    o->elem_thickness = elem_T;
+  }
   if (a.yplus > 0 || a.reynolds > 0 || a.ref_length > 0) {
     if (!(a.yplus > 0) || !(a.reynolds > 0)) {
       rc = vm_cli_usage_error(&cli, "--yplus needs --reynolds (and --reynolds, --ref-length "
@@ -619,6 +746,16 @@ int main(int argc, char **argv) {
     goto done;
   }
   if ((rc = check_wall_intersections(&cli, a.in, m)) != VM_EXIT_OK) goto done;
+  /* needles: the columns over rows of them fall short (the springback's
+   * line search is held by their prisms); the surface stage removes them */
+  double needle_min = 180;
+  int64_t nneedle = wall_needles(m, 1.0, &needle_min);
+  if (nneedle > 0)
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
+           "of T (vm-gen wing at T = 20 %%: 3.7 %% of its columns reach T, 99.9 %% after "
+           "vm-surface); run vm-surface %s first",
+           a.in, (long long)nneedle, needle_min, a.in);
   /* the report is made (or refused) before the run */
   if (a.report) {
     char title[512];
@@ -666,6 +803,12 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INTERRUPTED;
   else if (r.inverted > 0 || npairs > 0)
     rc = VM_EXIT_CHECK;
+  if (st >= 0 && r.split_negative > 0)
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "%lld prisms are not positive in every 3-tet split (the split repair could not "
+           "untwist them; valid as prisms, but a solver that splits prisms into tets fails "
+           "there; vm-quality lists the count)",
+           (long long)r.split_negative);
   if (st >= 0 && r.medial_short > 0) {
     int64_t room = (int64_t)llround(r.medial_room * (double)r.wall_vertices);
     vm_log(cli.ctx, VM_LOG_WARN,
@@ -704,13 +847,15 @@ int main(int argc, char **argv) {
             r.inverted > 0 || npairs > 0 ? "NOT VALID" : "not verified", (long long)r.inverted,
             (long long)npairs);
   if (a.json)
-    print_json(a.in, a.out, &r, L, npairs, rc, verified, st == VM_ERR_INTERRUPTED, timed_out);
+    print_json(a.in, a.out, &r, L, npairs, nneedle, rc, verified, st == VM_ERR_INTERRUPTED,
+               timed_out);
   if (report) {
     int rrc =
         write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res, hist);
     if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
   }
 done:
+  vm_free(cli.ctx, elem_T);
   vm_report_destroy(&report);
   vm_report_history_destroy(&hist);
   vm_mesh_destroy(&res);

@@ -35,6 +35,9 @@ static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
     printf("OpenFOAM's checkMesh: %lld cells of volume <= 0, %lld face pyramids incorrectly "
            "oriented\n",
            (long long)q->foam_neg_volumes, (long long)q->foam_pyramid_errors);
+  if (q->type[VM_PRISM].count)
+    printf("prisms not positive in every 3-tet split: %lld of %lld\n",
+           (long long)q->prism_split_negative, (long long)q->type[VM_PRISM].count);
   if (!q->measured) return;
   printf("scaled Jacobian: min %.4f  p1 %.4f  p5 %.4f  p25 %.4f  median %.4f\n", q->all.sj_min,
          q->sj_p01, q->sj_p05, q->sj_p25, q->sj_p50);
@@ -93,6 +96,7 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q,
   if (q->top_dim == 3)
     printf(", \"foam\": {\"negative_volumes\": %lld, \"pyramid_errors\": %lld}",
            (long long)q->foam_neg_volumes, (long long)q->foam_pyramid_errors);
+  printf(", \"prism_split_negative\": %lld", (long long)q->prism_split_negative);
   printf(", \"sj_histogram\": [");
   for (int b = 0; b < VM_QUALITY_NBINS; b++)
     printf("%s%lld", b ? ", " : "", (long long)q->sj_hist[b]);

@@ -7,8 +7,10 @@
 # march) and validity (inverted corner tets, intersecting pairs); then
 # Gmsh's boundary-layer extrusion of the same STL with the same layer
 # heights (bench/peer_gmsh_extrude.py, Debian's python3-gmsh): its CPU and
-# wall seconds, peak memory and prisms that are not positive; and the
-# ratio of CPU times.
+# wall seconds, peak memory and prisms that are not positive; both sides'
+# prisms not positive in every 3-tet split (a solver splitting prisms into
+# tets fails there: vm-prism's count, then Gmsh's, corner failures
+# included); and the ratio of CPU times.
 # usage: bench/bench_prism_peer.sh BUILD_DIR [SHARED_DATA_DIR] [--threads N]
 #        [--t "0.05 0.2"] [STL...]
 # (threads: vm-prism's --threads, default 1 so CPU and wall compare alike)
@@ -44,8 +46,8 @@ len() { # the model's length: the largest extent of its bounding box
 }
 peer_ok=0
 /usr/bin/python3 -c 'import gmsh, numpy' 2>/dev/null && peer_ok=1
-printf '| case | tri | T/L | prisms | vm-prism CPU s | wall s | MB | B/prism | thin / springback / cut / restore / march s | inverted, crossing | Gmsh CPU s | wall s | MB | not positive | CPU ratio |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n'
+printf '| case | tri | T/L | prisms | vm-prism CPU s | wall s | MB | B/prism | thin / springback / cut / restore / march s | inverted, crossing, split negative | Gmsh CPU s | wall s | MB | not positive | split negative | CPU ratio |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 for model in "${models[@]}"; do
   name=$(basename "$model" .stl)
   L=$(len "$model")
@@ -66,7 +68,8 @@ for model in "${models[@]}"; do
       awk '{printf "%.1f / %.1f / %.1f / %.1f / %.1f", $1, $2, $3, $4, $5}')
     inv=$(json "$c.json" inverted_corner_tets)
     cross=$(json "$c.json" intersecting_pairs)
-    peer="- | - | - | - | -"
+    split=$(json "$c.json" split_negative)
+    peer="- | - | - | - | - | -"
     if [ $peer_ok = 1 ]; then
       T=$(echo "$t * $L" | bc -l)
       p=$(/usr/bin/python3 "$here/peer_gmsh_extrude.py" "$model" "$T" 20 2>/dev/null | tail -1)
@@ -75,14 +78,15 @@ for model in "${models[@]}"; do
       pm=$(echo "$p" | sed -n 's/.*"peak_mib": \([0-9.]*\).*/\1/p')
       pb=$(echo "$p" | sed -n 's/.*"not_positive_prisms": \([0-9]*\).*/\1/p')
       pp=$(echo "$p" | sed -n 's/.*"prisms": \([0-9]*\).*/\1/p')
+      ps=$(echo "$p" | sed -n 's/.*"split_negative_prisms": \([0-9]*\).*/\1/p')
       if [ -n "$pc" ]; then
-        peer=$(printf '%s | %s | %.0f | %s of %s | %.0f' "$pc" "$pw" "$pm" "$pb" "$pp" \
+        peer=$(printf '%s | %s | %.0f | %s of %s | %s | %.0f' "$pc" "$pw" "$pm" "$pb" "$pp" "$ps" \
           "$(echo "$cpu / ($pc + 0.01)" | bc -l)")
       else
-        peer="Gmsh failed | | | |"
+        peer="Gmsh failed | | | | |"
       fi
     fi
-    printf '| %s | %s | %s | %s | %.1f | %.1f | %.0f | %.0f | %s | %s, %s | %s |\n' "$name" "$tri" "$t" "$np" \
-      "$cpu" "$e" "$(echo "$m / 1024" | bc -l)" "$(echo "$m * 1024 / $np" | bc -l)" "$ph" "$inv" "$cross" "$peer"
+    printf '| %s | %s | %s | %s | %.1f | %.1f | %.0f | %.0f | %s | %s, %s, %s | %s |\n' "$name" "$tri" "$t" "$np" \
+      "$cpu" "$e" "$(echo "$m / 1024" | bc -l)" "$(echo "$m * 1024 / $np" | bc -l)" "$ph" "$inv" "$cross" "$split" "$peer"
   done
 done

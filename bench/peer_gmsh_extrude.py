@@ -10,7 +10,9 @@ Prints one line of JSON: prisms, wall triangles, CPU seconds (user + sys of
 this process, Gmsh's work only: from the merge to the mesh), wall seconds,
 peak memory (MiB), and the prisms whose volume is not positive (signed volume
 of the prism's three corner tets at the wall triangle's corners, the same
-corner test vm-quality uses for M): Gmsh does not untangle.
+corner test vm-quality uses for M): Gmsh does not untangle; and the prisms
+not positive in every 3-tet split (a tet of two bottom and two top vertices
+off a side face with a non-positive volume, as vm_prism_split_check counts).
 
 usage: peer_gmsh_extrude.py WALL.stl T N [G]   (T absolute)"""
 import json
@@ -50,7 +52,7 @@ def main():
     X = np.zeros((int(tags.max()) + 1, 3))
     X[tags.astype(np.int64)] = coord.reshape(-1, 3)
     types, _, nodes = gmsh.model.mesh.getElements(3)
-    nprism, bad, ntri = 0, 0, 0
+    nprism, bad, ntri, split = 0, 0, 0, 0
     for t, nd in zip(types, nodes):
         if gmsh.model.mesh.getElementProperties(t)[3] != 6:
             continue
@@ -65,6 +67,15 @@ def main():
         V = np.array(vols)
         sign = np.sign(np.median(V[0]))
         bad += int(np.sum(np.any(V * sign <= 0, axis=0)))
+        # the tets of the 3-tet splits that are not corner tets, each
+        # ordered to be positive on the right prism (as vm_prism_split_check)
+        S = []
+        for a, b, c, d in ((0, 1, 5, 4), (0, 1, 5, 3), (1, 2, 3, 4), (1, 2, 3, 5), (0, 2, 3, 4),
+                           (0, 2, 5, 4)):
+            S.append(np.einsum("ij,ij->i", np.cross(P[:, b] - P[:, a], P[:, c] - P[:, a]),
+                               P[:, d] - P[:, a]))
+        S = np.array(S)
+        split += int(np.sum(np.any(np.concatenate([V, S]) * sign <= 0, axis=0)))
     types2, _, nodes2 = gmsh.model.mesh.getElements(2)
     for t, nd in zip(types2, nodes2):
         if gmsh.model.mesh.getElementProperties(t)[3] == 3:
@@ -74,7 +85,7 @@ def main():
     print(json.dumps({"peer": "gmsh %s extrudeBoundaryLayer" % gmsh.__version__,
                       "prisms": nprism, "triangles_2d": ntri, "cpu_s": round(c1 - c0, 2),
                       "wall_s": round(w1 - w0, 2), "peak_mib": round(peak, 1),
-                      "not_positive_prisms": bad}))
+                      "not_positive_prisms": bad, "split_negative_prisms": split}))
 
 
 if __name__ == "__main__":

@@ -1187,6 +1187,12 @@ int vm_prism_march(vm_prism *p) {
            "%lld -> %lld, largest non-orthogonality %.1f -> %.1f degrees",
            (long long)os.moves, os.sweeps, (long long)os.over70_before, (long long)os.over70_after,
            acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI);
+    if (os.split_before)
+      vm_log(ctx, VM_LOG_INFO,
+             "prism: split repair: %lld steps; prisms not positive in every 3-tet split %lld -> "
+             "%lld (the least scaled Jacobian %.3g kept), %.2f s",
+             (long long)os.split_moves, (long long)os.split_before, (long long)os.split_after,
+             os.split_sj, os.split_time);
   }
   ts[7] = omp_get_wtime();
   vm_log(ctx, VM_LOG_INFO,

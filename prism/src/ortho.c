@@ -21,7 +21,8 @@
  * before), no face around it becomes more skewed than k.skew_limit (or than
  * it was), its worst face gets no worse (or stays within
  * k.ortho_relief_active_deg), no more of its faces fail OpenFOAM's
- * face-tet decomposition and no more of its cells are concave, their
+ * face-tet decomposition and no more of its cells are concave or fail a
+ * 3-tet split (vm_prism_split_check), their
  * smallest interpolation weight stays above k.ortho_relief_wmin (or where
  * it was), the ratios of the column's successive heights stay within
  * [G / b, b G] (G the growth ratio, b k.ortho_relief_growth_band; or where
@@ -35,6 +36,7 @@
  * and thread count. */
 #include <math.h>
 #include <omp.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "state.h"
@@ -87,6 +89,9 @@ typedef struct facemap {
   uint8_t *o70;
   double *cw;
   uint8_t *mark; /* nt nl scratch: cells to update */
+  double qworst; /* the least scaled Jacobian of the stack when the split
+                    repair starts: the repair lowers no cell below it (the
+                    figure the report gives) */
 } facemap;
 
 /* The cells around level k of column v (layers k - 1 and k of v's
@@ -106,6 +111,7 @@ static void make_hood(const vm_prism *p, const int32_t *nbt, const facemap *fm, 
   h->n = 0;
   for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
     for (int j = k - 1; j <= k; j++) {
+      if (j < 0 || j >= p->nlev - 1) continue; /* the outer level: its one layer */
       h->t[h->n] = p->vt[m];
       h->j[h->n] = j;
       h->n++;
@@ -127,21 +133,37 @@ static void make_hood(const vm_prism *p, const int32_t *nbt, const facemap *fm, 
 
 /* What the relief weighs around the vertex. */
 typedef struct around {
-  double e;                  /* E: the penalty of the faces of the cells around */
-  double cmin;               /* the worst face's non-orthogonality cosine */
-  double skew;               /* the largest skewness of those faces (boundary faces too) */
-  double wmin;               /* their smallest interpolation weight */
-  int badtets;               /* those failing the face-tet decomposition */
-  int concave;               /* cells concave as checkMesh sees them */
-  double q[2 * PR_RING_MAX]; /* each cell's quality: the lesser of its scaled
-                               Jacobian and its quadrature quality (-1 if
-                               either is not positive) */
+  double e;                   /* E: the penalty of the faces of the cells around */
+  double cmin;                /* the worst face's non-orthogonality cosine */
+  double skew;                /* the largest skewness of those faces (boundary faces too) */
+  double wmin;                /* their smallest interpolation weight */
+  int badtets;                /* those failing the face-tet decomposition */
+  int splitbad;               /* cells not positive in every 3-tet split */
+  int n70;                    /* faces beyond 70 degrees (counted twice
+                                 between two cells around) */
+  int concave;                /* cells concave as checkMesh sees them */
+  double q[2 * PR_RING_MAX];  /* each cell's quality: the lesser of its scaled
+                                Jacobian and its quadrature quality (-1 if
+                                either is not positive) */
+  double sj[2 * PR_RING_MAX]; /* each cell's scaled Jacobian (corner tets) */
 } around;
+
+/* The split penalty of prism x: the sum over its tets of two bottom and
+ * two top vertices (pr_prism_split_bad) of max(0, m - q)^2, q their
+ * det / edge-length product, m = k.split_margin. */
+static double split_penalty(const vm_prism *p, const double *x) {
+  double q[6], e = 0;
+  pr_prism_split_q(x, q);
+  for (int j = 0; j < 6; j++)
+    if (q[j] < p->k.split_margin) e += (p->k.split_margin - q[j]) * (p->k.split_margin - q[j]);
+  return e;
+}
 
 /* The figures of hood h at the current coordinates: E alone (qfloor NULL,
  * for the gradient), or everything, stopping at the first cell below its
- * floor qfloor[c] (returns 0; else 1). */
-static int eval_around(const vm_prism *p, const hood *h, double c0, const double *qfloor,
+ * floor qfloor[c] (returns 0; else 1). With `split`, E is the split
+ * penalty of the cells (split_penalty) instead of the faces'. */
+static int eval_around(const vm_prism *p, const hood *h, double c0, const double *qfloor, int split,
                        around *a) {
   const int full = qfloor != NULL;
   double x[2 * PR_RING_MAX][18], cc[2 * PR_RING_MAX][3];
@@ -152,15 +174,21 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   a->wmin = 0.5;
   a->badtets = 0;
   a->concave = 0;
+  a->splitbad = 0;
+  a->n70 = 0;
+  const double c70 = cos(70 * PR_PI / 180);
   for (int c = 0; c < h->n; c++) {
     pr_prism_at(p, p->lev, h->t[c], h->j[c], x[c]);
     if (full) {
       int inv;
       double q = pr_prism_corner_quality(x[c], &inv), qn = pr_prism_quality(x[c]);
+      a->sj[c] = inv ? -1 : q;
       q = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
       a->q[c] = q;
       if (!(q >= qfloor[c])) return 0;
+      a->splitbad += pr_prism_split_bad(x[c], NULL) > 0;
     }
+    if (split) a->e += split_penalty(p, x[c]);
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
     if (full)
       a->concave +=
@@ -190,7 +218,8 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
         a->badtets += !pr_foam_face_tets_ok(y, n, fc[c][f], fs[c][f], cc[c], cn);
       }
       a->cmin = cs < a->cmin ? cs : a->cmin;
-      if (cs < c0) a->e += (c0 - cs) * (c0 - cs);
+      a->n70 += cs < c70;
+      if (cs < c0 && !split) a->e += (c0 - cs) * (c0 - cs);
     }
   return 1;
 }
@@ -279,11 +308,11 @@ static void refresh(const vm_prism *p, const int32_t *nbt, double cact, facemap 
   int64_t nt = p->nt, nw = p->nw;
   int nl = p->nlev - 1;
   memset(fm->mark, 0, (size_t)(nt * nl));
-  for (int k = 1; k < nl; k++)
+  for (int k = 1; k <= nl; k++)
     for (int64_t v = 0; v < nw; v++) {
       if (!moved[(size_t)k * nw + v]) continue;
       for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
-        for (int j = k - 1; j <= k; j++) fm->mark[p->vt[m] * nl + j] |= 1;
+        for (int j = k - 1; j <= k && j < nl; j++) fm->mark[p->vt[m] * nl + j] |= 1;
     }
   for (int64_t c = 0; c < nt * nl; c++) {
     if (!(fm->mark[c] & 1)) continue;
@@ -322,29 +351,42 @@ static void growth_around(const vm_prism *p, int64_t v, int k, double *lo, doubl
   }
 }
 
-/* One relief step at level k of column v; 1 if it moved. */
+/* One relief step at level k of column v; 1 if it moved. With `split`
+ * the step lowers the split penalty of the cells around instead of their
+ * faces' (split_repair), under the same guards. */
 static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit, int64_t v,
-                   int k, double c0, double cact) {
+                   int k, double c0, double cact, int split) {
   const pr_params *kp = &p->k;
   size_t lsz = (size_t)(3 * p->nw);
+  int nl = p->nlev - 1, top = k == nl; /* top: an outer vertex (the split repair) */
   double *xv = p->lev + k * lsz + 3 * v;
-  const double *below = p->lev + (k - 1) * lsz + 3 * v, *above = p->lev + (k + 1) * lsz + 3 * v;
+  const double *below = p->lev + (k - 1) * lsz + 3 * v,
+               *above = top ? NULL : p->lev + (k + 1) * lsz + 3 * v;
   int64_t deg = p->vt_off[v + 1] - p->vt_off[v];
   if (deg > PR_RING_MAX) return 0;
   hood h;
   around a0, a1;
   make_hood(p, nbt, fm, v, k, &h);
   /* each cell's floor: from its quality before the relief, so steps do
-   * not wear it down */
+   * not wear it down (the split repair may go further: a cell a split
+   * inverts fails a solver, a poorer one does not) */
   double qfloor[2 * PR_RING_MAX];
   for (int c = 0; c < h.n; c++) {
-    double q = kp->ortho_relief_qshare * qinit[h.t[c] * (p->nlev - 1) + h.j[c]];
+    double qi = qinit[h.t[c] * (p->nlev - 1) + h.j[c]];
+    double q =
+        split ? fmax(kp->split_qshare * qi, fmin(qi, fm->qworst)) : kp->ortho_relief_qshare * qi;
     qfloor[c] = q < kp->ortho_qmin ? q : kp->ortho_qmin;
   }
   /* an invalid neighbourhood is left to the verifier */
-  if (!eval_around(p, &h, c0, qfloor, &a0) || !(a0.e > 0)) return 0;
+  if (!eval_around(p, &h, c0, qfloor, split, &a0) || !(a0.e > 0)) return 0;
   double skew_max = a0.skew > kp->skew_limit ? a0.skew : kp->skew_limit;
-  double cfloor = a0.cmin < cact ? a0.cmin : cact;
+  /* the relief keeps the worst face within its active angle (or where it
+   * was); the split repair lets it go to checkMesh's 70 degrees, or a
+   * fraction of a degree past where it was beyond, with no more faces
+   * beyond 70 (a cell a split inverts fails a solver outright; a face at
+   * 68 degrees does not) */
+  const double c70 = cos(70 * PR_PI / 180);
+  double cfloor = split ? fmin(a0.cmin - kp->split_cos_slack, c70) : fmin(a0.cmin, cact);
   double wfloor = a0.wmin < kp->ortho_relief_wmin ? a0.wmin : kp->ortho_relief_wmin;
   /* nor may the column's heights leave the growth band (or their ratios
    * before, where outside it) */
@@ -357,12 +399,31 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     double t0 = pr_tilt_deg(p->wall + 3 * v, xv, p->vnrm + 3 * v);
     tilt_max = t0 > kp->tilt_limit_deg ? t0 : kp->tilt_limit_deg;
   }
-  /* the column's course here: moves go across it */
-  double tc[3], x0[3], g[3];
-  for (int r = 0; r < 3; r++) tc[r] = above[r] - below[r];
-  double lt = vm_norm3(tc);
-  if (!(lt > 0)) return 0;
-  for (int r = 0; r < 3; r++) tc[r] /= lt;
+  /* the column's course here: moves go across it (an outer vertex: in
+   * the outer surface's tangent plane, its area-weighted normal) */
+  double tc[3], x0[3], g[3], lt;
+  if (top) {
+    tc[0] = tc[1] = tc[2] = 0;
+    for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++) {
+      const int32_t *c = p->tri + 3 * (int64_t)p->vt[m];
+      const double *a = p->lev + k * lsz + 3 * (int64_t)c[0],
+                   *b = p->lev + k * lsz + 3 * (int64_t)c[1],
+                   *d = p->lev + k * lsz + 3 * (int64_t)c[2];
+      double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+             e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]}, n[3];
+      vm_cross3(e1, e2, n);
+      for (int r = 0; r < 3; r++) tc[r] += n[r];
+    }
+    double ln = vm_norm3(tc);
+    if (!(ln > 0)) return 0;
+    for (int r = 0; r < 3; r++) tc[r] /= ln;
+    lt = vm_dist3(xv, below);
+  } else {
+    for (int r = 0; r < 3; r++) tc[r] = above[r] - below[r];
+    lt = vm_norm3(tc);
+    if (!(lt > 0)) return 0;
+    for (int r = 0; r < 3; r++) tc[r] /= lt;
+  }
   /* a length scale: the shorter of the wall's edges here and the column's
    * span over the two cells */
   double hloc = p->elen[v] < lt ? p->elen[v] : lt;
@@ -370,7 +431,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
   memcpy(x0, xv, sizeof x0);
   for (int r = 0; r < 3; r++) {
     xv[r] = x0[r] + fd;
-    eval_around(p, &h, c0, NULL, &a1);
+    eval_around(p, &h, c0, NULL, split, &a1);
     g[r] = (a1.e - a0.e) / fd;
     xv[r] = x0[r];
   }
@@ -379,16 +440,51 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
   double lg = vm_norm3(g);
   if (!(lg > 0)) return 0;
   double step = kp->ortho_relief_step * hloc / lg;
-  for (int b = 0; b < kp->ortho_relief_backtracks; b++, step *= 0.5) {
-    for (int r = 0; r < 3; r++) xv[r] = x0[r] - step * g[r];
-    if (!eval_around(p, &h, c0, qfloor, &a1)) continue;
+  /* the split repair tries a second direction where the gradient's is
+   * refused: onto the segment between the levels below and above, at the
+   * same share of the column (a kink straightened: where a twist sits in
+   * one cell, this hands part of it to the next) */
+  double kink[3];
+  if (!top) {
+    double a = vm_dist3(x0, below), b = vm_dist3(above, x0), f = a + b > 0 ? a / (a + b) : 0.5;
+    for (int r = 0; r < 3; r++) kink[r] = x0[r] - (below[r] + f * (above[r] - below[r]));
+  }
+  int nb = split ? 2 * kp->ortho_relief_backtracks : kp->ortho_relief_backtracks;
+  for (int b = 0; b < (split && !top ? 2 * nb : nb); b++, step *= 0.5) {
+    if (b == nb) step = 1;
+    const double *dg = b < nb ? g : kink;
+    for (int r = 0; r < 3; r++) xv[r] = x0[r] - step * dg[r];
+    if (!eval_around(p, &h, c0, qfloor, split, &a1)) continue;
     if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
-        a1.concave > a0.concave || a1.wmin < wfloor)
+        a1.concave > a0.concave || a1.wmin < wfloor || a1.splitbad > a0.splitbad ||
+        (split && a1.n70 > a0.n70))
       continue;
+    /* the split repair lowers no cell's scaled Jacobian below the stack's
+     * least before the relief (or below its own, where lower) */
+    int sjdown = 0;
+    for (int c = 0; split && c < h.n && !sjdown; c++)
+      sjdown = a1.sj[c] < fmin(a0.sj[c], fm->qworst);
+    if (sjdown) continue;
     if (tilt_max > 0 && pr_tilt_deg(p->wall + 3 * v, xv, p->vnrm + 3 * v) > tilt_max) continue;
     double lo, hi;
     growth_around(p, v, k, &lo, &hi);
     if (lo < glo || hi > ghi) continue;
+    if (top) {
+      /* a column at full thickness stays there */
+      double full = (1 - p->o.full_tol) * p->tv[v];
+      if (vm_dist3(x0, p->wall + 3 * v) >= full && vm_dist3(xv, p->wall + 3 * v) < full) continue;
+      /* the outer surface may cross nothing it did not cross before: the
+       * single layer's faces (its top is the outer level) queried again
+       * around the move */
+      double *lv = p->layer->xyz + 3 * (p->nw + v), keep[3];
+      int64_t np;
+      memcpy(keep, lv, sizeof keep);
+      memcpy(lv, xv, sizeof keep);
+      if (pr_layer_intersections(p, NULL, &np) < 0 || np > p->rep.intersections) {
+        memcpy(lv, keep, sizeof keep);
+        continue;
+      }
+    }
     /* the cells around keep their centres current for the next hoods */
     for (int c = 0; c < h.n; c++) {
       double x[18];
@@ -399,6 +495,178 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
   }
   memcpy(xv, x0, sizeof x0);
   return 0;
+}
+
+/* Prisms of the stack not positive in every 3-tet split. */
+static int64_t count_split_bad(const vm_prism *p) {
+  int nl = p->nlev - 1;
+  int64_t n = 0, nc = p->nt * nl;
+#pragma omp parallel for schedule(static) reduction(+ : n)
+  for (int64_t c = 0; c < nc; c++) {
+    double x[18];
+    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
+    n += pr_prism_split_bad(x, NULL) > 0;
+  }
+  return n;
+}
+
+static int cmp_i64(const void *a, const void *b) {
+  int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* The split repair, after the relief's sweeps: the vertices of levels
+ * 1..nl-1 of every prism not positive in all of its 3-tet splits (a tet of
+ * two bottom and two top vertices with det <= 0: a twisted or sheared
+ * thin cell) take steps that lower the split penalty of the cells around
+ * them (relieve with `split`, the relief's guards, and no cell around
+ * newly failing a split; a top-layer cell's outer vertices too, in the
+ * outer surface's tangent plane, kept only if the single layer's faces
+ * cross nothing new), in rounds, each in level and vertex order, until
+ * none is left or a round moves nothing (k.split_rounds at most). After
+ * the first, a round looks only at the failing cells and those around the
+ * vertices that moved. act and moved are work arrays (nw per level).
+ * Serial: the cells are few. */
+static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit,
+                        double c0, double cact, uint8_t *act, uint8_t *moved, pr_ortho_summary *s) {
+  vm_ctx *ctx = p->ctx;
+  int nl = p->nlev - 1;
+  int64_t nt = p->nt, nw = p->nw, nc = nt * nl;
+  size_t nv = (size_t)(nw * (nl + 1));
+  memset(moved, 0, nv);
+  memset(act, 0, nv);
+  uint8_t *cmark = vm_calloc(ctx, (size_t)nc, 1);
+  /* stuck[key]: the vertex's last step was refused and nothing around it
+   * has moved since (trying it again would be refused again) */
+  uint8_t *stuck = vm_calloc(ctx, nv, 1);
+  int64_t *bad = vm_alloc_array(ctx, (size_t)nc, sizeof *bad);
+  if (!cmark || !bad || !stuck) {
+    vm_free(ctx, cmark);
+    vm_free(ctx, stuck);
+    vm_free(ctx, bad);
+    return VM_ERR_NOMEM;
+  }
+  double sjmin = INFINITY;
+#pragma omp parallel for schedule(static) reduction(min : sjmin)
+  for (int64_t c = 0; c < nc; c++) {
+    double x[18];
+    int inv;
+    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
+    cmark[c] = pr_prism_split_bad(x, NULL) > 0;
+    double q = pr_prism_corner_quality(x, &inv);
+    if (!inv && q < sjmin) sjmin = q;
+  }
+  fm->qworst = sjmin;
+  s->split_sj = sjmin;
+  int64_t nbad = 0;
+  for (int64_t c = 0; c < nc; c++)
+    if (cmark[c]) {
+      bad[nbad++] = c;
+      cmark[c] = 0;
+    }
+  s->split_before = s->split_after = nbad;
+  int64_t *vl = NULL, *ml = NULL, *cl = NULL;
+  size_t vcap = 0, mcap = 0, ccap = 0;
+  int st = VM_OK;
+#define PUSH(list, n, cap, val)                                                                    \
+  do {                                                                                             \
+    if ((size_t)(n) == (cap)) {                                                                    \
+      size_t nc2 = (cap) ? 2 * (cap) : 256;                                                        \
+      int64_t *g2 = vm_realloc(ctx, (list), nc2 * sizeof *(list));                                 \
+      if (!g2) {                                                                                   \
+        st = VM_ERR_NOMEM;                                                                         \
+        goto done;                                                                                 \
+      }                                                                                            \
+      (list) = g2;                                                                                 \
+      (cap) = nc2;                                                                                 \
+    }                                                                                              \
+    (list)[(n)++] = (val);                                                                         \
+  } while (0)
+  for (int round = 0; round < p->k.split_rounds && nbad && pr_time_left(p) > 0; round++) {
+    /* the failing cells' movable vertices, in level and vertex order */
+    int64_t nvl = 0, nml = 0, ncl = 0;
+    for (int64_t b = 0; b < nbad; b++) {
+      int64_t t = bad[b] / nl;
+      int k = (int)(bad[b] % nl);
+      for (int i = 0; i < 3; i++)
+        for (int l = k; l <= k + 1; l++) {
+          size_t key = (size_t)l * nw + p->tri[3 * t + i];
+          if (l < 1 || l > nl || act[key] || stuck[key]) continue;
+          act[key] = 1;
+          PUSH(vl, nvl, vcap, (int64_t)key);
+        }
+    }
+    qsort(vl, (size_t)nvl, sizeof *vl, cmp_i64);
+    for (int64_t i = 0; i < nvl; i++) {
+      act[vl[i]] = 0;
+      int k = (int)(vl[i] / nw);
+      int64_t v = vl[i] % nw;
+      if (relieve(p, nbt, fm, qinit, v, k, c0, cact, 1)) {
+        moved[vl[i]] = 1;
+        PUSH(ml, nml, mcap, vl[i]);
+      } else {
+        stuck[vl[i]] = 1;
+      }
+    }
+    /* a vertex whose step reads what moved may go again: a step at (k, u)
+     * reads the cells of u's triangles at layers k - 1 and k, the centres
+     * of the cells beside them and u's heights at levels k - 2..k + 2, so
+     * the columns within two rings of a moved vertex, levels k - 2..k + 2 */
+    for (int64_t i = 0; i < nml; i++) {
+      int k = (int)(ml[i] / nw);
+      int64_t v = ml[i] % nw;
+      for (int l = k - 2; l <= k + 2; l++) {
+        if (l < 1 || l > nl) continue;
+        size_t o = (size_t)l * nw;
+        stuck[o + v] = 0;
+        for (int64_t m = p->vv_off[v]; m < p->vv_off[v + 1]; m++) {
+          int32_t u = p->vv[m];
+          stuck[o + u] = 0;
+          for (int64_t m2 = p->vv_off[u]; m2 < p->vv_off[u + 1]; m2++) stuck[o + p->vv[m2]] = 0;
+        }
+      }
+    }
+    s->split_moves += nml;
+    if (!nml) break;
+    /* the cells to look at again: the failing ones and those around the
+     * vertices that moved */
+    for (int64_t b = 0; b < nbad; b++)
+      if (!cmark[bad[b]]) {
+        cmark[bad[b]] = 1;
+        PUSH(cl, ncl, ccap, bad[b]);
+      }
+    for (int64_t i = 0; i < nml; i++) {
+      int k = (int)(ml[i] / nw);
+      int64_t v = ml[i] % nw;
+      for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
+        for (int j = k - 1; j <= k && j < nl; j++) {
+          int64_t c = (int64_t)p->vt[m] * nl + j;
+          if (!cmark[c]) {
+            cmark[c] = 1;
+            PUSH(cl, ncl, ccap, c);
+          }
+        }
+    }
+    qsort(cl, (size_t)ncl, sizeof *cl, cmp_i64);
+    nbad = 0;
+    for (int64_t i = 0; i < ncl; i++) {
+      double x[18];
+      cmark[cl[i]] = 0;
+      pr_prism_at(p, p->lev, cl[i] / nl, (int)(cl[i] % nl), x);
+      if (pr_prism_split_bad(x, NULL)) bad[nbad++] = cl[i];
+    }
+  }
+#undef PUSH
+  s->split_after = count_split_bad(p);
+  refresh(p, nbt, cact, fm, moved);
+done:
+  vm_free(ctx, cmark);
+  vm_free(ctx, stuck);
+  vm_free(ctx, bad);
+  vm_free(ctx, vl);
+  vm_free(ctx, ml);
+  vm_free(ctx, cl);
+  return st;
 }
 
 int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
@@ -415,8 +683,11 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
   uint8_t *act = vm_alloc_array(ctx, nv, sizeof *act);
   uint8_t *moved = vm_alloc_array(ctx, nv, sizeof *moved);
   facemap fm = {vm_alloc_array(ctx, (size_t)(3 * nc), sizeof *fm.cc),
-                vm_alloc_array(ctx, (size_t)nc, 1), vm_alloc_array(ctx, (size_t)nc, 1),
-                vm_alloc_array(ctx, (size_t)nc, sizeof *fm.cw), vm_alloc_array(ctx, (size_t)nc, 1)};
+                vm_alloc_array(ctx, (size_t)nc, 1),
+                vm_alloc_array(ctx, (size_t)nc, 1),
+                vm_alloc_array(ctx, (size_t)nc, sizeof *fm.cw),
+                vm_alloc_array(ctx, (size_t)nc, 1),
+                INFINITY};
   int st = VM_OK;
   if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.mark) {
     st = VM_ERR_NOMEM;
@@ -451,7 +722,7 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
       for (int i = 0; i < nk; i++) {
         int k = 1 + r + i * PR_ORTHO_STRIDE;
         for (int64_t v = 0; v < nw; v++)
-          if (act[(size_t)k * nw + v] && relieve(p, nbt, &fm, qinit, v, k, c0, cact)) {
+          if (act[(size_t)k * nw + v] && relieve(p, nbt, &fm, qinit, v, k, c0, cact, 0)) {
             moved[(size_t)k * nw + v] = 1;
             nmoved++;
           }
@@ -470,6 +741,9 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
     if (!nmoved || (double)(last - n70) <= kp->ortho_relief_gain * (double)last) break;
     last = n70;
   }
+  double t0 = omp_get_wtime();
+  if ((st = split_repair(p, nbt, &fm, qinit, c0, cact, act, moved, s)) < 0) goto done;
+  s->split_time = omp_get_wtime() - t0;
   face_totals(p, &fm, &s->over70_after, &s->cmin_after);
 done:
   vm_free(ctx, nbt);

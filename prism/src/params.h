@@ -83,6 +83,12 @@ typedef struct pr_params {
                             (1 - 1e-9) T (no sliver last layer from rounding) */
   int sched_bisect_iter; /* 200: bisection steps for the growth ratio (far
                             more than double precision needs; cheap) */
+  double region_slope;   /* 0.5: with a thickness per wall face, neighbouring
+                            columns' aims differ by at most 0.5 times the
+                            wall distance between them (the outer surface
+                            rises at most about 27 degrees over a border;
+                            a step there made the top layers' faces lean
+                            as in the contact zones) */
 
   /* phase 1, thin layer (thin.c) */
   double thin_height;        /* 0.5: start height, a share of the mean incident
@@ -228,6 +234,26 @@ typedef struct pr_params {
                                  growth ratio (issue 24's band) */
   double ortho_relief_wmin;        /* 0.1: nor lowers a face's interpolation weight
                                       below this (checkMesh fails at 0.05) */
+  double split_margin;             /* 0.02: the split repair (ortho.c) lowers the
+                                      sum of max(0, 0.02 - q)^2 over the tets of
+                                      two bottom and two top vertices, q their
+                                      det / edge-length product (about 0.7 on a
+                                      right prism): a margin, so a repaired cell
+                                      is not left at the edge of rounding */
+  double split_cos_slack;          /* 0.005: ... and may lower the worst face's
+                                      non-orthogonality cosine by this much
+                                      (0.3 degrees near 80) where it is beyond
+                                      70 degrees already (no more faces beyond 70) */
+  double split_qshare;             /* 0.25: ... keeps every prism around above
+                                      min(k.ortho_qmin, 0.25 of its quality
+                                      before the relief) (the relief's 0.5 left
+                                      cells pinned at their floor, holding the
+                                      last twisted cells of the coarse
+                                      aircraft), and no cell's scaled Jacobian
+                                      below the stack's least when it starts */
+  int split_rounds;                /* 200: rounds of the repair at most (each a
+                                      step at every vertex of a failing cell;
+                                      plane.stl at 20 % stops by itself) */
   double ortho_relief_fd;          /* 1e-6: finite-difference step of the gradient,
                                       a share of the local size */
   double stack_lean_deg;           /* 45: a prism of layers 1..n-1 whose centroids'
@@ -281,6 +307,7 @@ static inline pr_params pr_params_default(void) {
               .fair_quality = 0.05},
       .sched_fit_tol = 1e-9,
       .sched_bisect_iter = 200,
+      .region_slope = 0.5,
       .thin_height = 0.5,
       .thin_limit_height = 1e-6,
       .thin_rounds = 60,
@@ -348,6 +375,10 @@ static inline pr_params pr_params_default(void) {
       .ortho_relief_growth_band = 1.5,
       .ortho_relief_wmin = 0.1,
       .ortho_relief_fd = 1e-6,
+      .split_margin = 0.02,
+      .split_rounds = 200,
+      .split_qshare = 0.25,
+      .split_cos_slack = 0.005,
       .stack_lean_deg = 45,
       .stack_iter = 20,
       .tilt_solve_deg = 4.5,

@@ -270,6 +270,87 @@ static int build_adjacency(vm_prism *p) {
   return VM_OK;
 }
 
+/* Each column's aim p->tv: T everywhere, or, with a thickness per wall
+ * triangle (held in p->tv on entry, nt values), the least of its
+ * triangles' graded along the wall: tv[v] = min over u of (the least at u
+ * + k.region_slope * the shortest wall-edge path from u to v), by
+ * Dijkstra's method from every vertex at once (a binary heap; the result is
+ * the unique fixed point, whatever order ties are taken in). */
+static int region_aims(vm_prism *p) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  double *tv = vm_alloc_array(ctx, (size_t)nw, sizeof *tv);
+  if (!tv) return VM_ERR_NOMEM;
+  double *tri_T = p->tv;
+  p->tv = tv;
+  if (!tri_T) {
+    for (int64_t v = 0; v < nw; v++) tv[v] = p->o.thickness;
+    return VM_OK;
+  }
+  for (int64_t v = 0; v < nw; v++) tv[v] = INFINITY;
+  for (int64_t t = 0; t < nt; t++)
+    for (int i = 0; i < 3; i++) {
+      int32_t v = p->tri[3 * t + i];
+      if (tri_T[t] < tv[v]) tv[v] = tri_T[t];
+    }
+  vm_free(ctx, tri_T);
+  /* heap of (aim, vertex), lazily updated: at most nw + one entry per
+   * directed edge */
+  int64_t cap = nw + p->vv_off[nw], n = 0;
+  struct he {
+    double a;
+    int32_t v;
+  } *hp = vm_alloc_array(ctx, (size_t)cap, sizeof *hp);
+  uint8_t *done = vm_calloc(ctx, (size_t)nw, sizeof *done);
+  if (!hp || !done) {
+    vm_free(ctx, hp);
+    vm_free(ctx, done);
+    return VM_ERR_NOMEM;
+  }
+#define HE_LESS(x, y) ((x).a < (y).a || ((x).a == (y).a && (x).v < (y).v))
+#define HE_PUSH(A, V)                                                                              \
+  do {                                                                                             \
+    int64_t i_ = n++;                                                                              \
+    struct he e_ = {(A), (V)};                                                                     \
+    while (i_ > 0 && HE_LESS(e_, hp[(i_ - 1) / 2])) {                                              \
+      hp[i_] = hp[(i_ - 1) / 2];                                                                   \
+      i_ = (i_ - 1) / 2;                                                                           \
+    }                                                                                              \
+    hp[i_] = e_;                                                                                   \
+  } while (0)
+  for (int64_t v = 0; v < nw; v++) HE_PUSH(tv[v], (int32_t)v);
+  const double s = p->k.region_slope;
+  while (n > 0) {
+    struct he top = hp[0], last = hp[--n];
+    int64_t i = 0;
+    for (;;) {
+      int64_t c = 2 * i + 1;
+      if (c >= n) break;
+      if (c + 1 < n && HE_LESS(hp[c + 1], hp[c])) c++;
+      if (!HE_LESS(hp[c], last)) break;
+      hp[i] = hp[c];
+      i = c;
+    }
+    if (n > 0) hp[i] = last;
+    int32_t v = top.v;
+    if (done[v] || top.a > tv[v]) continue;
+    done[v] = 1;
+    for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++) {
+      int32_t u = p->vv[j];
+      double a = tv[v] + s * vm_dist3(p->wall + 3 * (int64_t)v, p->wall + 3 * (int64_t)u);
+      if (!done[u] && a < tv[u]) {
+        tv[u] = a;
+        HE_PUSH(a, u);
+      }
+    }
+  }
+#undef HE_PUSH
+#undef HE_LESS
+  vm_free(ctx, hp);
+  vm_free(ctx, done);
+  return VM_OK;
+}
+
 int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts, vm_prism **out) {
   if (!out) return vm_error(ctx, VM_ERR_ARG, "vm_prism_create: out is NULL");
   *out = NULL;
@@ -297,17 +378,47 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     vm_prism_destroy(&p);
     return VM_ERR_NOMEM;
   }
+  /* a thickness per wall face: one per triangle here, the aims per
+   * column after the adjacency (region_aims) */
+  double *tri_T = NULL;
+  if (o.elem_thickness) {
+    tri_T = vm_alloc_array(ctx, (size_t)nt, sizeof *tri_T);
+    if (!tri_T) {
+      vm_free(ctx, map);
+      vm_prism_destroy(&p);
+      return VM_ERR_NOMEM;
+    }
+  }
   for (int64_t v = 0; v < wall->nv; v++) map[v] = -1;
   int64_t k = 0;
   for (int64_t e = 0; e < wall->ne; e++) {
     const int32_t *c = wall->conn + wall->eoff[e];
+    if (wall->etype[e] != VM_TRI && wall->etype[e] != VM_QUAD) continue;
+    if (tri_T) {
+      double Te = o.elem_thickness[e];
+      if (!(Te > 0 && Te <= o.thickness)) {
+        vm_free(ctx, map);
+        vm_free(ctx, tri_T);
+        vm_prism_destroy(&p);
+        return vm_error(ctx, VM_ERR_ARG,
+                        "prism: wall element %lld's thickness %g is not in (0, %g] (the "
+                        "thickness)",
+                        (long long)e, Te, o.thickness);
+      }
+      tri_T[k / 3] = Te;
+      if (wall->etype[e] == VM_QUAD) tri_T[k / 3 + 1] = Te;
+    }
     if (wall->etype[e] == VM_TRI) {
       for (int i = 0; i < 3; i++) p->tri[k++] = c[i];
-    } else if (wall->etype[e] == VM_QUAD) {
+    } else {
       static const int sp[6] = {0, 1, 2, 0, 2, 3};
       for (int i = 0; i < 6; i++) p->tri[k++] = c[sp[i]];
     }
   }
+  /* the options' array is read here only */
+  p->o.elem_thickness = NULL;
+  p->regional = tri_T != NULL;
+  p->tv = tri_T; /* held here (freed with p) until region_aims replaces it */
   for (int64_t i = 0; i < 3 * nt; i++) map[p->tri[i]] = 0;
   int64_t nw = 0;
   for (int64_t v = 0; v < wall->nv; v++)
@@ -341,9 +452,10 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   p->h = vm_alloc_array(ctx, (size_t)nw, sizeof *p->h);
   p->cap = vm_alloc_array(ctx, (size_t)nw, sizeof *p->cap);
   p->cut = vm_calloc(ctx, (size_t)nw, sizeof *p->cut);
-  if (!p->fnrm || !p->vnrm || !p->dir || !p->smooth || !p->h || !p->cap || !p->cut) {
+  if (!p->fnrm || !p->vnrm || !p->dir || !p->smooth || !p->h || !p->cap || !p->cut ||
+      (st = region_aims(p)) < 0) {
     vm_prism_destroy(&p);
-    return VM_ERR_NOMEM;
+    return st < 0 ? st : VM_ERR_NOMEM;
   }
   for (int64_t t = 0; t < nt; t++) {
     const int32_t *c = p->tri + 3 * t;
@@ -402,8 +514,8 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
       if (vm_dot3(p->vnrm + 3 * v, p->fnrm + 3 * (int64_t)p->vt[j]) < smooth_cos) sm = 0;
     p->smooth[v] = (uint8_t)sm;
-    p->h[v] = o.thickness;
-    p->cap[v] = o.thickness;
+    p->h[v] = p->tv[v];
+    p->cap[v] = p->tv[v];
   }
   if ((st = build_schedule(p))) {
     vm_prism_destroy(&p);
@@ -424,9 +536,9 @@ void vm_prism_destroy(vm_prism **pp) {
   pr_layer_faces_destroy(ctx, &p->faces);
   pr_rt_destroy(&p->rt);
   vm_mesh_destroy(&p->layer);
-  void *arrays[] = {p->wall,   p->tri, p->fnrm,   p->vnrm,  p->dir,   p->elen, p->smooth,
-                    p->vt_off, p->vt,  p->vv_off, p->vv,    p->edge,  p->etri, p->h,
-                    p->cap,    p->cut, p->lev,    p->sched, p->medial};
+  void *arrays[] = {p->wall,   p->tri, p->fnrm,   p->vnrm,  p->dir,    p->elen, p->smooth,
+                    p->vt_off, p->vt,  p->vv_off, p->vv,    p->edge,   p->etri, p->h,
+                    p->cap,    p->cut, p->lev,    p->sched, p->medial, p->tv};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;

@@ -91,12 +91,19 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
       goto fail;
     fl = f->data;
     for (int64_t v = 0; v < nw; v++) {
-      double fill = pr_fill(th[v], p->o.thickness, p->medial[v]);
+      double fill = pr_fill(th[v], p->tv[v], p->medial[v]);
       for (int64_t k = 0; k < nlev; k++) {
         mr[k * nw + v] = p->medial[v];
         fl[k * nw + v] = fill;
       }
     }
+  }
+  if (p->regional) {
+    if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_TARGET, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
+      goto fail;
+    double *tg = f->data;
+    for (int64_t v = 0; v < nw; v++)
+      for (int64_t k = 0; k < nlev; k++) tg[k * nw + v] = p->tv[v];
   }
   if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
@@ -118,12 +125,11 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
   if (nlev >= 2) {
     int64_t nw = p->nw, nt = p->nt;
     size_t lsz = (size_t)(3 * nw);
-    double T = p->o.thickness;
     const double *top = L + (size_t)(nlev - 1) * lsz;
     int64_t full = 0, room = 0, reach = 0;
     double tmin = INFINITY, tmax = 0, tsum = 0, fsum = 0, frest = 0;
     for (int64_t v = 0; v < nw; v++) {
-      double len = vm_dist3(p->wall + 3 * v, top + 3 * v), d = len / T;
+      double len = vm_dist3(p->wall + 3 * v, top + 3 * v), d = len / p->tv[v];
       int at_full = d >= 1 - p->o.full_tol;
       full += at_full;
       tmin = d < tmin ? d : tmin;
@@ -131,9 +137,9 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
       tsum += d;
       if (!p->medial) continue;
       /* the room the geometry leaves (medial.c) */
-      double fill = pr_fill(len, T, p->medial[v]);
+      double fill = pr_fill(len, p->tv[v], p->medial[v]);
       fsum += fill;
-      if (p->medial[v] >= p->k.medial_room * T) {
+      if (p->medial[v] >= p->k.medial_room * p->tv[v]) {
         room++;
         reach += at_full;
       } else {
@@ -153,7 +159,7 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     R.thick_max = tmax;
     R.prisms = (nlev - 1) * nt;
     R.layers = nlev - 1;
-    int64_t inv = 0;
+    int64_t inv = 0, split = 0;
     double sj = INFINITY;
     for (int k = 0; k + 1 < nlev; k++)
       for (int64_t t = 0; t < nt; t++) {
@@ -165,9 +171,11 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
         int bad;
         double q = pr_prism_corner_quality(x, &bad);
         inv += bad;
+        split += pr_prism_split_bad(x, NULL) > 0;
         sj = q < sj ? q : sj;
       }
     R.inverted = inv;
+    R.split_negative = split;
     R.sj_min = sj;
     double dmax = 0, dsum = 0;
     int64_t ns = 0, over = 0;

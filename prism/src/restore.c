@@ -132,8 +132,8 @@ int vm_prism_restore(vm_prism *p) {
   for (int64_t v = 0; v < nw; v++) {
     for (int k = 0; k < 3; k++) d[3 * v + k] = x[3 * (v + nw) + k] - x[3 * v + k];
     t[v] = vm_normalize3(d + 3 * v);
-    tcut[v] = t[v] < T ? t[v] : T;
-    p->cap[v] = T;
+    tcut[v] = t[v] < p->tv[v] ? t[v] : p->tv[v];
+    p->cap[v] = p->tv[v];
     alpha[v] = 1;
   }
   /* positions exactly wall + t d from here on, so going back to an old t
@@ -163,7 +163,7 @@ int vm_prism_restore(vm_prism *p) {
     memcpy(told, t, (size_t)nw * sizeof *t);
     double change = 0;
     for (int64_t v = 0; v < nw; v++) {
-      double goal = p->cap[v] < T ? p->cap[v] : T;
+      double goal = p->cap[v] < p->tv[v] ? p->cap[v] : p->tv[v];
       /* cut columns: one Laplace-Beltrami step (mean-value weights) of the
        * offset surface along the side edge; all: restoration towards T */
       double s = p->cut[v] ? p->k.restore_smooth_weight * (t[v] + tp[v]) : t[v];
@@ -203,11 +203,11 @@ int vm_prism_restore(vm_prism *p) {
     }
     double mean = 0;
     for (int64_t v = 0; v < nw; v++) {
-      mean += t[v];
+      mean += t[v] / p->tv[v];
       double c = fabs(t[v] - told[v]);
       change = c > change ? c : change;
     }
-    pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw / T, np, 0);
+    pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw, np, 0);
     if (np > np0 || change < p->k.restore_stop_change * T) break;
   }
   p->rep.intersections = np;

@@ -42,6 +42,9 @@ struct vm_prism {
   pr_layer_faces *faces; /* the layer's faces for intersection queries */
   vm_mesh *layer;        /* single layer: 2nw vertices, nt prisms, target field */
   vm_problem *prob;
+  double *tv;   /* nw: each column's aim T_v <= T (T everywhere unless
+                   the options give a thickness per wall face) */
+  int regional; /* the options gave a thickness per wall face */
   double *h;    /* nw target heights */
   double *cap;  /* nw upper bounds of the thickness left by cutting */
   uint8_t *cut; /* nw: rounds the column was cut in (saturates at 255) */
@@ -138,6 +141,12 @@ typedef struct pr_ortho_summary {
   int64_t moves;                       /* vertex steps kept */
   int64_t over70_before, over70_after; /* internal faces beyond 70 degrees */
   double cmin_before, cmin_after;      /* the worst face's non-orthogonality cosine */
+  int64_t split_before, split_after;   /* prisms not positive in every 3-tet split,
+                                          before and after the split repair */
+  int64_t split_moves;                 /* the repair's vertex steps kept */
+  double split_sj;                     /* the least scaled Jacobian when it started
+                                          (it lowers no cell below) */
+  double split_time;                   /* its seconds */
 } pr_ortho_summary;
 
 /* Levels 1..nlev-2 moved across their columns where the faces of their

@@ -39,7 +39,7 @@ int vm_prism_thin(vm_prism *p) {
   }
   for (int64_t v = 0; v < nw; v++) {
     double h = p->k.thin_height * p->elen[v];
-    hv[v] = h < p->o.thickness ? h : p->o.thickness;
+    hv[v] = h < p->tv[v] ? h : p->tv[v];
   }
   /* the quality each prism tends to as its height goes to 0: the bound the
    * thin layer may approach but not reach */

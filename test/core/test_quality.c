@@ -222,6 +222,64 @@ static void foam_cells(void) {
         "the twisted hex: 1 face pyramid wrong, volume %g > 0", v);
 }
 
+/* A prism on an equilateral triangle whose top is the bottom turned by
+ * theta about the axis and lifted by h: every corner tet has det 2 A h > 0
+ * whatever theta (the top vertex adds only its height), but a tet of two
+ * bottom and two top vertices has det proportional to h sin(60 deg -
+ * theta) (three of them) or h sin(60 deg + theta) (the other three): its
+ * two horizontal edges' cross product is vertical. Three reach 0 at a
+ * twist of exactly 60 degrees either way, for any h. So the twist
+ * 59 degrees: positive in all six 3-tet splits; 61: 3 tets negative,
+ * while the corner rule (and a check of the corner tets) sees nothing. */
+static void prism_twist(vm_ctx *ctx, double theta_deg, double h, int want) {
+  double x[18], th = theta_deg * 3.14159265358979323846 / 180;
+  for (int i = 0; i < 3; i++) {
+    double a = 2 * 3.14159265358979323846 * i / 3;
+    x[3 * i] = cos(a), x[3 * i + 1] = sin(a), x[3 * i + 2] = 0;
+    x[9 + 3 * i] = cos(a + th), x[9 + 3 * i + 1] = sin(a + th), x[9 + 3 * i + 2] = h;
+  }
+  double q[6];
+  int bad = vm_prism_split_check(x, q);
+  CHECK(bad == want, "twist %g deg, h %g: %d split tets not positive, want %d", theta_deg, h, bad,
+        want);
+  /* the mesh figure: the corner rule sees no inverted node, the split
+   * count sees the prism */
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  vm_mesh_set_vertices(m, 6);
+  memcpy(m->xyz, x, sizeof x);
+  vm_mesh_set_elements(m, 1, 6);
+  m->etype[0] = VM_PRISM;
+  for (int i = 0; i < 6; i++) m->conn[i] = i;
+  m->eoff[1] = 6;
+  vm_quality Q;
+  CHECK(vm_mesh_quality(m, NULL, &Q) == 0, "quality");
+  CHECK(Q.all.inverted_nodes == 0, "twist %g: %lld corner nodes inverted", theta_deg,
+        (long long)Q.all.inverted_nodes);
+  CHECK(Q.prism_split_negative == (want > 0), "twist %g: split negative %lld", theta_deg,
+        (long long)Q.prism_split_negative);
+  vm_mesh_destroy(&m);
+}
+
+static void prism_splits(vm_ctx *ctx) {
+  /* the right prism on the unit right triangle: tet (0, 1, 5, 4) has edges
+   * (1,0,0), (0,1,1), (1,0,1): det 1, lengths 1, sqrt 2, sqrt 2 */
+  const double right[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1};
+  double q[6];
+  CHECK(vm_prism_split_check(right, q) == 0, "the right prism");
+  CHECK_NEAR(q[0], 0.5, 1e-15, "right prism: tet (0, 1, 5, 4)");
+  for (int j = 0; j < 6; j++) CHECK(q[j] > 0.25, "right prism: split tet %d q %g", j, q[j]);
+  const double hs[3] = {1e-4, 0.1, 10};
+  for (int i = 0; i < 3; i++) {
+    prism_twist(ctx, 0, hs[i], 0);
+    prism_twist(ctx, 59, hs[i], 0);
+    prism_twist(ctx, -59, hs[i], 0);
+    prism_twist(ctx, 61, hs[i], 3);
+    prism_twist(ctx, -61, hs[i], 3);
+    prism_twist(ctx, 110, hs[i], 3);
+  }
+}
+
 int main(void) {
   vm_ctx *ctx;
   vm_ctx_create(&ctx);
@@ -232,6 +290,7 @@ int main(void) {
   adjacency(ctx);
   units(ctx);
   foam_cells();
+  prism_splits(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == live0, "leak: %ld blocks", vm_ctx_alloc_live(ctx) - live0);
   vm_ctx_destroy(&ctx);
   return vmtest_end("quality");

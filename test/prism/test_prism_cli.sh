@@ -144,4 +144,12 @@ check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && grep -q "oriented in
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.xyz" ]' "unknown output format: exit 2"
 "${prism[@]}" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "first height above the thickness: exit 2"
+# needles (triangles under 1 degree, which the surface stage removes): a
+# warning naming the count and vm-surface, "needles" in the JSON; the wing
+# vm-gen makes as a CAD mesher grades it has rows of them, the sphere none
+"$gen" wing "$dir/w.stl" >/dev/null
+"${prism[@]}" -q --json --time-limit 0.01 "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
+nn=$(sed -n 's/.*"needles": \([0-9]*\).*/\1/p' "$dir/w.json")
+check '[ "${nn:-0}" -gt 1000 ] && grep -q "$nn triangles under 1 degree.*run vm-surface" "$dir/w.err"' "wing: $nn needles, warned: $(grep -o 'triangles under 1 degree' "$dir/w.err" | head -1)"
+check 'grep -q "\"needles\": 0" "$dir/out.json" && ! grep -q "under 1 degree" "$dir/inv.err"' "sphere: no needles, no warning"
 exit $fail

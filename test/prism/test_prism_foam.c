@@ -29,6 +29,7 @@
 #include "support/check_prism.h"
 #include "varmesh/aircraft.h"
 #include "varmesh/prism.h"
+#include "varmesh/quality.h"
 #include "varmesh/surface.h"
 #include "vmtest.h"
 
@@ -128,6 +129,7 @@ typedef struct {
   int64_t between, lateral; /* faces beyond 70 degrees */
   double growth;            /* largest ratio of successive heights */
   int64_t dev_over5;        /* smooth columns tilted beyond 5 degrees */
+  int64_t split;            /* prisms not positive in every 3-tet split */
 } layer_limits;
 
 /* The layer vm-prism builds on wall w with its defaults at T = 5 % of the
@@ -251,6 +253,18 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
         r.full_fraction);
   CHECK(r.normal_dev_over5 <= lim.dev_over5, "%s: %lld smooth columns beyond 5 degrees", name,
         (long long)r.normal_dev_over5);
+  /* every 3-tet split positive (a solver splitting prisms into tets fails
+   * on the others): the report's count is the mesh's, by the library's
+   * quality pass over the written elements */
+  vm_quality q;
+  CHECK(vm_mesh_quality(m, NULL, &q) == 0, "%s: quality", name);
+  fprintf(stderr, "%s: prisms not positive in every 3-tet split %lld\n", name,
+          (long long)q.prism_split_negative);
+  CHECK(r.split_negative == q.prism_split_negative,
+        "%s: the report counts %lld prisms failing a 3-tet split, the mesh %lld", name,
+        (long long)r.split_negative, (long long)q.prism_split_negative);
+  CHECK(q.prism_split_negative <= lim.split, "%s: %lld prisms failing a 3-tet split", name,
+        (long long)q.prism_split_negative);
   free(ed);
   free(tri);
   free(cc);
@@ -268,7 +282,7 @@ int main(void) {
   /* from its STL: 690 faces between layers and 765 lateral ones beyond 70
    * degrees, growth 19.4, before the stack smoothing and the columns put
    * back on the schedule */
-  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 10, 0});
+  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 10, 0, 0});
   /* the same wall through the surface stage's defaults, as the pipeline
    * runs it: its remeshing and adaptation leave the trailing edges'
    * triangles about twice as wide across the edge, and OpenFOAM's
@@ -283,7 +297,7 @@ int main(void) {
   CHECK(st == 0, "surface stage: %d %s", st, vm_ctx_error(ctx));
   if (st == 0) /* measured: 112, 89, 12.3, 0 (269, 349 before the relief) */
     check_layer(ctx, ws, ao.length, "coarse aircraft after vm-surface",
-                (layer_limits){160, 130, 15, 10});
+                (layer_limits){160, 130, 15, 10, 0});
   vm_mesh_destroy(&ws);
   vm_mesh_destroy(&w);
   CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));

@@ -333,6 +333,7 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
       q->foam_pyramid_errors += vm_cell_foam(t, x, &vol);
       q->foam_neg_volumes += !(vol > 0);
     }
+    if (t == VM_PRISM) q->prism_split_negative += vm_prism_split_check(x, NULL) > 0;
   }
   for (int t = 0; t < VM_NTYPES; t++) {
     vm_type_quality *tq = &q->type[t];
@@ -364,6 +365,32 @@ static int measure(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q,
   }
   vm_free(ctx, sj);
   return VM_OK;
+}
+
+/* The tets of a prism's 3-tet splits that are not corner tets, each
+ * ordered to be positive on the right prism. */
+static const int split_tets[6][4] = {{0, 1, 5, 4}, {0, 1, 5, 3}, {1, 2, 3, 4},
+                                     {1, 2, 3, 5}, {0, 2, 3, 4}, {0, 2, 5, 4}};
+
+int vm_prism_split_check(const double *x, double *q) {
+  int bad = 0;
+  for (int j = 0; j < 6; j++) {
+    const double *a = x + 3 * split_tets[j][0];
+    double c[3][3];
+    for (int k = 0; k < 3; k++)
+      for (int r = 0; r < 3; r++) c[k][r] = x[3 * split_tets[j][k + 1] + r] - a[r];
+    double cr[3] = {c[1][1] * c[2][2] - c[1][2] * c[2][1], c[1][2] * c[2][0] - c[1][0] * c[2][2],
+                    c[1][0] * c[2][1] - c[1][1] * c[2][0]};
+    double det = c[0][0] * cr[0] + c[0][1] * cr[1] + c[0][2] * cr[2];
+    if (!(det > 0)) bad++;
+    if (q) {
+      double l = sqrt(c[0][0] * c[0][0] + c[0][1] * c[0][1] + c[0][2] * c[0][2]) *
+                 sqrt(c[1][0] * c[1][0] + c[1][1] * c[1][1] + c[1][2] * c[1][2]) *
+                 sqrt(c[2][0] * c[2][0] + c[2][1] * c[2][1] + c[2][2] * c[2][2]);
+      q[j] = l > 0 ? det / l : -1;
+    }
+  }
+  return bad;
 }
 
 int vm_mesh_quality(const vm_mesh *m, const vm_quality_opts *opts, vm_quality *q) {

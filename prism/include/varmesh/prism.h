@@ -24,9 +24,14 @@ extern "C" {
 #define VM_PRISM_FIELD_THICKNESS "thickness" /* f64 per vertex: achieved column thickness */
 #define VM_PRISM_FIELD_PHYS "gmsh:physical"  /* i32 per element: family tag below */
 #define VM_PRISM_FIELD_MEDIAL                                                                      \
-  "medial_radius"                  /* f64 per vertex: the column's exterior                        \
-                                      medial radius (vm_prism_medial_radius) */
-#define VM_PRISM_FIELD_FILL "fill" /* f64 per vertex: min(1, thickness / min(T, medial_radius)) */
+  "medial_radius" /* f64 per vertex: the column's exterior                                         \
+                     medial radius (vm_prism_medial_radius) */
+/* f64 per vertex: min(1, thickness / min(T_v, medial_radius)), T_v the
+ * column's own aim (T unless vm_prism_opts.elem_thickness is given) */
+#define VM_PRISM_FIELD_FILL "fill"
+/* f64 per vertex: the column's own aim T_v; written only when
+ * vm_prism_opts.elem_thickness is given */
+#define VM_PRISM_FIELD_TARGET "target_thickness"
 enum {
   VM_PRISM_TAG_WALL = 1,  /* wall triangles (the input surface) */
   VM_PRISM_TAG_OUTER = 2, /* outer boundary triangles */
@@ -94,6 +99,17 @@ typedef struct vm_prism_opts {
                             enclosed volume) has its triangles turned, with a
                             warning on the log, so the layer grows outside;
                             0: such a wall is refused */
+  /* NULL (default): every column aims at `thickness`. Else one thickness
+   * per element of the wall (its triangles' and quads'; other elements'
+   * entries are not read), each in (0, thickness]: a column aims at the
+   * least of its wall faces' values, graded along the wall so that
+   * neighbouring columns' aims differ by at most a slope of 0.5 (the
+   * thicker side is shortened near the border: a step would make the outer
+   * surface a cliff). The schedule is the thickest column's; thinner ones
+   * keep its first height and grow more slowly. Full thickness, the room
+   * the geometry leaves and the fill are each column's against its own
+   * aim. Read by vm_prism_create only. */
+  const double *elem_thickness;
   vm_prism_progress_fn progress;
   void *user;
 } vm_prism_opts;
@@ -124,11 +140,15 @@ typedef struct vm_prism_report {
   int cut_rounds;
   int64_t cut_pairs_first;      /* intersecting pairs found in the first round */
   int64_t intersections;        /* pairs left at the end (0 unless limits hit) */
-  double full_fraction;         /* columns at full thickness */
-  double thick_min, thick_mean; /* achieved / requested thickness over columns */
+  double full_fraction;         /* columns at full thickness (their own aim T_v) */
+  double thick_min, thick_mean; /* achieved thickness / T_v over columns */
   double thick_max;             /* > 1 where springback left a column longer than T */
   int64_t inverted;             /* corner tets with det <= 0 in the final mesh */
   double sj_min;                /* minimum scaled Jacobian of the prisms */
+  int64_t split_negative;       /* prisms not positive in every 3-tet split
+                                   (a tet of two bottom and two top vertices
+                                   with det <= 0: a solver splitting prisms
+                                   into tets fails there) */
   double normal_dev_max;        /* degrees: first-layer side edges vs the wall's
                                    vertex normal, at smooth vertices */
   double normal_dev_mean;

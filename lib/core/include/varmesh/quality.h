@@ -44,7 +44,19 @@ typedef struct vm_quality {
    * <= 0 and face pyramids of volume <= 0 ("incorrectly oriented"; a face
    * counts once per cell it bounds, as checkMesh counts) */
   int64_t foam_neg_volumes, foam_pyramid_errors;
+  /* prisms not positive in every one of their 3-tet splits
+   * (vm_prism_split_check): a solver or mesher that splits prisms into
+   * tets (Pointwise checks this before it accepts a prism) fails there */
+  int64_t prism_split_negative;
 } vm_quality;
+
+/* A prism (VM_PRISM: vertices 0-2 the bottom, 3-5 the top, 3 over 0; x
+ * its 18 coordinates) is positive in all six of its 3-tet splits iff its 6
+ * corner tets (the corner rule's) and the 6 tets of two bottom and two top
+ * vertices off a side face are. Those 6 tets' det / (|e1| |e2| |e3|), the
+ * edges from their first vertex, into q (6 values, may be NULL; about 0.7
+ * on a right prism, -1 for a zero edge); returns how many have det <= 0. */
+int vm_prism_split_check(const double *x, double *q);
 
 /* Quality of every element of the top dimension. The scaled Jacobian of an
  * element is the minimum over its corner nodes of det E/(|e1||e2||e3|)
