@@ -246,9 +246,23 @@ static int opt_thickness_rel(vm_cli *cli, const vm_opt *opt, const char *value, 
  * *out (m->ne, vm_free'd by the caller), the unit `unit` (1: absolute, or
  * the model's length `length`), T the thickness elsewhere; *tmax the
  * largest. */
+typedef struct {
+  int32_t id, order; /* the value, its place in the list */
+  double x;          /* its thickness */
+  int64_t hits;      /* wall faces with it */
+} region_item;
+
+static int cmp_region_item(const void *a, const void *b) {
+  const region_item *p = a, *q = b;
+  if (p->id != q->id) return p->id < q->id ? -1 : 1;
+  return (p->order > q->order) - (p->order < q->order);
+}
+
 static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, double unit,
                             double length, double T, double **out, double *tmax) {
   *out = NULL;
+  region_item *items = NULL;
+  size_t n = 0, cap = 0;
   const char *colon = strrchr(spec, ':');
   if (!colon || colon == spec || !colon[1])
     return vm_cli_usage_error(cli, "--region-thickness '%s': expects FIELD:ID=X,...", spec);
@@ -276,35 +290,79 @@ static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, dou
     long long k = strtoll(s, &end, 10);
     if (end == s || *end != '=' || errno || k < INT32_MIN || k > INT32_MAX) {
       vm_free(cli->ctx, et);
+      vm_free(cli->ctx, items);
       return vm_cli_usage_error(cli, "--region-thickness: item %d ('%s'): expects ID=X", item, s);
     }
     s = end + 1;
     double x = strtod(s, &end);
     if (end == s || (*end && *end != ',') || !(x > 0) || !isfinite(x * unit)) {
       vm_free(cli->ctx, et);
+      vm_free(cli->ctx, items);
       return vm_cli_usage_error(cli,
                                 "--region-thickness: item %d: '%.*s' is not a positive thickness",
                                 item, (int)strcspn(s, ","), s);
     }
     if (!(x * unit >= 1e-9 * length)) {
       vm_free(cli->ctx, et);
+      vm_free(cli->ctx, items);
       return vm_cli_usage_error(cli,
                                 "--region-thickness: item %d: %g is below 1e-9 of the model's "
                                 "length %g (the layers would vanish in rounding)",
                                 item, x * unit, length);
     }
-    int64_t hit = 0;
-    for (int64_t e = 0; e < m->ne; e++)
-      if (id[e] == (int32_t)k) {
-        et[e] = x * unit;
-        hit += m->etype[e] == VM_TRI || m->etype[e] == VM_QUAD;
+    if (n == cap) {
+      size_t c2 = cap ? 2 * cap : 16;
+      region_item *g = vm_realloc(cli->ctx, items, c2 * sizeof *g);
+      if (!g) {
+        vm_free(cli->ctx, et);
+        vm_free(cli->ctx, items);
+        return vm_cli_usage_error(cli, "--region-thickness: out of memory");
       }
-    if (!hit)
-      vm_log(cli->ctx, VM_LOG_WARN, "--region-thickness: no wall face has %s = %lld", name, k);
+      items = g;
+      cap = c2;
+    }
+    items[n] = (region_item){(int32_t)k, (int32_t)n, x * unit, 0};
+    n++;
     if (x * unit > *tmax) *tmax = x * unit;
     if (!*end) break;
     s = end + 1;
   }
+  /* by value (a value given twice: the later one), then one binary
+   * search per element: linear in the list and the wall, whatever the
+   * list */
+  qsort(items, n, sizeof *items, cmp_region_item);
+  size_t u = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (u && items[u - 1].id == items[i].id)
+      items[u - 1] = items[i];
+    else
+      items[u++] = items[i];
+  }
+  for (int64_t e = 0; e < m->ne; e++) {
+    size_t lo = 0, hi = u;
+    while (lo < hi) {
+      size_t mid = lo + (hi - lo) / 2;
+      if (items[mid].id < id[e])
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    if (lo < u && items[lo].id == id[e]) {
+      et[e] = items[lo].x;
+      items[lo].hits += m->etype[e] == VM_TRI || m->etype[e] == VM_QUAD;
+    }
+  }
+  size_t missing = 0, first = 0;
+  for (size_t i = 0; i < u; i++)
+    if (!items[i].hits && !missing++) first = i;
+  if (missing == 1)
+    vm_log(cli->ctx, VM_LOG_WARN, "--region-thickness: no wall face has %s = %d", name,
+           items[first].id);
+  else if (missing > 1)
+    vm_log(cli->ctx, VM_LOG_WARN,
+           "--region-thickness: no wall face has %s = %d, nor %zu other values of the list", name,
+           items[first].id, missing - 1);
+  vm_free(cli->ctx, items);
   *out = et;
   return VM_EXIT_OK;
 }
