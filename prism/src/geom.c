@@ -49,19 +49,6 @@ double pr_prism_corner_quality(const double *x, int *inverted) {
   return q / (sqrt(3.0) / 2);
 }
 
-int pr_prism_split_bad(const double *x, double *qmin) {
-  if (!qmin) return vm_prism_split_check(x, NULL); /* the signs alone: no lengths */
-  double q[6];
-  int bad = vm_prism_split_check(x, q);
-  {
-    *qmin = q[0];
-    for (int j = 1; j < 6; j++) *qmin = q[j] < *qmin ? q[j] : *qmin;
-  }
-  return bad;
-}
-
-void pr_prism_split_q(const double *x, double *q) { vm_prism_split_check(x, q); }
-
 double pr_tilt_deg(const double *o, const double *x, const double *n) {
   double e[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
   double l = vm_norm3(e), cs = l > 0 ? vm_dot3(e, n) / l : -1;

@@ -21,13 +21,6 @@ double pr_prism_quality(const double *x);
 /* The same over the 6 corner tets (the figure the report calls the scaled
  * Jacobian), and the number of corner tets with det <= 0 in *inverted. */
 double pr_prism_corner_quality(const double *x, int *inverted);
-/* vm_prism_split_check (varmesh/quality.h): the tets of two bottom and
- * two top vertices with det <= 0 (a prism is positive in all of its 3-tet
- * splits iff none is and its corner tets are); in *qmin (may be NULL) the
- * least of their det / (|e1| |e2| |e3|). */
-int pr_prism_split_bad(const double *x, double *qmin);
-/* Those 6 tets' det / (|e1| |e2| |e3|) into q. */
-void pr_prism_split_q(const double *x, double *q);
 
 /* Angle in degrees between side edge o -> x and the unit normal n (180 for
  * an edge of zero length). */

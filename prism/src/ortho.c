@@ -40,6 +40,7 @@
 #include <string.h>
 
 #include "state.h"
+#include "varmesh/quality.h"
 
 /* Levels this far apart are relieved at the same time (see the sweep). */
 #define PR_ORTHO_STRIDE 5
@@ -149,11 +150,11 @@ typedef struct around {
 } around;
 
 /* The split penalty of prism x: the sum over its tets of two bottom and
- * two top vertices (pr_prism_split_bad) of max(0, m - q)^2, q their
+ * two top vertices (vm_prism_split_check) of max(0, m - q)^2, q their
  * det / edge-length product, m = k.split_margin. */
 static double split_penalty(const vm_prism *p, const double *x) {
   double q[6], e = 0;
-  pr_prism_split_q(x, q);
+  vm_prism_split_check(x, q);
   for (int j = 0; j < 6; j++)
     if (q[j] < p->k.split_margin) e += (p->k.split_margin - q[j]) * (p->k.split_margin - q[j]);
   return e;
@@ -186,7 +187,7 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
       q = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
       a->q[c] = q;
       if (!(q >= qfloor[c])) return 0;
-      a->splitbad += pr_prism_split_bad(x[c], NULL) > 0;
+      a->splitbad += vm_prism_split_check(x[c], NULL) > 0;
     }
     if (split) a->e += split_penalty(p, x[c]);
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
@@ -497,19 +498,6 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
   return 0;
 }
 
-/* Prisms of the stack not positive in every 3-tet split. */
-static int64_t count_split_bad(const vm_prism *p) {
-  int nl = p->nlev - 1;
-  int64_t n = 0, nc = p->nt * nl;
-#pragma omp parallel for schedule(static) reduction(+ : n)
-  for (int64_t c = 0; c < nc; c++) {
-    double x[18];
-    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
-    n += pr_prism_split_bad(x, NULL) > 0;
-  }
-  return n;
-}
-
 static int cmp_i64(const void *a, const void *b) {
   int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
   return (x > y) - (x < y);
@@ -535,16 +523,21 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
   size_t nv = (size_t)(nw * (nl + 1));
   memset(moved, 0, nv);
   memset(act, 0, nv);
+  /* work lists: vertices to visit (vl), those that moved (ml), cells to
+   * look at again (cl), deduplicated by act and cmark, so bounded by the
+   * vertices and the cells */
   uint8_t *cmark = vm_calloc(ctx, (size_t)nc, 1);
   /* stuck[key]: the vertex's last step was refused and nothing around it
    * has moved since (trying it again would be refused again) */
   uint8_t *stuck = vm_calloc(ctx, nv, 1);
   int64_t *bad = vm_alloc_array(ctx, (size_t)nc, sizeof *bad);
-  if (!cmark || !bad || !stuck) {
-    vm_free(ctx, cmark);
-    vm_free(ctx, stuck);
-    vm_free(ctx, bad);
-    return VM_ERR_NOMEM;
+  int64_t *cl = vm_alloc_array(ctx, (size_t)nc, sizeof *cl);
+  int64_t *vl = vm_alloc_array(ctx, nv, sizeof *vl);
+  int64_t *ml = vm_alloc_array(ctx, nv, sizeof *ml);
+  int st = VM_OK;
+  if (!cmark || !stuck || !bad || !cl || !vl || !ml) {
+    st = VM_ERR_NOMEM;
+    goto done;
   }
   double sjmin = INFINITY;
 #pragma omp parallel for schedule(static) reduction(min : sjmin)
@@ -552,7 +545,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
     double x[18];
     int inv;
     pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
-    cmark[c] = pr_prism_split_bad(x, NULL) > 0;
+    cmark[c] = vm_prism_split_check(x, NULL) > 0;
     double q = pr_prism_corner_quality(x, &inv);
     if (!inv && q < sjmin) sjmin = q;
   }
@@ -564,24 +557,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       bad[nbad++] = c;
       cmark[c] = 0;
     }
-  s->split_before = s->split_after = nbad;
-  int64_t *vl = NULL, *ml = NULL, *cl = NULL;
-  size_t vcap = 0, mcap = 0, ccap = 0;
-  int st = VM_OK;
-#define PUSH(list, n, cap, val)                                                                    \
-  do {                                                                                             \
-    if ((size_t)(n) == (cap)) {                                                                    \
-      size_t nc2 = (cap) ? 2 * (cap) : 256;                                                        \
-      int64_t *g2 = vm_realloc(ctx, (list), nc2 * sizeof *(list));                                 \
-      if (!g2) {                                                                                   \
-        st = VM_ERR_NOMEM;                                                                         \
-        goto done;                                                                                 \
-      }                                                                                            \
-      (list) = g2;                                                                                 \
-      (cap) = nc2;                                                                                 \
-    }                                                                                              \
-    (list)[(n)++] = (val);                                                                         \
-  } while (0)
+  s->split_before = nbad;
   for (int round = 0; round < p->k.split_rounds && nbad && pr_time_left(p) > 0; round++) {
     /* the failing cells' movable vertices, in level and vertex order */
     int64_t nvl = 0, nml = 0, ncl = 0;
@@ -593,7 +569,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
           size_t key = (size_t)l * nw + p->tri[3 * t + i];
           if (l < 1 || l > nl || act[key] || stuck[key]) continue;
           act[key] = 1;
-          PUSH(vl, nvl, vcap, (int64_t)key);
+          vl[nvl++] = (int64_t)key;
         }
     }
     qsort(vl, (size_t)nvl, sizeof *vl, cmp_i64);
@@ -603,7 +579,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       int64_t v = vl[i] % nw;
       if (relieve(p, nbt, fm, qinit, v, k, c0, cact, 1)) {
         moved[vl[i]] = 1;
-        PUSH(ml, nml, mcap, vl[i]);
+        ml[nml++] = vl[i];
       } else {
         stuck[vl[i]] = 1;
       }
@@ -633,7 +609,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
     for (int64_t b = 0; b < nbad; b++)
       if (!cmark[bad[b]]) {
         cmark[bad[b]] = 1;
-        PUSH(cl, ncl, ccap, bad[b]);
+        cl[ncl++] = bad[b];
       }
     for (int64_t i = 0; i < nml; i++) {
       int k = (int)(ml[i] / nw);
@@ -643,7 +619,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
           int64_t c = (int64_t)p->vt[m] * nl + j;
           if (!cmark[c]) {
             cmark[c] = 1;
-            PUSH(cl, ncl, ccap, c);
+            cl[ncl++] = c;
           }
         }
     }
@@ -653,12 +629,13 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       double x[18];
       cmark[cl[i]] = 0;
       pr_prism_at(p, p->lev, cl[i] / nl, (int)(cl[i] % nl), x);
-      if (pr_prism_split_bad(x, NULL)) bad[nbad++] = cl[i];
+      if (vm_prism_split_check(x, NULL)) bad[nbad++] = cl[i];
     }
   }
-#undef PUSH
-  s->split_after = count_split_bad(p);
-  refresh(p, nbt, cact, fm, moved);
+  /* the list is exact: every round ends by looking again at every cell
+   * that could have changed */
+  s->split_after = nbad;
+  if (s->split_moves) refresh(p, nbt, cact, fm, moved);
 done:
   vm_free(ctx, cmark);
   vm_free(ctx, stuck);

@@ -270,30 +270,16 @@ static int build_adjacency(vm_prism *p) {
   return VM_OK;
 }
 
-/* Each column's aim p->tv: T everywhere, or, with a thickness per wall
- * triangle (held in p->tv on entry, nt values), the least of its
- * triangles' graded along the wall: tv[v] = min over u of (the least at u
- * + k.region_slope * the shortest wall-edge path from u to v), by
- * Dijkstra's method from every vertex at once (a binary heap; the result is
- * the unique fixed point, whatever order ties are taken in). */
+/* With a thickness per wall face, each column's aim p->tv (on entry the
+ * least of its triangles') graded along the wall: tv[v] = min over u of
+ * (the least at u + k.region_slope * the shortest wall-edge path from u to
+ * v), by Dijkstra's method from every vertex at once (a binary heap; the
+ * result is the unique fixed point, whatever order ties are taken in). */
 static int region_aims(vm_prism *p) {
+  if (!p->regional) return VM_OK;
   vm_ctx *ctx = p->ctx;
-  int64_t nw = p->nw, nt = p->nt;
-  double *tv = vm_alloc_array(ctx, (size_t)nw, sizeof *tv);
-  if (!tv) return VM_ERR_NOMEM;
-  double *tri_T = p->tv;
-  p->tv = tv;
-  if (!tri_T) {
-    for (int64_t v = 0; v < nw; v++) tv[v] = p->o.thickness;
-    return VM_OK;
-  }
-  for (int64_t v = 0; v < nw; v++) tv[v] = INFINITY;
-  for (int64_t t = 0; t < nt; t++)
-    for (int i = 0; i < 3; i++) {
-      int32_t v = p->tri[3 * t + i];
-      if (tri_T[t] < tv[v]) tv[v] = tri_T[t];
-    }
-  vm_free(ctx, tri_T);
+  int64_t nw = p->nw;
+  double *tv = p->tv;
   /* heap of (aim, vertex), lazily updated: at most nw + one entry per
    * directed edge */
   int64_t cap = nw + p->vv_off[nw], n = 0;
@@ -378,8 +364,8 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     vm_prism_destroy(&p);
     return VM_ERR_NOMEM;
   }
-  /* a thickness per wall face: one per triangle here, the aims per
-   * column after the adjacency (region_aims) */
+  /* a thickness per wall face: one per triangle here, the least per
+   * column below */
   double *tri_T = NULL;
   if (o.elem_thickness) {
     tri_T = vm_alloc_array(ctx, (size_t)nt, sizeof *tri_T);
@@ -418,13 +404,28 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   /* the options' array is read here only */
   p->o.elem_thickness = NULL;
   p->regional = tri_T != NULL;
-  p->tv = tri_T; /* held here (freed with p) until region_aims replaces it */
   for (int64_t i = 0; i < 3 * nt; i++) map[p->tri[i]] = 0;
   int64_t nw = 0;
   for (int64_t v = 0; v < wall->nv; v++)
     if (map[v] == 0) map[v] = (int32_t)nw++;
   for (int64_t i = 0; i < 3 * nt; i++) p->tri[i] = map[p->tri[i]];
   p->nw = nw;
+  /* each column's aim: T, or the least of its triangles' (graded along
+   * the wall once the adjacency is known: region_aims) */
+  p->tv = vm_alloc_array(ctx, (size_t)nw, sizeof *p->tv);
+  if (!p->tv) {
+    vm_free(ctx, map);
+    vm_free(ctx, tri_T);
+    vm_prism_destroy(&p);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t v = 0; v < nw; v++) p->tv[v] = tri_T ? INFINITY : o.thickness;
+  for (int64_t t = 0; tri_T && t < nt; t++)
+    for (int i = 0; i < 3; i++) {
+      int32_t v = p->tri[3 * t + i];
+      if (tri_T[t] < p->tv[v]) p->tv[v] = tri_T[t];
+    }
+  vm_free(ctx, tri_T);
   p->wall = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *p->wall);
   if (!p->wall) {
     vm_free(ctx, map);

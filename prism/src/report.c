@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "state.h"
+#include "varmesh/quality.h"
 
 /* The layer's fill of what the geometry allows at a column of thickness
  * d: min(1, d / min(T, radius)) (1 where the radius is 0). */
@@ -171,7 +172,7 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
         int bad;
         double q = pr_prism_corner_quality(x, &bad);
         inv += bad;
-        split += pr_prism_split_bad(x, NULL) > 0;
+        split += vm_prism_split_check(x, NULL) > 0;
         sj = q < sj ? q : sj;
       }
     R.inverted = inv;
