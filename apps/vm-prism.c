@@ -16,6 +16,7 @@
 #include "varmesh/quadrature.h"
 #include "varmesh/prism.h"
 #include "varmesh/repair.h"
+#include "varmesh/surface.h"
 
 typedef struct {
   vm_cli *cli;
@@ -221,6 +222,7 @@ typedef struct {
   double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
   int growth_given;                   /* --growth given (else solved for a first height) */
   double min_reach;                   /* --min-reach: percent, 0: never an exit for it */
+  int keep_wall;                      /* --keep-wall: no surface stage on a wall with needles */
   int json, fout;
   vm_prism_opts o;
   vm_write_opts wo;
@@ -399,6 +401,48 @@ static int64_t wall_needles(const vm_mesh *m, double deg, double *amin) {
   return n;
 }
 
+/* The wall m through the surface stage as vm-surface's defaults take it
+ * (repaired, slivers removed, the input remeshed to sizes from its
+ * curvature where needles are left, adapted by the 2D functional), in
+ * place: the layers are then those of `vm-surface IN W; vm-prism W`. `why`
+ * is said first. */
+static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, double amin) {
+  vm_log(cli->ctx, VM_LOG_WARN,
+         "%s: %s; the wall goes through the surface stage first, as vm-surface would take it "
+         "(--keep-wall: as it is)",
+         in, why);
+  vm_surface_opts so = vm_surface_opts_default();
+  int fin = vm_format_from_path(in);
+  so.soup = fin == VM_FMT_STL || fin == VM_FMT_OBJ || fin == VM_FMT_OFF || fin == VM_FMT_PLY;
+  vm_mesh_apply_fixed_field(m);
+  int64_t ne = m->ne;
+  vm_surface_summary s;
+  vm_cli_catch_interrupts(cli);
+  int st = vm_surface_run(cli->ctx, m, &so, &s);
+  if (st == VM_ERR_INTERRUPTED) {
+    vm_cli_error(cli, "%s: interrupted in the surface stage; nothing written", in);
+    return VM_EXIT_INTERRUPTED;
+  }
+  if (st < 0) {
+    vm_cli_error(cli, "%s: the surface stage: %s (--keep-wall extrudes the wall as it is)", in,
+                 vm_ctx_error(cli->ctx));
+    return VM_EXIT_INPUT;
+  }
+  if (s.adapted && s.adapt.flipped > 0)
+    vm_log(cli->ctx, VM_LOG_WARN, "%s: the surface stage's adaptation flipped %lld triangles", in,
+           (long long)s.adapt.flipped);
+  double amin2 = 180;
+  int64_t left = wall_needles(m, 1.0, &amin2);
+  if (!cli->quiet)
+    fprintf(stderr,
+            "vm-prism: %s: surface stage: %lld -> %lld triangles (%s), smallest angle %.3g -> "
+            "%.3g deg, %lld under 1 degree left\n",
+            in, (long long)ne, (long long)m->ne,
+            s.remeshed ? "remeshed to sizes from the curvature" : "the input's vertices", amin,
+            amin2, (long long)left);
+  return VM_EXIT_OK;
+}
+
 #define A(f) offsetof(args, f)
 static const vm_opt opts[] = {
     {"--thickness", "-T", VM_OPT_DOUBLE, A(T_abs), "X", "total thickness, absolute", .lo = 1e-300,
@@ -455,6 +499,11 @@ static const vm_opt opts[] = {
      "refuse a wall oriented inwards (default: its triangles are turned, with a warning, so "
      "the layer grows outside)",
      .ival = 0},
+    {"--keep-wall", NULL, VM_OPT_FLAG, A(keep_wall), NULL,
+     "extrude the wall as it is, also where it has needles (triangles under 1 degree; by "
+     "default such a wall first goes through the surface stage as vm-surface's defaults "
+     "would: repaired, the needles remeshed away, adapted)",
+     .ival = 1},
     {"--min-reach", NULL, VM_OPT_DOUBLE, A(min_reach), "P",
      "exit 5 if fewer than P % of the columns the geometry leaves room for (exterior medial "
      "radius >= 1.05 T) reach the full thickness (default 0: never; the mesh is still written)",
@@ -553,8 +602,8 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
 }
 
 static void print_json(const char *in, const char *out, const vm_prism_report *rp, double L,
-                       int64_t npairs, int64_t needles, int rc, int verified, int interrupted,
-                       int timed_out) {
+                       int64_t npairs, int64_t needles_in, int surface, int64_t needles, int rc,
+                       int verified, int interrupted, int timed_out) {
   const vm_prism_report r = *rp;
   printf("{\"input\": ");
   vm_json_string(stdout, in);
@@ -574,7 +623,8 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.first_height);
   printf(", \"growth\": ");
   vm_json_double(stdout, r.growth);
-  printf(", \"reoriented\": %s, \"needles\": %lld", r.reoriented ? "true" : "false",
+  printf(", \"reoriented\": %s, \"needles_in\": %lld, \"surface_stage\": %s, \"needles\": %lld",
+         r.reoriented ? "true" : "false", (long long)needles_in, surface ? "true" : "false",
          (long long)needles);
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
@@ -754,6 +804,33 @@ int main(int argc, char **argv) {
     rc = VM_EXIT_INPUT;
     goto done;
   }
+  /* needles: the columns over rows of them fall short (the springback's
+   * line search is held by their prisms: vm-gen wing at T = 20 %, 3.7 % of
+   * the columns with room reach T, 99.9 % through the surface stage). So by
+   * default such a wall goes through the surface stage here, as vm-surface
+   * would take it: the same layers as the two runs. Slivers alone (1 to 15
+   * degrees) do not send it there: on them the stage is not better
+   * everywhere (docs/prism.md). */
+  double needle_min = 180;
+  int64_t nneedle = wall_needles(m, 1.0, &needle_min), needles_in = nneedle;
+  int surface_ran = 0;
+  if (nneedle > 0 && a.keep_wall) {
+    vm_log(cli.ctx, VM_LOG_WARN,
+           "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
+           "of T (vm-gen wing at T = 20 %%: 3.7 %% of its columns reach T, 99.9 %% after the "
+           "surface stage); --keep-wall extrudes the wall as it is",
+           a.in, (long long)nneedle, needle_min);
+  } else if (nneedle > 0) {
+    char why[256];
+    snprintf(why, sizeof why,
+             "%lld triangles under 1 degree (smallest %.3g): the columns over them would fall "
+             "short of T",
+             (long long)nneedle, needle_min);
+    if ((rc = surface_stage(&cli, a.in, m, why, needle_min)) != VM_EXIT_OK) goto done;
+    surface_ran = 1;
+    nneedle = wall_needles(m, 1.0, &needle_min);
+    L = model_length(m);
+  }
   vm_prism_opts *o = &a.o;
   o->thickness = a.T_abs > 0 ? a.T_abs : a.T_rel * L;
   /* a thickness lost in rounding against the model's coordinates is a
@@ -804,16 +881,6 @@ int main(int argc, char **argv) {
     goto done;
   }
   if ((rc = check_wall_intersections(&cli, a.in, m)) != VM_EXIT_OK) goto done;
-  /* needles: the columns over rows of them fall short (the springback's
-   * line search is held by their prisms); the surface stage removes them */
-  double needle_min = 180;
-  int64_t nneedle = wall_needles(m, 1.0, &needle_min);
-  if (nneedle > 0)
-    vm_log(cli.ctx, VM_LOG_WARN,
-           "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
-           "of T (vm-gen wing at T = 20 %%: 3.7 %% of its columns reach T, 99.9 %% after "
-           "vm-surface); run vm-surface %s first",
-           a.in, (long long)nneedle, needle_min, a.in);
   /* the report is made (or refused) before the run */
   if (a.report) {
     char title[512];
@@ -905,8 +972,8 @@ int main(int argc, char **argv) {
             r.inverted > 0 || npairs > 0 ? "NOT VALID" : "not verified", (long long)r.inverted,
             (long long)npairs);
   if (a.json)
-    print_json(a.in, a.out, &r, L, npairs, nneedle, rc, verified, st == VM_ERR_INTERRUPTED,
-               timed_out);
+    print_json(a.in, a.out, &r, L, npairs, needles_in, surface_ran, nneedle, rc, verified,
+               st == VM_ERR_INTERRUPTED, timed_out);
   if (report) {
     int rrc =
         write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res, hist);

@@ -1189,10 +1189,11 @@ int vm_prism_march(vm_prism *p) {
            acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI);
     if (os.split_before)
       vm_log(ctx, VM_LOG_INFO,
-             "prism: split repair: %lld steps; prisms not positive in every 3-tet split %lld -> "
-             "%lld (the least scaled Jacobian %.3g kept), %.2f s",
-             (long long)os.split_moves, (long long)os.split_before, (long long)os.split_after,
-             os.split_sj, os.split_time);
+             "prism: split repair: %lld steps in %d rounds (%d outer batches taken again "
+             "step by step); prisms not positive in every 3-tet split %lld -> %lld (the least "
+             "scaled Jacobian %.3g kept), %.2f s",
+             (long long)os.split_moves, os.split_rounds, os.split_batches_undone,
+             (long long)os.split_before, (long long)os.split_after, os.split_sj, os.split_time);
   }
   ts[7] = omp_get_wtime();
   vm_log(ctx, VM_LOG_INFO,

@@ -354,7 +354,10 @@ static void growth_around(const vm_prism *p, int64_t v, int k, double *lo, doubl
 
 /* One relief step at level k of column v; 1 if it moved. With `split`
  * the step lowers the split penalty of the cells around instead of their
- * faces' (split_repair), under the same guards. */
+ * faces' (split_repair), under the same guards; with split == 2 an outer
+ * vertex's step is kept without querying the single layer's crossings
+ * (the caller queries once for a batch of them, and undoes the batch if
+ * it crosses). */
 static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit, int64_t v,
                    int k, double c0, double cact, int split) {
   const pr_params *kp = &p->k;
@@ -481,7 +484,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
       int64_t np;
       memcpy(keep, lv, sizeof keep);
       memcpy(lv, xv, sizeof keep);
-      if (pr_layer_intersections(p, NULL, &np) < 0 || np > p->rep.intersections) {
+      if (split != 2 && (pr_layer_intersections(p, NULL, &np) < 0 || np > p->rep.intersections)) {
         memcpy(lv, keep, sizeof keep);
         continue;
       }
@@ -498,6 +501,20 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
   return 0;
 }
 
+/* Outer vertex v (level nl) back at x: in the levels, in the single
+ * layer, and the centres of its top-layer cells. */
+static void put_outer(vm_prism *p, facemap *fm, int64_t v, const double *x) {
+  int nl = p->nlev - 1;
+  memcpy(p->lev + (size_t)nl * 3 * p->nw + 3 * v, x, 3 * sizeof *x);
+  memcpy(p->layer->xyz + 3 * (p->nw + v), x, 3 * sizeof *x);
+  for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++) {
+    double y[18];
+    int64_t t = p->vt[m];
+    pr_prism_at(p, p->lev, t, nl - 1, y);
+    pr_foam_cell(y, fm->cc + 3 * (t * nl + nl - 1));
+  }
+}
+
 static int cmp_i64(const void *a, const void *b) {
   int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
   return (x > y) - (x < y);
@@ -511,7 +528,8 @@ static int cmp_i64(const void *a, const void *b) {
  * newly failing a split; a top-layer cell's outer vertices too, in the
  * outer surface's tangent plane, kept only if the single layer's faces
  * cross nothing new), in rounds, each in level and vertex order, until
- * none is left or a round moves nothing (k.split_rounds at most). After
+ * none is left, a round moves nothing or k.split_stall_rounds rounds
+ * bring no new least count (k.split_rounds at most). After
  * the first, a round looks only at the failing cells and those around the
  * vertices that moved. act and moved are work arrays (nw per level).
  * Serial: the cells are few. */
@@ -534,8 +552,10 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
   int64_t *cl = vm_alloc_array(ctx, (size_t)nc, sizeof *cl);
   int64_t *vl = vm_alloc_array(ctx, nv, sizeof *vl);
   int64_t *ml = vm_alloc_array(ctx, nv, sizeof *ml);
+  /* the outer vertices' positions before the round's batch of steps */
+  double *x0 = vm_alloc_array(ctx, 3 * (size_t)nw, sizeof *x0);
   int st = VM_OK;
-  if (!cmark || !stuck || !bad || !cl || !vl || !ml) {
+  if (!cmark || !stuck || !bad || !cl || !vl || !ml || !x0) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -558,7 +578,11 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       cmark[c] = 0;
     }
   s->split_before = nbad;
-  for (int round = 0; round < p->k.split_rounds && nbad && pr_time_left(p) > 0; round++) {
+  int64_t best = nbad;
+  int since_best = 0;
+  for (int round = 0; round < p->k.split_rounds && nbad && pr_time_left(p) > 0 &&
+                      since_best < p->k.split_stall_rounds;
+       round++) {
     /* the failing cells' movable vertices, in level and vertex order */
     int64_t nvl = 0, nml = 0, ncl = 0;
     for (int64_t b = 0; b < nbad; b++) {
@@ -573,16 +597,40 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
         }
     }
     qsort(vl, (size_t)nvl, sizeof *vl, cmp_i64);
-    for (int64_t i = 0; i < nvl; i++) {
-      act[vl[i]] = 0;
-      int k = (int)(vl[i] / nw);
+    /* the outer vertices come last (the highest level): their steps go as
+     * one batch, the single layer's crossings queried once after it (each
+     * query rebuilds the layer's scene: once per step it was most of the
+     * repair's time). If the batch crosses something new, it is undone in
+     * reverse order (the state before it, exactly) and its steps are taken
+     * again, each checked on its own. */
+    int64_t top0 = nvl;
+    while (top0 > 0 && vl[top0 - 1] / nw == nl) top0--;
+    for (int64_t i = top0; i < nvl; i++) {
       int64_t v = vl[i] % nw;
-      if (relieve(p, nbt, fm, qinit, v, k, c0, cact, 1)) {
-        moved[vl[i]] = 1;
-        ml[nml++] = vl[i];
-      } else {
-        stuck[vl[i]] = 1;
+      memcpy(x0 + 3 * v, p->lev + (size_t)nl * 3 * nw + 3 * v, 3 * sizeof *x0);
+    }
+    int64_t nml0 = 0;
+    for (int pass = 0; pass < 2; pass++) {
+      for (int64_t i = pass ? top0 : 0; i < nvl; i++) {
+        act[vl[i]] = 0;
+        int k = (int)(vl[i] / nw);
+        int64_t v = vl[i] % nw;
+        if (i == top0) nml0 = nml;
+        if (relieve(p, nbt, fm, qinit, v, k, c0, cact, pass == 0 && k == nl ? 2 : 1)) {
+          moved[vl[i]] = 1;
+          ml[nml++] = vl[i];
+        } else {
+          stuck[vl[i]] = 1;
+        }
       }
+      if (pass || nml == nml0 || top0 == nvl) break;
+      int64_t np;
+      if ((st = pr_layer_intersections(p, NULL, &np)) < 0) goto done;
+      if (np <= p->rep.intersections) break;
+      s->split_batches_undone++;
+      for (int64_t i = nml; i-- > nml0;) put_outer(p, fm, ml[i] % nw, x0 + 3 * (ml[i] % nw));
+      for (int64_t i = top0; i < nvl; i++) stuck[vl[i]] = 0;
+      nml = nml0;
     }
     /* a vertex whose step reads what moved may go again: a step at (k, u)
      * reads the cells of u's triangles at layers k - 1 and k, the centres
@@ -603,6 +651,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       }
     }
     s->split_moves += nml;
+    s->split_rounds = round + 1;
     if (!nml) break;
     /* the cells to look at again: the failing ones and those around the
      * vertices that moved */
@@ -631,6 +680,12 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       pr_prism_at(p, p->lev, cl[i] / nl, (int)(cl[i] % nl), x);
       if (vm_prism_split_check(x, NULL)) bad[nbad++] = cl[i];
     }
+    if (nbad < best) {
+      best = nbad;
+      since_best = 0;
+    } else {
+      since_best++;
+    }
   }
   /* the list is exact: every round ends by looking again at every cell
    * that could have changed */
@@ -643,6 +698,7 @@ done:
   vm_free(ctx, vl);
   vm_free(ctx, ml);
   vm_free(ctx, cl);
+  vm_free(ctx, x0);
   return st;
 }
 

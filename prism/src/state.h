@@ -144,6 +144,9 @@ typedef struct pr_ortho_summary {
   int64_t split_before, split_after;   /* prisms not positive in every 3-tet split,
                                           before and after the split repair */
   int64_t split_moves;                 /* the repair's vertex steps kept */
+  int split_rounds;                    /* its rounds */
+  int split_batches_undone;            /* rounds whose outer-vertex batch crossed
+                                          something and was taken again step by step */
   double split_sj;                     /* the least scaled Jacobian when it started
                                           (it lowers no cell below) */
   double split_time;                   /* its seconds */

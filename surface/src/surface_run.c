@@ -90,12 +90,94 @@ static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
 static int all_triangles(const vm_mesh *m);
 static int count_pairs(vm_mesh *m, int64_t *count, int32_t **pairs, double *where);
 
-/* The features of m for the remeshing: by dihedral angle, and cone points
- * as corners. */
+/* The features of m for the remeshing: by dihedral angle, cone points as
+ * corners, and the borders between regions of its int element fields. */
 static int features(vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
                     vm_surface_features *f) {
   return vm_surface_detect_features_cones(m, o->adapt.feature_angle, o->adapt.corner_angle,
                                           o->adapt.cone_angle, f, &s->cones);
+}
+
+/* The fields of `from` (the surface before a remeshing) onto m (after it;
+ * m's own fields of those names replaced): an element's values are those
+ * of the element of `from` closest to its centroid (with the region
+ * borders kept as lines, the region it lies in); a vertex's F64 values are
+ * interpolated linearly at its closest point of `from`, its I32 values are
+ * those of the nearest corner of the closest element. */
+static int carry_fields(vm_ctx *ctx, vm_mesh *m, const vm_mesh *from) {
+  if (from->nfield == 0) return VM_OK;
+  vm_surface_projector *p = NULL;
+  int64_t n = m->ne > m->nv ? m->ne : m->nv;
+  double *pts = vm_alloc_array(ctx, 3 * (size_t)(n > 0 ? n : 1), sizeof *pts);
+  int64_t *ce = vm_alloc_array(ctx, (size_t)(m->ne > 0 ? m->ne : 1), sizeof *ce);
+  int64_t *cv = vm_alloc_array(ctx, (size_t)(m->nv > 0 ? m->nv : 1), sizeof *cv);
+  double *tmp = vm_alloc_array(ctx, (size_t)(from->nv > 0 ? from->nv : 1), sizeof *tmp);
+  double *out = vm_alloc_array(ctx, (size_t)(m->nv > 0 ? m->nv : 1), sizeof *out);
+  int st = pts && ce && cv && tmp && out ? VM_OK : VM_ERR_NOMEM;
+  if (!st) st = vm_surface_projector_create(ctx, from, NULL, &p);
+  /* the closest element of every new element's centroid, and of every
+   * new vertex */
+  for (int64_t e = 0; !st && e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    int k = (int)(m->eoff[e + 1] - m->eoff[e]);
+    double *q = pts + 3 * e;
+    q[0] = q[1] = q[2] = 0;
+    for (int i = 0; i < k; i++)
+      for (int j = 0; j < 3; j++) q[j] += m->xyz[3 * (int64_t)c[i] + j] / k;
+  }
+  if (!st) st = vm_surface_projector_closest_element(p, m->ne, pts, ce);
+  if (!st) st = vm_surface_projector_closest_element(p, m->nv, m->xyz, cv);
+  for (int i = 0; !st && i < from->nfield; i++) {
+    const vm_field *src = &from->fields[i];
+    int vert = src->location == VM_FIELD_VERTEX, nc = src->ncomp;
+    vm_mesh_remove_field(m, src->name, src->location);
+    vm_field *dst = NULL;
+    if ((st = vm_mesh_add_field(m, src->name, src->location, src->type, nc, &dst))) break;
+    if (!vert) {
+      size_t sz = (size_t)nc * (src->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
+      for (int64_t e = 0; e < m->ne; e++) {
+        if (ce[e] >= 0)
+          memcpy((char *)dst->data + (size_t)e * sz, (const char *)src->data + (size_t)ce[e] * sz,
+                 sz);
+        else
+          memset((char *)dst->data + (size_t)e * sz, 0, sz);
+      }
+    } else if (src->type == VM_FIELD_F64) {
+      const double *sd = src->data;
+      double *dd = dst->data;
+      for (int j = 0; !st && j < nc; j++) {
+        for (int64_t v = 0; v < from->nv; v++) tmp[v] = sd[(int64_t)nc * v + j];
+        st = vm_surface_projector_interpolate(p, tmp, m->nv, m->xyz, out);
+        for (int64_t v = 0; !st && v < m->nv; v++) dd[(int64_t)nc * v + j] = out[v];
+      }
+    } else {
+      const int32_t *sd = src->data;
+      int32_t *dd = dst->data;
+      for (int64_t v = 0; v < m->nv; v++) {
+        int32_t best = -1;
+        double bd = INFINITY;
+        if (cv[v] >= 0) {
+          const int32_t *c = from->conn + from->eoff[cv[v]];
+          int k = (int)(from->eoff[cv[v] + 1] - from->eoff[cv[v]]);
+          for (int i2 = 0; i2 < k; i2++) {
+            double d[3];
+            vm_sub3(from->xyz + 3 * (int64_t)c[i2], m->xyz + 3 * v, d);
+            double l = vm_dot3(d, d);
+            if (l < bd) bd = l, best = c[i2];
+          }
+        }
+        for (int j = 0; j < nc; j++)
+          dd[(int64_t)nc * v + j] = best >= 0 ? sd[(int64_t)nc * best + j] : 0;
+      }
+    }
+  }
+  vm_surface_projector_destroy(&p);
+  vm_free(ctx, pts);
+  vm_free(ctx, ce);
+  vm_free(ctx, cv);
+  vm_free(ctx, tmp);
+  vm_free(ctx, out);
+  return st;
 }
 
 /* Slivers removed by flips and collapses (f: m's features, updated). */
@@ -311,10 +393,13 @@ static int remesh_as(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surfa
         memcpy(keep + 3 * nkeep++, m->xyz + 3 * v, 3 * sizeof *keep);
   }
   if (!st && (uniform || graded)) {
-    if (graded)
-      st = vm_surface_remesh_graded(m, &f, &go, &s->graded);
-    else
-      st = vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
+    /* the fields are carried from *input afterwards (carry_fields), not
+     * dropped or zeroed by the remeshers */
+    while (!st && m->nfield > 0)
+      st = vm_mesh_remove_field(m, m->fields[0].name, m->fields[0].location);
+    if (!st)
+      st = graded ? vm_surface_remesh_graded(m, &f, &go, &s->graded)
+                  : vm_surface_remesh(m, &f, &mo, o->adapt.corner_angle);
     /* CGAL 5.5 can collapse a constrained tip, fold a triangle over where
      * details are far smaller than the edge length, or make the surface
      * intersect itself: the input's own vertices then */
@@ -380,6 +465,7 @@ static int remesh_as(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surfa
              s->min_angle_input, vm_surface_min_angle(m));
     }
   }
+  if (!st && (uniform || graded)) st = carry_fields(ctx, m, *input);
   if (!st && vm_ctx_interrupted(ctx)) st = VM_ERR_INTERRUPTED;
   if (!st) st = clean(ctx, m, o, s, &f);
   vm_surface_features_free(ctx, &f);
@@ -409,14 +495,6 @@ static int remesh(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
     return st;
   s->needles_in = needles(m, o->needle_angle);
   if (s->needles_in == 0) return st;
-  for (int k = 0; k < m->nfield; k++)
-    if (m->fields[k].location == VM_FIELD_ELEMENT) {
-      vm_log(ctx, VM_LOG_WARN,
-             "remesh: %lld triangles under %g deg are left; not remeshed, the surface has "
-             "element fields ('%s') a remeshing would drop",
-             (long long)s->needles_in, o->needle_angle, m->fields[k].name);
-      return st;
-    }
   vm_log(ctx, VM_LOG_INFO,
          "remesh: %lld triangles under %g deg are left after the sliver removal (needles it "
          "cannot remove without moving the surface); remeshing the input to sizes from its "

@@ -12,11 +12,12 @@ fail=0
 check() { if eval "$1"; then echo "ok: $2"; else echo "FAIL: $2"; fail=1; fi; }
 
 # a graded wing (vm-gen wing: cosine chordwise spacing, trailing-edge
-# triangles 1,500 times longer than wide, as CAD meshes of wings have):
-# its thin layer used to be refused ("12 thin prisms stay degenerate",
-# exit 1) while Gmsh extrudes it; the second halving pass takes it
+# triangles 1,500 times longer than wide, as CAD meshes of wings have),
+# extruded as it is (--keep-wall): its thin layer used to be refused ("12
+# thin prisms stay degenerate", exit 1) while Gmsh extrudes it; the second
+# halving pass takes it
 "$gen" wing "$dir/w.stl" >/dev/null
-"${prism[@]}" -t 0.05 -n 3 --json "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
+"${prism[@]}" --keep-wall -t 0.05 -n 3 --json "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
 rc=$?
 check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/w.json" && grep -q "\"intersecting_pairs\": 0," "$dir/w.json"' \
   "a graded wing's needles: a valid layer (got $rc)"
@@ -144,12 +145,18 @@ check '[ $rc -eq 1 ] && [ "$(wc -l <"$dir/err")" -eq 1 ] && grep -q "oriented in
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.xyz" ]' "unknown output format: exit 2"
 "${prism[@]}" --first-height 5 -T 1 "$dir/a.stl" "$dir/u.msh" 2>/dev/null
 check '[ $? -eq 2 ] && [ ! -e "$dir/u.msh" ]' "first height above the thickness: exit 2"
-# needles (triangles under 1 degree, which the surface stage removes): a
-# warning naming the count and vm-surface, "needles" in the JSON; the wing
-# vm-gen makes as a CAD mesher grades it has rows of them, the sphere none
-"$gen" wing "$dir/w.stl" >/dev/null
-"${prism[@]}" -q --json --time-limit 0.01 "$dir/w.stl" "$dir/w.vmsh" >"$dir/w.json" 2>"$dir/w.err"
-nn=$(sed -n 's/.*"needles": \([0-9]*\).*/\1/p' "$dir/w.json")
-check '[ "${nn:-0}" -gt 1000 ] && grep -q "$nn triangles under 1 degree.*run vm-surface" "$dir/w.err"' "wing: $nn needles, warned: $(grep -o 'triangles under 1 degree' "$dir/w.err" | head -1)"
-check 'grep -q "\"needles\": 0" "$dir/out.json" && ! grep -q "under 1 degree" "$dir/inv.err"' "sphere: no needles, no warning"
+# needles (triangles under 1 degree): the wing vm-gen makes as a CAD
+# mesher grades it has rows of them, the sphere none. By default such a
+# wall goes through the surface stage first (said, "surface_stage" and
+# "needles_in" in the JSON, none left); --keep-wall extrudes it as it is,
+# with a warning giving the count
+"${prism[@]}" -q --json --time-limit 0.01 "$dir/w.stl" "$dir/ws.vmsh" >"$dir/ws.json" 2>"$dir/ws.err"
+nin=$(sed -n 's/.*"needles_in": \([0-9]*\).*/\1/p' "$dir/ws.json")
+check '[ "${nin:-0}" -gt 1000 ] && grep -q "\"surface_stage\": true, \"needles\": 0," "$dir/ws.json" && grep -q "$nin triangles under 1 degree.*goes through the surface stage first" "$dir/ws.err"' \
+  "wing: $nin needles, the surface stage run and said, none left: $(grep -o 'the wall goes through the surface stage first' "$dir/ws.err")"
+"${prism[@]}" -q --json --keep-wall --time-limit 0.01 "$dir/w.stl" "$dir/wk.vmsh" >"$dir/wk.json" 2>"$dir/wk.err"
+nn=$(sed -n 's/.*"needles": \([0-9]*\).*/\1/p' "$dir/wk.json")
+check '[ "${nn:-0}" -eq "${nin:-1}" ] && grep -q "\"surface_stage\": false" "$dir/wk.json" && grep -q "$nn triangles under 1 degree.*--keep-wall extrudes the wall as it is" "$dir/wk.err"' \
+  "wing, --keep-wall: $nn needles extruded, warned"
+check 'grep -q "\"needles_in\": 0, \"surface_stage\": false, \"needles\": 0" "$dir/out.json" && ! grep -q "under 1 degree" "$dir/inv.err"' "sphere: no needles, no surface stage, no warning"
 exit $fail

@@ -59,8 +59,15 @@ check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wp.json" && awk -v r="$re
 "$surf" -q --json --iter 10 --size input "$dir/w.stl" "$dir/wi.vmsh" >"$dir/wi.json" 2>"$dir/wi.err"
 check '[ $? -eq 0 ] && grep -q "\"size\": \"input\", \"needles\": 0" "$dir/wi.json" && grep -q "\"faces\": 4564, \"repair\"" "$dir/wi.json"' \
   "graded wing, --size input: the input's vertices kept (4,564 triangles after the sliver removal)"
-"$prism" -q --json -t 0.05 -n 3 "$dir/wi.vmsh" "$dir/wip.vmsh" >"$dir/wip.json" 2>"$dir/wip.err"
-check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wip.json"' "graded wing, --size input: vm-prism takes it ($(tail -n 1 "$dir/wip.err"))"
+"$prism" -q --json --keep-wall -t 0.05 -n 3 "$dir/wi.vmsh" "$dir/wip.vmsh" >"$dir/wip.json" 2>"$dir/wip.err"
+check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wip.json"' "graded wing, --size input: vm-prism --keep-wall takes it ($(tail -n 1 "$dir/wip.err"))"
+# vm-prism given the raw wing (needles) runs the surface stage itself: the
+# same layers, byte for byte, as vm-surface's defaults and then vm-prism
+"$surf" -q "$dir/w.stl" "$dir/wd.vmsh"
+"$prism" -q -t 0.05 -n 3 "$dir/wd.vmsh" "$dir/two.vmsh" 2>/dev/null
+"$prism" -q --json -t 0.05 -n 3 "$dir/w.stl" "$dir/one.vmsh" >"$dir/one.json" 2>"$dir/one.err"
+check '[ $? -eq 0 ] && cmp -s "$dir/one.vmsh" "$dir/two.vmsh" && grep -q "\"surface_stage\": true, \"needles\": 0," "$dir/one.json"' \
+  "raw graded wing: vm-prism's own surface stage gives the layers of vm-surface then vm-prism, byte for byte"
 
 # the uniform remeshing (CGAL) of the wing folds triangles over where its
 # details are far finer than the edge length: caught, and the run goes on

@@ -128,18 +128,96 @@ int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double c
   return marked;
 }
 
+/* Do triangles e and g of m differ in an int element field (a region:
+ * vm-gen's component, gmsh:physical, ...)? */
+static int other_region(const vm_mesh *m, int64_t e, int64_t g) {
+  for (int i = 0; i < m->nfield; i++) {
+    const vm_field *fl = &m->fields[i];
+    if (fl->location != VM_FIELD_ELEMENT || fl->type != VM_FIELD_I32) continue;
+    const int32_t *d = fl->data;
+    if (memcmp(d + (int64_t)fl->ncomp * e, d + (int64_t)fl->ncomp * g,
+               (size_t)fl->ncomp * sizeof *d))
+      return 1;
+  }
+  return 0;
+}
+
+typedef struct {
+  uint64_t key; /* smaller vertex << 32 | larger */
+  int64_t face;
+} edge_face;
+
+static int cmp_edge_face(const void *a, const void *b) {
+  const edge_face *x = a, *y = b;
+  if (x->key != y->key) return x->key < y->key ? -1 : 1;
+  return (x->face > y->face) - (x->face < y->face);
+}
+
+/* f plus the borders between the regions of m's int element fields as
+ * feature edges (its corners kept as corners): a remeshing keeps them as
+ * lines, so every new triangle lies in one region. Nothing to do (VM_OK, f
+ * unchanged) without such fields. */
+static int add_region_borders(const vm_mesh *m, double corner_deg, vm_surface_features *f) {
+  vm_ctx *ctx = m->ctx;
+  int any = 0;
+  for (int i = 0; i < m->nfield; i++)
+    any |= m->fields[i].location == VM_FIELD_ELEMENT && m->fields[i].type == VM_FIELD_I32;
+  if (!any || !tris_only(m) || m->ne == 0) return VM_OK;
+  edge_face *ef = vm_alloc_array(ctx, 3 * (size_t)m->ne, sizeof *ef);
+  int32_t *edges = vm_alloc_array(ctx, 2 * (size_t)f->nedge + 3 * (size_t)m->ne, sizeof *edges);
+  uint8_t *corner = vm_calloc(ctx, (size_t)(m->nv > 0 ? m->nv : 1), 1);
+  int st = ef && edges && corner ? VM_OK : VM_ERR_NOMEM;
+  int64_t n = 2 * f->nedge, nb = 0;
+  if (!st) {
+    for (int64_t e = 0; e < m->ne; e++) {
+      const int32_t *c = m->conn + m->eoff[e];
+      for (int i = 0; i < 3; i++) {
+        uint32_t a = (uint32_t)c[i], b = (uint32_t)c[(i + 1) % 3];
+        ef[3 * e + i].key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        ef[3 * e + i].face = e;
+      }
+    }
+    qsort(ef, 3 * (size_t)m->ne, sizeof *ef, cmp_edge_face);
+    memcpy(edges, f->edge, 2 * (size_t)f->nedge * sizeof *edges);
+    for (int64_t k = 0; k + 1 < 3 * m->ne; k++) {
+      if (ef[k].key != ef[k + 1].key || !other_region(m, ef[k].face, ef[k + 1].face)) continue;
+      edges[n++] = (int32_t)(ef[k].key >> 32);
+      edges[n++] = (int32_t)(ef[k].key & 0xffffffffu);
+      nb++;
+      while (k + 1 < 3 * m->ne && ef[k + 1].key == ef[k].key) k++;
+    }
+    for (int64_t v = 0; v < m->nv && v < f->nv; v++) corner[v] = f->vclass[v] == VM_FEATURE_CORNER;
+  }
+  if (!st && nb > 0) {
+    vm_surface_features g;
+    memset(&g, 0, sizeof g);
+    st = vm_surface_features_from_edges(m, n / 2, edges, corner, corner_deg, &g);
+    if (!st) {
+      vm_surface_features_free(ctx, f);
+      *f = g;
+    }
+  }
+  vm_free(ctx, ef);
+  vm_free(ctx, edges);
+  vm_free(ctx, corner);
+  return st;
+}
+
 int vm_surface_detect_features_cones(const vm_mesh *m, double angle_deg, double corner_deg,
                                      double cone_deg, vm_surface_features *f, int64_t *ncones) {
   if (ncones) *ncones = 0;
   int st = vm_surface_detect_features(m, angle_deg, corner_deg, f);
-  if (st || cone_deg >= 360) return st;
-  int64_t nc = vm_surface_mark_cones(m, f, cone_deg);
-  if (nc < 0) {
-    vm_surface_features_free(m->ctx, f);
-    return (int)nc;
+  if (st) return st;
+  if (cone_deg < 360) {
+    int64_t nc = vm_surface_mark_cones(m, f, cone_deg);
+    if (nc < 0) {
+      vm_surface_features_free(m->ctx, f);
+      return (int)nc;
+    }
+    if (ncones) *ncones = nc;
   }
-  if (ncones) *ncones = nc;
-  return VM_OK;
+  if ((st = add_region_borders(m, corner_deg, f))) vm_surface_features_free(m->ctx, f);
+  return st;
 }
 
 /* ---- the working mesh ---- */

@@ -36,10 +36,12 @@ typedef std::vector<Segment>::const_iterator SegIt;
 typedef CGAL::AABB_segment_primitive<K, SegIt> SegPrim;
 typedef CGAL::AABB_tree<CGAL::AABB_traits<K, SegPrim>> SegTree;
 
-// Triangles of the 2D elements of m (quads split along 0-2) and their
-// vertex indices; degenerate triangles break the AABB distance code and
-// are left out.
-void collect_triangles(const vm_mesh *m, std::vector<Triangle> &tri, std::vector<int32_t> &tv) {
+// Triangles of the 2D elements of m (quads split along 0-2), their
+// vertex indices and, if te is given, the element each came from;
+// degenerate triangles break the AABB distance code and are left out.
+void collect_triangles(const vm_mesh *m, std::vector<Triangle> &tri, std::vector<int32_t> &tv,
+                       std::vector<int64_t> *te = nullptr) {
+  int64_t elem = 0;
   auto P = [m](int32_t v) {
     const double *x = m->xyz + 3 * static_cast<int64_t>(v);
     return Point(x[0], x[1], x[2]);
@@ -51,9 +53,11 @@ void collect_triangles(const vm_mesh *m, std::vector<Triangle> &tri, std::vector
     tv.push_back(a);
     tv.push_back(b);
     tv.push_back(c);
+    if (te) te->push_back(elem);
   };
   for (int64_t e = 0; e < m->ne; e++) {
     const int32_t *c = m->conn + m->eoff[e];
+    elem = e;
     if (m->etype[e] == VM_TRI) {
       add(c[0], c[1], c[2]);
     } else if (m->etype[e] == VM_QUAD) {
@@ -66,12 +70,13 @@ void collect_triangles(const vm_mesh *m, std::vector<Triangle> &tri, std::vector
 struct TriSurface {
   std::vector<Triangle> tri;
   std::vector<int32_t> tv;
+  std::vector<int64_t> te; // the element of m each triangle came from
   std::vector<Vector> normal;
   std::unique_ptr<TriTree> tree;
   int64_t nv = 0;
   void build(const vm_mesh *m) {
     nv = m->nv;
-    collect_triangles(m, tri, tv);
+    collect_triangles(m, tri, tv, &te);
     normal.reserve(tri.size());
     for (const Triangle &t : tri) {
       Vector n = CGAL::cross_product(t[1] - t[0], t[2] - t[0]);
@@ -399,6 +404,24 @@ extern "C" int vm_surface_projector_distance(vm_surface_projector *p, int64_t n,
   for (int64_t i = 0; i < n; i++) {
     Point q(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
     dist[i] = std::sqrt(p->surf.tree->squared_distance(q));
+  }
+  return VM_OK;
+  VM_CXX_END(ctx, "projector")
+}
+
+extern "C" int vm_surface_projector_closest_element(vm_surface_projector *p, int64_t n,
+                                                    const double *pts, int64_t *elem) {
+  if (!p || n < 0 || (n > 0 && (!pts || !elem))) return VM_ERR_ARG;
+  vm_ctx *ctx = p->ctx;
+  VM_CXX_BEGIN
+  if (p->surf.tri.empty()) {
+    for (int64_t i = 0; i < n; i++) elem[i] = -1;
+    return VM_OK;
+  }
+  int64_t hint = -1;
+  for (int64_t i = 0; i < n; i++) {
+    auto cp = closest(p, Point(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]), &hint);
+    elem[i] = p->surf.te[static_cast<std::size_t>(cp.second - p->surf.tri.begin())];
   }
   return VM_OK;
   VM_CXX_END(ctx, "projector")

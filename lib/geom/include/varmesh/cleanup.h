@@ -90,7 +90,12 @@ double vm_surface_min_angle_free(const vm_mesh *m, const vm_surface_features *f,
 int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double cone_deg);
 
 /* vm_surface_detect_features, then vm_surface_mark_cones unless cone_deg
- * >= 360; *ncones (may be NULL): the cone points marked. */
+ * >= 360; *ncones (may be NULL): the cone points marked. On a triangle
+ * mesh with int (VM_FIELD_I32) element fields, the edges between
+ * triangles that differ in one of them (the borders of regions: vm-gen's
+ * component, gmsh:physical) are feature edges too, so the remeshing, the
+ * sliver removal and the adaptation keep every region's border as a line
+ * (where a border meets another feature line, a corner). */
 int vm_surface_detect_features_cones(const vm_mesh *m, double angle_deg, double corner_deg,
                                      double cone_deg, vm_surface_features *f, int64_t *ncones);
 

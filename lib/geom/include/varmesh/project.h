@@ -44,6 +44,13 @@ int vm_surface_projector_assign(vm_surface_projector *p, const vm_mesh *m,
 int vm_surface_projector_distance(vm_surface_projector *p, int64_t n, const double *pts,
                                   double *dist);
 
+/* The reference element (index into ref's elements) whose surface is
+ * closest to each of n points (3*n): elem[i]; -1 if the reference has no
+ * non-degenerate triangle. Consecutive points near each other are found
+ * fastest (the last element found bounds the next search). */
+int vm_surface_projector_closest_element(vm_surface_projector *p, int64_t n, const double *pts,
+                                         int64_t *elem);
+
 /* A per-vertex field of the reference (field[v], v < ref->nv) evaluated
  * at the closest reference points of n points (3*n): linear
  * interpolation in the triangle the closest point lies in. */
