@@ -424,8 +424,10 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
     return VM_EXIT_INTERRUPTED;
   }
   if (st < 0) {
-    vm_cli_error(cli, "%s: the surface stage: %s (--keep-wall extrudes the wall as it is)", in,
-                 vm_ctx_error(cli->ctx));
+    /* an open wall is refused either way: no advice then */
+    vm_cli_error(cli, "%s: the surface stage: %s%s", in, vm_ctx_error(cli->ctx),
+                 s.open ? " (the layer needs a closed wall)"
+                        : " (--keep-wall extrudes the wall as it is)");
     return VM_EXIT_INPUT;
   }
   if (s.adapted && s.adapt.flipped > 0)

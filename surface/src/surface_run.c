@@ -73,7 +73,10 @@ static int border_edge(vm_ctx *ctx, const vm_mesh *m, int32_t *a, int32_t *b) {
 static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s) {
   vm_repair_report *rr = &s->repair;
   int st = vm_surface_repair(m, &o->repair_opts, rr);
-  if (st < 0) return st;
+  if (st < 0) {
+    s->open = rr->border_edges > 0;
+    return st;
+  }
   s->repaired = 1;
   vm_log(ctx, VM_LOG_INFO,
          "repair: %lld vertices, %lld triangles; merged %lld points, removed %lld "

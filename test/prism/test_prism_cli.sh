@@ -158,5 +158,12 @@ check '[ "${nin:-0}" -gt 1000 ] && grep -q "\"surface_stage\": true, \"needles\"
 nn=$(sed -n 's/.*"needles": \([0-9]*\).*/\1/p' "$dir/wk.json")
 check '[ "${nn:-0}" -eq "${nin:-1}" ] && grep -q "\"surface_stage\": false" "$dir/wk.json" && grep -q "$nn triangles under 1 degree.*--keep-wall extrudes the wall as it is" "$dir/wk.err"' \
   "wing, --keep-wall: $nn needles extruded, warned"
+# an open wall with a needle: the surface stage refuses it, and the error
+# does not send the user to --keep-wall (the layer needs a closed wall)
+printf 'solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0.5 0.001 0\nendloop\nendfacet\nendsolid x\n' >"$dir/needle.stl"
+"${prism[@]}" -q "$dir/needle.stl" "$dir/needle.vmsh" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 1 ] && [ "$(grep -c "error:" "$dir/err")" -eq 1 ] && grep -q "error: .*the surface stage: open surface.*(the layer needs a closed wall)$" "$dir/err" && [ ! -e "$dir/needle.vmsh" ]' \
+  "an open wall with a needle: exit 1, one error line, no output (got $rc: $(grep error: "$dir/err"))"
 check 'grep -q "\"needles_in\": 0, \"surface_stage\": false, \"needles\": 0" "$dir/out.json" && ! grep -q "under 1 degree" "$dir/inv.err"' "sphere: no needles, no surface stage, no warning"
 exit $fail

@@ -464,6 +464,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   auto fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
   r.components = static_cast<int64_t>(PMP::connected_components(sm, fcc));
   if (r.border_edges > 0 && o.require_closed) {
+    if (rep) *rep = r; // the caller can tell an open surface from other errors
     halfedge_descriptor h = cycles.front();
     const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h));
     return vm_error(ctx, VM_ERR_FORMAT,

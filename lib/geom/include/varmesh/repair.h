@@ -57,7 +57,8 @@ typedef struct vm_repair_report {
  *    (border edges left) when o->require_closed; self-intersections when
  *    checked and o->require_closed; nothing left after repair;
  *  - VM_ERR_ARG, VM_ERR_NOMEM, VM_ERR_BACKEND.
- * rep may be NULL; o NULL means defaults. */
+ * rep may be NULL (zeros on refusal, except an open surface's
+ * border_edges and holes); o NULL means defaults. */
 int vm_surface_repair(vm_mesh *m, const vm_repair_opts *o, vm_repair_report *rep);
 
 /* Pairs of intersecting triangles of a triangle mesh m (faces sharing a
