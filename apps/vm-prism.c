@@ -406,7 +406,8 @@ static int64_t wall_needles(const vm_mesh *m, double deg, double *amin) {
  * curvature where needles are left, adapted by the 2D functional), in
  * place: the layers are then those of `vm-surface IN W; vm-prism W`. `why`
  * is said first. */
-static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, double amin) {
+static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, double amin,
+                         char *said, size_t nsaid) {
   vm_log(cli->ctx, VM_LOG_WARN,
          "%s: %s; the wall goes through the surface stage first, as vm-surface would take it "
          "(--keep-wall: as it is)",
@@ -435,13 +436,13 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
            (long long)s.adapt.flipped);
   double amin2 = 180;
   int64_t left = wall_needles(m, 1.0, &amin2);
-  if (!cli->quiet)
-    fprintf(stderr,
-            "vm-prism: %s: surface stage: %lld -> %lld triangles (%s), smallest angle %.3g -> "
-            "%.3g deg, %lld under 1 degree left\n",
-            in, (long long)ne, (long long)m->ne,
-            s.remeshed ? "remeshed to sizes from the curvature" : "the input's vertices", amin,
-            amin2, (long long)left);
+  snprintf(said, nsaid,
+           "%lld -> %lld triangles (%s), smallest angle %.3g -> %.3g deg, %lld under 1 degree "
+           "left",
+           (long long)ne, (long long)m->ne,
+           s.remeshed ? "remeshed to sizes from the curvature" : "the input's vertices", amin,
+           amin2, (long long)left);
+  if (!cli->quiet) fprintf(stderr, "vm-prism: %s: surface stage: %s\n", in, said);
   return VM_EXIT_OK;
 }
 
@@ -701,11 +702,15 @@ static int report_fill(vm_ctx *ctx, vm_report *report, const vm_mesh *res, int64
 /* --report: the run's rows, then the standard pictures (cli_report.c). */
 static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const char *in,
                         const char *out, const vm_prism_report *rp, double L, int64_t npairs,
-                        int rc, int verified, const vm_mesh *res, const vm_report_history *hist) {
+                        int rc, int verified, const vm_mesh *res, const vm_report_history *hist,
+                        const char *surface) {
   vm_report *report = *rep;
   const vm_prism_report r = *rp;
   int st2 = vm_report_heading(report, "run");
   if (st2 >= 0) st2 = vm_report_row(report, "input, output", "%s, %s", in, out);
+  if (st2 >= 0 && surface)
+    st2 =
+        vm_report_row(report, "surface stage (the wall had needles under 1 degree)", "%s", surface);
   if (st2 >= 0)
     st2 = vm_report_row(report, "wall triangles, prisms, layers (requested)", "%lld, %lld, %d (%d)",
                         (long long)r.wall_triangles, (long long)r.prisms, r.layers,
@@ -816,6 +821,7 @@ int main(int argc, char **argv) {
   double needle_min = 180;
   int64_t nneedle = wall_needles(m, 1.0, &needle_min), needles_in = nneedle;
   int surface_ran = 0;
+  char surface_said[256] = "";
   if (nneedle > 0 && a.keep_wall) {
     vm_log(cli.ctx, VM_LOG_WARN,
            "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
@@ -828,7 +834,9 @@ int main(int argc, char **argv) {
              "%lld triangles under 1 degree (smallest %.3g): the columns over them would fall "
              "short of T",
              (long long)nneedle, needle_min);
-    if ((rc = surface_stage(&cli, a.in, m, why, needle_min)) != VM_EXIT_OK) goto done;
+    if ((rc = surface_stage(&cli, a.in, m, why, needle_min, surface_said, sizeof surface_said)) !=
+        VM_EXIT_OK)
+      goto done;
     surface_ran = 1;
     nneedle = wall_needles(m, 1.0, &needle_min);
     L = model_length(m);
@@ -977,8 +985,8 @@ int main(int argc, char **argv) {
     print_json(a.in, a.out, &r, L, npairs, needles_in, surface_ran, nneedle, rc, verified,
                st == VM_ERR_INTERRUPTED, timed_out);
   if (report) {
-    int rrc =
-        write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res, hist);
+    int rrc = write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res,
+                           hist, surface_ran ? surface_said : NULL);
     if (rrc != VM_EXIT_OK && rc == VM_EXIT_OK) rc = rrc;
   }
 done:

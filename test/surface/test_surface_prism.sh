@@ -65,9 +65,11 @@ check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wip.json"' "graded wing, 
 # same layers, byte for byte, as vm-surface's defaults and then vm-prism
 "$surf" -q "$dir/w.stl" "$dir/wd.vmsh"
 "$prism" -q -t 0.05 -n 3 "$dir/wd.vmsh" "$dir/two.vmsh" 2>/dev/null
-"$prism" -q --json -t 0.05 -n 3 "$dir/w.stl" "$dir/one.vmsh" >"$dir/one.json" 2>"$dir/one.err"
+"$prism" -q --json --report "$dir/rep" -t 0.05 -n 3 "$dir/w.stl" "$dir/one.vmsh" >"$dir/one.json" 2>"$dir/one.err"
 check '[ $? -eq 0 ] && cmp -s "$dir/one.vmsh" "$dir/two.vmsh" && grep -q "\"surface_stage\": true, \"needles\": 0," "$dir/one.json"' \
   "raw graded wing: vm-prism's own surface stage gives the layers of vm-surface then vm-prism, byte for byte"
+check 'grep -q "surface stage (the wall had needles under 1 degree)</td><td class=\"v\">5756 -&gt; [0-9]* triangles (remeshed" "$dir/rep/index.html"' \
+  "and its report says so"
 
 # the uniform remeshing (CGAL) of the wing folds triangles over where its
 # details are far finer than the edge length: caught, and the run goes on
