@@ -647,8 +647,18 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.normal_dev_mean);
   printf(", \"smooth_vertices\": %lld, \"normal_dev_over_5deg\": %lld",
          (long long)r.smooth_vertices, (long long)r.normal_dev_over5);
+  printf(", \"normal_dev_p99_deg\": ");
+  vm_json_double(stdout, r.normal_dev_p99);
+  printf(", \"normal_dev_all_max_deg\": ");
+  vm_json_double(stdout, r.normal_dev_all_max);
+  printf(", \"normal_dev_all_p99_deg\": ");
+  vm_json_double(stdout, r.normal_dev_all_p99);
   printf(", \"growth_max\": ");
   vm_json_double(stdout, r.growth_max);
+  printf(", \"growth_p99\": ");
+  vm_json_double(stdout, r.growth_p99);
+  printf(", \"growth_band_share\": ");
+  vm_json_double(stdout, r.growth_band_share);
   printf(", \"nonortho_over_70deg\": %lld, \"nonortho_max_deg\": ", (long long)r.nonortho_over70);
   vm_json_double(stdout, r.nonortho_max);
   printf(", \"skewness_max\": ");
@@ -731,11 +741,15 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         "%lld, %lld, %lld, %.3g", (long long)r.inverted,
                         (long long)r.split_negative, (long long)npairs, r.sj_min);
   if (st2 >= 0)
-    st2 = vm_report_row(report, "first layer off the wall normal (smooth vertices)",
-                        "max %.2f deg, %lld of %lld above 5 deg", r.normal_dev_max,
-                        (long long)r.normal_dev_over5, (long long)r.smooth_vertices);
+    st2 = vm_report_row(report, "first layer off the wall normal: smooth vertices; all",
+                        "max %.2f deg, p99 %.2f deg, %lld of %lld above 5 deg; max %.2f deg, "
+                        "p99 %.2f deg",
+                        r.normal_dev_max, r.normal_dev_p99, (long long)r.normal_dev_over5,
+                        (long long)r.smooth_vertices, r.normal_dev_all_max, r.normal_dev_all_p99);
   if (st2 >= 0)
-    st2 = vm_report_row(report, "max growth of successive heights", "%.3f", r.growth_max);
+    st2 = vm_report_row(report, "growth of successive heights (columns' largest ratio)",
+                        "max %.3f, p99 %.3f; %.2f %% of the columns within [1/1.5, 1.5] x %g",
+                        r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.growth);
   if (st2 >= 0)
     st2 =
         vm_report_row(report, "faces as OpenFOAM measures them",

@@ -146,14 +146,15 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
   }
   printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %5.1f%% / %6.2f%% (%lld) / %.3f "
          "(%.3f) | %.3f / %.3f / %.3f | %lld / %lld | %lld | "
-         "%.3f | %5.2f (%lld > 5) "
-         "| %lld / %lld+%lld | %.3f | %d%s |\n",
+         "%.3f | %5.2f / %5.2f (%lld > 5) / %5.2f / %5.2f "
+         "| %lld / %lld+%lld | %.3f / %.3f / %.2f%% | %d%s |\n",
          name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction,
          100 * r.medial_room, 100 * r.medial_reach, (long long)r.medial_short, r.medial_fill,
          r.medial_fill_rest, r.thick_min, r.thick_mean, r.thick_max, (long long)r.inverted,
          (long long)cg_bad, (long long)r.split_negative, r.sj_min, r.normal_dev_max,
-         (long long)r.normal_dev_over5, (long long)emb, (long long)cg_pairs, (long long)cg_wall,
-         r.growth_max, r.layers, st ? " (warn)" : "");
+         r.normal_dev_p99, (long long)r.normal_dev_over5, r.normal_dev_all_max,
+         r.normal_dev_all_p99, (long long)emb, (long long)cg_pairs, (long long)cg_wall,
+         r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.layers, st ? " (warn)" : "");
   fflush(stdout);
   if (verbose) {
     fprintf(stderr, "  phases:");
@@ -207,9 +208,9 @@ int main(int argc, char **argv) {
   printf("| case | T/L | prisms | time s (wall / CPU) | full | room for T / of those at T (short) "
          "/ fill (where no room) | thick/T min / mean / max | inverted "
          "(own / CGAL) | 3-tet split negative "
-         "| min SJ | max normal dev deg (smooth vertices > 5°) | intersecting pairs (Embree / CGAL "
-         "outer+wall) | max "
-         "growth | layers |\n");
+         "| min SJ | first layer off the normal, deg: smooth max / p99 (> 5°) / all max / p99 "
+         "| intersecting pairs (Embree / CGAL outer+wall) | growth: max / p99 / columns within "
+         "[1/1.5, 1.5] x | layers |\n");
   printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   if (!only || !strcmp(only, "plane")) {
     vm_mesh *m = NULL;

@@ -1,6 +1,7 @@
 /* prism/src/report.c: the result mesh of a run (the levels as prisms, the
  * wall and outer triangles, fields and names) and its measured figures. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "state.h"
@@ -117,6 +118,20 @@ fail:
   return st;
 }
 
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The q-quantile (0 < q <= 1: the smallest value at or above a share q of
+ * the n values; 1: the largest) of x, sorted in place; 0 if n == 0. */
+double pr_percentile(double *x, int64_t n, double q) {
+  if (n <= 0) return 0;
+  qsort(x, (size_t)n, sizeof *x, cmp_double);
+  int64_t k = (int64_t)ceil(q * (double)n) - 1;
+  return x[k < 0 ? 0 : k >= n ? n - 1 : k];
+}
+
 int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
   if (!p || !r) return VM_ERR_ARG;
   int nlev;
@@ -178,28 +193,47 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     R.inverted = inv;
     R.split_negative = split;
     R.sj_min = sj;
-    double dmax = 0, dsum = 0;
-    int64_t ns = 0, over = 0;
+    /* per column: the first side edge's tilt from the vertex normal (all
+     * columns, and apart the smooth ones), the largest ratio of successive
+     * heights, and whether every ratio lies in the growth band */
+    double *dev = vm_alloc_array(p->ctx, 3 * (size_t)nw, sizeof *dev);
+    if (!dev) return VM_ERR_NOMEM;
+    double *dsm = dev + nw, *gcol = dev + 2 * nw;
+    double dmax = 0, dsum = 0, gmax = 0;
+    int64_t ns = 0, over = 0, inband = 0;
+    const double band = 1.5, glo = p->rep.growth / band, ghi = p->rep.growth * band;
     for (int64_t v = 0; v < nw; v++) {
-      if (!p->smooth[v]) continue;
       double a = pr_tilt_deg(p->wall + 3 * v, L + lsz + 3 * v, p->vnrm + 3 * v);
+      dev[v] = a;
+      double gc = 0;
+      int ok = 1;
+      for (int k = 0; k + 2 < nlev; k++) {
+        double h0 = vm_dist3(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
+        double h1 = vm_dist3(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
+        double g = h0 > 0 ? h1 / h0 : INFINITY;
+        gc = g > gc ? g : gc;
+        ok &= g >= glo && g <= ghi;
+      }
+      gcol[v] = gc;
+      gmax = gc > gmax ? gc : gmax;
+      inband += ok;
+      if (!p->smooth[v]) continue;
       dmax = a > dmax ? a : dmax;
       dsum += a;
-      ns++;
+      dsm[ns++] = a;
       over += a > p->k.tilt_limit_deg;
     }
     R.normal_dev_over5 = over;
     R.normal_dev_max = dmax;
     R.normal_dev_mean = ns ? dsum / (double)ns : 0;
     R.smooth_vertices = ns;
-    double gmax = 0;
-    for (int64_t v = 0; v < nw && nlev > 2; v++)
-      for (int k = 0; k + 2 < nlev; k++) {
-        double h0 = vm_dist3(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
-        double h1 = vm_dist3(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
-        if (h0 > 0 && h1 / h0 > gmax) gmax = h1 / h0;
-      }
-    R.growth_max = gmax;
+    R.normal_dev_p99 = pr_percentile(dsm, ns, 0.99);
+    R.normal_dev_all_p99 = pr_percentile(dev, nw, 0.99);
+    R.normal_dev_all_max = pr_percentile(dev, nw, 1);
+    R.growth_max = nlev > 2 ? gmax : 0;
+    R.growth_p99 = nlev > 2 ? pr_percentile(gcol, nw, 0.99) : 0;
+    R.growth_band_share = nlev > 2 ? (double)inband / (double)nw : 1;
+    vm_free(p->ctx, dev);
     int st = pr_foam_figures(p, L, nlev, &R.nonortho_over70, &R.nonortho_max, &R.skew_max);
     if (st < 0) return st;
   }

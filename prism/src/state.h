@@ -127,6 +127,8 @@ int pr_check_valid(vm_prism *p, const char *when);
  * intersecting top or side face in `mark` (nw, may be NULL); the number of
  * intersecting face pairs in *npairs (cutting.c). */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
+/* The q-quantile of the n values x (sorted in place; report.c). */
+double pr_percentile(double *x, int64_t n, double q);
 
 /* ---- the room the geometry leaves (medial.c) ---- */
 

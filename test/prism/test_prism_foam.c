@@ -249,6 +249,50 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
         name, (long long)lateral);
   CHECK(skew_max < 4, "%s: max skewness %.2f (checkMesh fails at 4)", name, skew_max);
   CHECK(r.growth_max <= lim.growth, "%s: max growth %.2f", name, r.growth_max);
+  {
+    /* the report's growth figures, again from the written levels (vertex
+     * k * nw + v is column v's level k): each column's largest ratio of
+     * successive heights, their 99th percentile, the share of columns with
+     * every ratio within [1/1.5, 1.5] x the growth ratio */
+    double *gc = malloc(sizeof *gc * (size_t)nw);
+    int64_t inband = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      double g = 0;
+      int ok = 1;
+      for (int64_t k = 0; k + 2 <= nl; k++) {
+        const double *a = m->xyz + 3 * (k * nw + v), *b = a + 3 * nw, *c = b + 3 * nw;
+        double h0 = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                         (b[2] - a[2]) * (b[2] - a[2])),
+               h1 = sqrt((c[0] - b[0]) * (c[0] - b[0]) + (c[1] - b[1]) * (c[1] - b[1]) +
+                         (c[2] - b[2]) * (c[2] - b[2]));
+        double q = h1 / h0;
+        g = q > g ? q : g;
+        ok &= q >= r.growth / 1.5 && q <= r.growth * 1.5;
+      }
+      gc[v] = g;
+      inband += ok;
+    }
+    for (int64_t i = 1; i < nw; i++) /* insertion sort: a few thousand */
+      for (int64_t j = i; j > 0 && gc[j - 1] > gc[j]; j--) {
+        double t = gc[j];
+        gc[j] = gc[j - 1];
+        gc[j - 1] = t;
+      }
+    int64_t k99 = (int64_t)ceil(0.99 * (double)nw) - 1;
+    CHECK(fabs(gc[k99] - r.growth_p99) <= 1e-12 * r.growth_p99 &&
+              fabs(gc[nw - 1] - r.growth_max) <= 1e-12 * r.growth_max &&
+              r.growth_band_share == (double)inband / (double)nw,
+          "%s: growth p99 %.6g (again %.6g), max %.6g (%.6g), band share %.6g (%.6g)", name,
+          r.growth_p99, gc[k99], r.growth_max, gc[nw - 1], r.growth_band_share,
+          (double)inband / (double)nw);
+    fprintf(stderr, "%s: growth p99 %.3f, %.2f %% of the columns within the band\n", name,
+            r.growth_p99, 100 * r.growth_band_share);
+    free(gc);
+  }
+  CHECK(r.normal_dev_p99 <= r.normal_dev_max && r.normal_dev_all_max >= r.normal_dev_max &&
+            r.normal_dev_all_p99 <= r.normal_dev_all_max,
+        "%s: first layer off the normal: smooth max %g p99 %g, all max %g p99 %g", name,
+        r.normal_dev_max, r.normal_dev_p99, r.normal_dev_all_max, r.normal_dev_all_p99);
   CHECK(r.full_fraction >= 0.98, "%s: %.3f of the columns at full thickness", name,
         r.full_fraction);
   CHECK(r.normal_dev_over5 <= lim.dev_over5, "%s: %lld smooth columns beyond 5 degrees", name,

@@ -104,6 +104,15 @@ int main(void) {
   CHECK(r.full_fraction == 1.0, "full fraction %g", r.full_fraction);
   CHECK(r.normal_dev_max < 1.0, "normal deviation %g", r.normal_dev_max);
   CHECK(fabs(r.growth_max - 1.3) < 0.05, "growth %g", r.growth_max);
+  /* every column is smooth and on the schedule: the figures over all
+   * columns are those over the smooth ones, the percentiles below the
+   * largest, every column's ratios within the growth band */
+  CHECK(r.smooth_vertices == nw && r.normal_dev_all_max == r.normal_dev_max &&
+            r.normal_dev_p99 <= r.normal_dev_max && r.normal_dev_all_p99 == r.normal_dev_p99,
+        "normal deviation: all %g / p99 %g, smooth %g / p99 %g", r.normal_dev_all_max,
+        r.normal_dev_all_p99, r.normal_dev_max, r.normal_dev_p99);
+  CHECK(r.growth_p99 <= r.growth_max && fabs(r.growth_p99 - 1.3) < 0.05 && r.growth_band_share == 1,
+        "growth p99 %g, band share %g", r.growth_p99, r.growth_band_share);
 
   vm_mesh *res = NULL;
   st = vm_prism_result(p, &res);

@@ -152,9 +152,16 @@ typedef struct vm_prism_report {
   double normal_dev_max;        /* degrees: first-layer side edges vs the wall's
                                    vertex normal, at smooth vertices */
   double normal_dev_mean;
-  int64_t smooth_vertices;  /* vertices where normal_dev is measured */
-  int64_t normal_dev_over5; /* of those, deviating by more than 5 degrees */
-  double growth_max;        /* max h_{k+1}/h_k over columns */
+  int64_t smooth_vertices;                       /* vertices where normal_dev is measured */
+  int64_t normal_dev_over5;                      /* of those, deviating by more than 5 degrees */
+  double normal_dev_p99;                         /* the 99th percentile at smooth vertices */
+  double normal_dev_all_max, normal_dev_all_p99; /* the same at every wall vertex
+                                                    (sharp edges: against the
+                                                    angle-weighted vertex normal) */
+  double growth_max;                             /* max h_{k+1}/h_k over columns */
+  double growth_p99;        /* the 99th percentile of the columns' largest ratio */
+  double growth_band_share; /* columns whose every ratio lies within
+                               [1/1.5, 1.5] x the growth ratio */
   /* the layer's faces as OpenFOAM's checkMesh measures them: internal
    * faces whose non-orthogonality is beyond 70 degrees, the largest
    * non-orthogonality (degrees), the largest skewness (the wall and the
