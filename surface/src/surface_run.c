@@ -105,8 +105,9 @@ static int features(vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s,
  * m's own fields of those names replaced): an element's values are those
  * of the element of `from` closest to its centroid (with the region
  * borders kept as lines, the region it lies in); a vertex's F64 values are
- * interpolated linearly at its closest point of `from`, its I32 values are
- * those of the nearest corner of the closest element. */
+ * interpolated linearly at its closest point of `from`; its I32 values
+ * (flags, ids: not to be spread) those of the input vertex at exactly its
+ * position (a kept corner), else 0. */
 static int carry_fields(vm_ctx *ctx, vm_mesh *m, const vm_mesh *from) {
   if (from->nfield == 0) return VM_OK;
   vm_surface_projector *p = NULL;
@@ -170,7 +171,7 @@ static int carry_fields(vm_ctx *ctx, vm_mesh *m, const vm_mesh *from) {
           }
         }
         for (int j = 0; j < nc; j++)
-          dd[(int64_t)nc * v + j] = best >= 0 ? sd[(int64_t)nc * best + j] : 0;
+          dd[(int64_t)nc * v + j] = best >= 0 && bd == 0 ? sd[(int64_t)nc * best + j] : 0;
       }
     }
   }

@@ -128,6 +128,9 @@ static void add_x_field(vm_mesh *m) {
   CHECK(vm_mesh_add_field(m, "x", VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f) == VM_OK, "field x");
   double *d = f->data;
   for (int64_t v = 0; v < m->nv; v++) d[v] = m->xyz[3 * v];
+  CHECK(vm_mesh_add_field(m, "id", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &f) == VM_OK, "field id");
+  int32_t *id = f->data;
+  for (int64_t v = 0; v < m->nv; v++) id[v] = (int32_t)v + 1;
 }
 
 static void aircraft(vm_ctx *ctx, int size) {
@@ -168,8 +171,24 @@ static void aircraft(vm_ctx *ctx, int size) {
    * input surface */
   CHECK(worst <= 1e-3 * ao.length, "%s: the field x at the new vertices is x (off by %.3g)", what,
         worst);
-  fprintf(stderr, "aircraft, %s: %lld -> %lld triangles, %lld border edges, x off by %.3g\n", what,
-          (long long)in->ne, (long long)m->ne, (long long)nb, worst);
+  /* an I32 vertex field (here: the input's vertex numbers) is not spread:
+   * nonzero only where the input vertex it names still is, bit for bit */
+  const vm_field *fid = vm_mesh_find_field(m, "id", VM_FIELD_VERTEX);
+  int64_t kept = 0, wrong = 0;
+  for (int64_t v = 0; fid && v < m->nv; v++) {
+    int32_t id = ((const int32_t *)fid->data)[v];
+    if (!id) continue;
+    kept++;
+    wrong += id < 1 || id > in->nv ||
+             memcmp(in->xyz + 3 * (int64_t)(id - 1), m->xyz + 3 * v, 3 * sizeof(double));
+  }
+  CHECK(fid && kept > 0 && wrong == 0,
+        "%s: the id field: %lld vertices keep an input id, %lld of them elsewhere", what,
+        (long long)kept, (long long)wrong);
+  fprintf(stderr,
+          "aircraft, %s: %lld -> %lld triangles, %lld border edges, x off by %.3g, %lld input "
+          "vertices kept with their ids\n",
+          what, (long long)in->ne, (long long)m->ne, (long long)nb, worst, (long long)kept);
   vm_mesh_destroy(&in);
   vm_mesh_destroy(&m);
 }
