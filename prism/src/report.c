@@ -210,7 +210,13 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
       for (int k = 0; k + 2 < nlev; k++) {
         double h0 = vm_dist3(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
         double h1 = vm_dist3(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
-        double g = h0 > 0 ? h1 / h0 : INFINITY;
+        /* a zero height (none is made) counts as out of the band, not
+         * as an infinite ratio */
+        if (!(h0 > 0)) {
+          ok = 0;
+          continue;
+        }
+        double g = h1 / h0;
         gc = g > gc ? g : gc;
         ok &= g >= glo && g <= ghi;
       }
