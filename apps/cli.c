@@ -406,3 +406,8 @@ int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *a
   if (!value && opt->error) return vm_cli_usage_error(cli, "%s %s", opt->name, opt->error);
   return vm_cli_format(cli, value, (int *)((char *)args + opt->offset));
 }
+
+int vm_cli_soup_format(const char *path) {
+  int f = vm_format_from_path(path);
+  return f == VM_FMT_STL || f == VM_FMT_OBJ || f == VM_FMT_OFF || f == VM_FMT_PLY;
+}

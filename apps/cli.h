@@ -155,6 +155,9 @@ int vm_cli_opt_quiet(vm_cli *cli, const vm_opt *opt, const char *value, void *ar
 int vm_cli_opt_verbose(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_threads(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
 int vm_cli_opt_format(vm_cli *cli, const vm_opt *opt, const char *value, void *args);
+/* Does the path name a polygon soup format (.stl .obj .off .ply: no shared
+ * vertices promised, the surface stage repairs it)? */
+int vm_cli_soup_format(const char *path);
 #define VM_CLI_OPT_QUIET(help)                                                                     \
   { "--quiet", "-q", VM_OPT_CALL, 0, NULL, help, .fn = vm_cli_opt_quiet }
 #define VM_CLI_OPT_VERBOSE(help)                                                                   \

@@ -405,16 +405,16 @@ static int64_t wall_needles(const vm_mesh *m, double deg, double *amin) {
  * (repaired, slivers removed, the input remeshed to sizes from its
  * curvature where needles are left, adapted by the 2D functional), in
  * place: the layers are then those of `vm-surface IN W; vm-prism W`. `why`
- * is said first. */
-static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, double amin,
-                         char *said, size_t nsaid) {
+ * is said first; *nneedle, *amin: the triangles under 1 degree and the
+ * smallest angle, before and then after. */
+static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, int64_t *nneedle,
+                         double *amin, char *said, size_t nsaid) {
   vm_log(cli->ctx, VM_LOG_WARN,
          "%s: %s; the wall goes through the surface stage first, as vm-surface would take it "
          "(--keep-wall: as it is)",
          in, why);
   vm_surface_opts so = vm_surface_opts_default();
-  int fin = vm_format_from_path(in);
-  so.soup = fin == VM_FMT_STL || fin == VM_FMT_OBJ || fin == VM_FMT_OFF || fin == VM_FMT_PLY;
+  so.soup = vm_cli_soup_format(in);
   vm_mesh_apply_fixed_field(m);
   int64_t ne = m->ne;
   vm_surface_summary s;
@@ -434,14 +434,14 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
   if (s.adapted && s.adapt.flipped > 0)
     vm_log(cli->ctx, VM_LOG_WARN, "%s: the surface stage's adaptation flipped %lld triangles", in,
            (long long)s.adapt.flipped);
-  double amin2 = 180;
-  int64_t left = wall_needles(m, 1.0, &amin2);
+  double amin0 = *amin;
+  *nneedle = wall_needles(m, 1.0, amin);
   snprintf(said, nsaid,
            "%lld -> %lld triangles (%s), smallest angle %.3g -> %.3g deg, %lld under 1 degree "
            "left",
            (long long)ne, (long long)m->ne,
-           s.remeshed ? "remeshed to sizes from the curvature" : "the input's vertices", amin,
-           amin2, (long long)left);
+           s.remeshed ? "remeshed to sizes from the curvature" : "the input's vertices", amin0,
+           *amin, (long long)*nneedle);
   if (!cli->quiet) fprintf(stderr, "vm-prism: %s: surface stage: %s\n", in, said);
   return VM_EXIT_OK;
 }
@@ -848,11 +848,10 @@ int main(int argc, char **argv) {
              "%lld triangles under 1 degree (smallest %.3g): the columns over them would fall "
              "short of T",
              (long long)nneedle, needle_min);
-    if ((rc = surface_stage(&cli, a.in, m, why, needle_min, surface_said, sizeof surface_said)) !=
-        VM_EXIT_OK)
+    if ((rc = surface_stage(&cli, a.in, m, why, &nneedle, &needle_min, surface_said,
+                            sizeof surface_said)) != VM_EXIT_OK)
       goto done;
     surface_ran = 1;
-    nneedle = wall_needles(m, 1.0, &needle_min);
     L = model_length(m);
   }
   vm_prism_opts *o = &a.o;

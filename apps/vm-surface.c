@@ -426,8 +426,7 @@ int main(int argc, char **argv) {
     goto done;
   }
   vm_mesh_apply_fixed_field(m);
-  int fin = vm_format_from_path(a.in);
-  a.so.soup = fin == VM_FMT_STL || fin == VM_FMT_OBJ || fin == VM_FMT_OFF || fin == VM_FMT_PLY;
+  a.so.soup = vm_cli_soup_format(a.in);
   if (!cli.quiet)
     fprintf(stderr, "vm-surface: %s: %lld vertices, %lld faces\n", a.in, (long long)m->nv,
             (long long)m->ne);
