@@ -96,7 +96,10 @@ static int carry_field(vm_cli *cli, const vm_field *f, vm_mesh *r, vm_field **g,
  * the column takes its wall vertex's value; a 'fixed' field only on the
  * wall itself. Fields the prism stage writes itself win. */
 static int pass_wall_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t nw) {
-  if (nw <= 0 || r->nv % nw) return VM_OK;
+  /* where layers end, the result names each vertex's column */
+  const vm_field *colf = vm_mesh_find_field(r, VM_PRISM_FIELD_COLUMN, VM_FIELD_VERTEX);
+  const int32_t *col = colf ? colf->data : NULL;
+  if (nw <= 0 || (!col && r->nv % nw)) return VM_OK;
   int64_t nlev = r->nv / nw, n = 0;
   int32_t *src = vm_alloc_array(w->ctx, (size_t)nw, sizeof *src);
   uint8_t *used = vm_calloc(w->ctx, (size_t)w->nv + 1, 1);
@@ -118,7 +121,16 @@ static int pass_wall_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t n
     int c = carry_field(cli, f, r, &g, &row);
     if (c < 0) st = c;
     if (c <= 0) continue;
-    int64_t levels = strcmp(f->name, "fixed") ? nlev : 1;
+    int fixed = !strcmp(f->name, "fixed");
+    if (col) {
+      /* a 'fixed' field on the wall only: the wall's vertices are the
+       * first nw */
+      for (int64_t x = 0; x < (fixed ? nw : r->nv); x++)
+        memcpy((char *)g->data + (size_t)x * row, (const char *)f->data + (size_t)src[col[x]] * row,
+               row);
+      continue;
+    }
+    int64_t levels = fixed ? 1 : nlev;
     for (int64_t k = 0; k < levels; k++)
       for (int64_t l = 0; l < nw; l++)
         memcpy((char *)g->data + (size_t)(k * nw + l) * row,
@@ -137,7 +149,10 @@ static int pass_wall_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t n
 static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, int64_t nt) {
   int nel = 0;
   for (int i = 0; i < w->nfield; i++) nel += w->fields[i].location == VM_FIELD_ELEMENT;
-  if (!nel || nt <= 0 || r->ne % nt || r->ne / nt < 3) return VM_OK;
+  /* where layers end, the result names each element's wall face */
+  const vm_field *wff = vm_mesh_find_field(r, VM_PRISM_FIELD_WALL_FACE, VM_FIELD_ELEMENT);
+  const int32_t *wf = wff ? wff->data : NULL;
+  if (!nel || nt <= 0 || (!wf && (r->ne % nt || r->ne / nt < 3))) return VM_OK;
   int32_t *src = vm_alloc_array(w->ctx, (size_t)nt, sizeof *src);
   if (!src) return vm_error(cli->ctx, VM_ERR_NOMEM, "out of memory");
   int64_t n = 0;
@@ -155,8 +170,8 @@ static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, i
     if (c < 0) st = c;
     if (c <= 0) continue;
     for (int64_t e = 0; e < r->ne; e++)
-      memcpy((char *)g->data + (size_t)e * row, (const char *)f->data + (size_t)src[e % nt] * row,
-             row);
+      memcpy((char *)g->data + (size_t)e * row,
+             (const char *)f->data + (size_t)src[wf ? wf[e] : e % nt] * row, row);
   }
   vm_free(w->ctx, src);
   return st;
@@ -217,7 +232,8 @@ static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *
 
 typedef struct {
   const char *in, *out, *report;
-  const char *region; /* --region-thickness FIELD:ID=X,... */
+  const char *region;        /* --region-thickness FIELD:ID=X,... */
+  const char *region_layers; /* --region-layers FIELD:ID=N,... */
   double T_abs, T_rel;
   double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
   int growth_given;                   /* --growth given (else solved for a first height) */
@@ -247,7 +263,8 @@ static int opt_thickness_rel(vm_cli *cli, const vm_opt *opt, const char *value, 
 /* --region-thickness SPEC on the wall m: one thickness per element into
  * *out (m->ne, vm_free'd by the caller), the unit `unit` (1: absolute, or
  * the model's length `length`), T the thickness elsewhere; *tmax the
- * largest. */
+ * largest. --region-layers SPEC (opt): the same with layer counts, whole
+ * numbers in [1, T] (T the stack's count, unit 1). */
 typedef struct {
   int32_t id, order; /* the value, its place in the list */
   double x;          /* its thickness */
@@ -260,29 +277,28 @@ static int cmp_region_item(const void *a, const void *b) {
   return (p->order > q->order) - (p->order < q->order);
 }
 
-static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, double unit,
-                            double length, double T, double **out, double *tmax) {
+static int region_values(vm_cli *cli, const char *opt, const char *spec, const vm_mesh *m,
+                         double unit, double length, double T, double **out, double *tmax) {
   *out = NULL;
   region_item *items = NULL;
   size_t n = 0, cap = 0;
   const char *colon = strrchr(spec, ':');
   if (!colon || colon == spec || !colon[1])
-    return vm_cli_usage_error(cli, "--region-thickness '%s': expects FIELD:ID=X,...", spec);
+    return vm_cli_usage_error(cli, "%s '%s': expects FIELD:ID=X,...", opt, spec);
   char name[256];
   size_t nl = (size_t)(colon - spec);
-  if (nl >= sizeof name)
-    return vm_cli_usage_error(cli, "--region-thickness: the field name is too long");
+  if (nl >= sizeof name) return vm_cli_usage_error(cli, "%s: the field name is too long", opt);
   memcpy(name, spec, nl);
   name[nl] = 0;
   const vm_field *f = vm_mesh_find_field(m, name, VM_FIELD_ELEMENT);
   if (!f || f->type != VM_FIELD_I32 || f->ncomp != 1)
     return vm_cli_usage_error(cli,
-                              "--region-thickness: the wall has no int element field '%s' (one "
+                              "%s: the wall has no int element field '%s' (one "
                               "value per face)",
-                              name);
+                              opt, name);
   const int32_t *id = f->data;
   double *et = vm_alloc_array(cli->ctx, (size_t)(m->ne ? m->ne : 1), sizeof *et);
-  if (!et) return vm_cli_usage_error(cli, "--region-thickness: out of memory");
+  if (!et) return vm_cli_usage_error(cli, "%s: out of memory", opt);
   for (int64_t e = 0; e < m->ne; e++) et[e] = T;
   *tmax = T;
   const char *s = colon + 1;
@@ -293,24 +309,30 @@ static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, dou
     if (end == s || *end != '=' || errno || k < INT32_MIN || k > INT32_MAX) {
       vm_free(cli->ctx, et);
       vm_free(cli->ctx, items);
-      return vm_cli_usage_error(cli, "--region-thickness: item %d ('%s'): expects ID=X", item, s);
+      return vm_cli_usage_error(cli, "%s: item %d ('%s'): expects ID=X", opt, item, s);
     }
     s = end + 1;
     double x = strtod(s, &end);
+    int count = strcmp(opt, "--region-layers") == 0;
+    if (count && !(end == s || (*end && *end != ',')) && !(x == floor(x) && x >= 1 && x <= T)) {
+      vm_free(cli->ctx, et);
+      vm_free(cli->ctx, items);
+      return vm_cli_usage_error(cli, "%s: item %d: '%.*s' is not a layer count in [1, %g] (-n)",
+                                opt, item, (int)strcspn(s, ","), s, T);
+    }
     if (end == s || (*end && *end != ',') || !(x > 0) || !isfinite(x * unit)) {
       vm_free(cli->ctx, et);
       vm_free(cli->ctx, items);
-      return vm_cli_usage_error(cli,
-                                "--region-thickness: item %d: '%.*s' is not a positive thickness",
-                                item, (int)strcspn(s, ","), s);
+      return vm_cli_usage_error(cli, "%s: item %d: '%.*s' is not a positive %s", opt, item,
+                                (int)strcspn(s, ","), s, count ? "layer count" : "thickness");
     }
-    if (!(x * unit >= 1e-9 * length)) {
+    if (!count && !(x * unit >= 1e-9 * length)) {
       vm_free(cli->ctx, et);
       vm_free(cli->ctx, items);
       return vm_cli_usage_error(cli,
-                                "--region-thickness: item %d: %g is below 1e-9 of the model's "
+                                "%s: item %d: %g is below 1e-9 of the model's "
                                 "length %g (the layers would vanish in rounding)",
-                                item, x * unit, length);
+                                opt, item, x * unit, length);
     }
     if (n == cap) {
       size_t c2 = cap ? 2 * cap : 16;
@@ -318,7 +340,7 @@ static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, dou
       if (!g) {
         vm_free(cli->ctx, et);
         vm_free(cli->ctx, items);
-        return vm_cli_usage_error(cli, "--region-thickness: out of memory");
+        return vm_cli_usage_error(cli, "%s: out of memory", opt);
       }
       items = g;
       cap = c2;
@@ -358,12 +380,10 @@ static int region_thickness(vm_cli *cli, const char *spec, const vm_mesh *m, dou
   for (size_t i = 0; i < u; i++)
     if (!items[i].hits && !missing++) first = i;
   if (missing == 1)
-    vm_log(cli->ctx, VM_LOG_WARN, "--region-thickness: no wall face has %s = %d", name,
-           items[first].id);
+    vm_log(cli->ctx, VM_LOG_WARN, "%s: no wall face has %s = %d", opt, name, items[first].id);
   else if (missing > 1)
-    vm_log(cli->ctx, VM_LOG_WARN,
-           "--region-thickness: no wall face has %s = %d, nor %zu other values of the list", name,
-           items[first].id, missing - 1);
+    vm_log(cli->ctx, VM_LOG_WARN, "%s: no wall face has %s = %d, nor %zu other values of the list",
+           opt, name, items[first].id, missing - 1);
   vm_free(cli->ctx, items);
   *out = et;
   return VM_EXIT_OK;
@@ -475,10 +495,16 @@ static const vm_opt opts[] = {
      "thickness per region of the wall: the int element field FIELD (vm-gen's 'component', "
      "'gmsh:physical', ...) and, for some of its values ID, the thickness X in the unit of "
      "-t or -T (a share of the model's length by default); other faces keep -t / -T. The "
-     "layer count is the same everywhere; thinner regions keep the first height and grow "
-     "more slowly, and thicker columns are shortened near a border so the outer surface "
-     "rises at most at a slope of 0.5",
+     "layer count is the same everywhere (see --region-layers); thinner regions keep the "
+     "first height and grow more slowly, and thicker columns are shortened near a border so "
+     "the outer surface rises at most at a slope of 0.5",
      .error = "expects FIELD:ID=X,..."},
+    {"--region-layers", NULL, VM_OPT_STRING, A(region_layers), "FIELD:ID=N,...",
+     "layer count per region of the wall (FIELD as for --region-thickness): faces with value "
+     "ID get N layers (1..-n), the others -n. A region's layers keep the first height and the "
+     "growth, so it is as thick as its N first layers (unless --region-thickness gives its "
+     "thickness); where counts meet, the extra layers end in pyramids and tetrahedra",
+     .error = "expects FIELD:ID=N,..."},
     {"--springback-iter", NULL, VM_OPT_INT, A(o.springback_iter), "N",
      "implicit iterations of the springback (default 100; up to 3N while the line search keeps "
      "cutting the step or F still falls by more than 1 % per 10 iterations)",
@@ -581,8 +607,12 @@ enum { EXIT_SHORT = 5 };
 static void print_summary(const char *out, const vm_prism_report *r, int64_t npairs, int rc,
                           int interrupted, int timed_out) {
   int bad = r->inverted > 0 || npairs > 0;
+  char ends[128] = "";
+  if (r->pyramids || r->tets)
+    snprintf(ends, sizeof ends, " (and %lld pyramids, %lld tets where layers end)",
+             (long long)r->pyramids, (long long)r->tets);
   fprintf(stderr,
-          "vm-prism: %s: %lld prisms in %d layers (first %g, growth %g), %.1f%% of columns at "
+          "vm-prism: %s: %lld prisms%s in %d layers (first %g, growth %g), %.1f%% of columns at "
           "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, prisms not "
           "positive in every 3-tet split %lld, min "
           "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
@@ -590,12 +620,12 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
           "growth %.3f, OpenFOAM non-orthogonality max %.1f deg (%lld faces beyond 70), "
           "skewness max %.2f, room for T at %.1f%% of columns (%.1f%% of those at full "
           "thickness), fill of the allowed thickness %.3f, %.2f s%s\n",
-          out, (long long)r->prisms, r->layers, r->first_height, r->growth, 100 * r->full_fraction,
-          r->thick_min, r->thick_mean, (long long)r->inverted, (long long)r->split_negative,
-          r->sj_min, r->normal_dev_max, (long long)r->normal_dev_over5,
-          (long long)r->smooth_vertices, (long long)npairs, r->growth_max, r->nonortho_max,
-          (long long)r->nonortho_over70, r->skew_max, 100 * r->medial_room, 100 * r->medial_reach,
-          r->medial_fill, r->time_total,
+          out, (long long)r->prisms, ends, r->layers, r->first_height, r->growth,
+          100 * r->full_fraction, r->thick_min, r->thick_mean, (long long)r->inverted,
+          (long long)r->split_negative, r->sj_min, r->normal_dev_max,
+          (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
+          r->growth_max, r->nonortho_max, (long long)r->nonortho_over70, r->skew_max,
+          100 * r->medial_room, 100 * r->medial_reach, r->medial_fill, r->time_total,
           rc == VM_EXIT_CHECK ? "  -- NOT VALID"
           : (interrupted || timed_out) && bad
               ? (timed_out ? "  -- time limit reached, NOT VALID" : "  -- interrupted, NOT VALID")
@@ -629,6 +659,9 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   printf(", \"reoriented\": %s, \"needles_in\": %lld, \"surface_stage\": %s, \"needles\": %lld",
          r.reoriented ? "true" : "false", (long long)needles_in, surface ? "true" : "false",
          (long long)needles);
+  printf(", \"ended_columns\": %lld, \"ended_kept\": %lld, \"pyramids\": %lld, \"tets\": %lld",
+         (long long)r.ended_columns, (long long)r.ended_kept, (long long)r.pyramids,
+         (long long)r.tets);
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
   printf(", \"thickness_min\": ");
@@ -729,6 +762,12 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
     st2 =
         vm_report_row(report, "thickness T (of the model's length), first height, growth",
                       "%g (%.3g), %g, %g", r.thickness, r.thickness / L, r.first_height, r.growth);
+  if (st2 >= 0 && (r.ended_columns > 0 || r.ended_kept > 0))
+    st2 = vm_report_row(report,
+                        "layers ending per region: columns ended, columns kept whole, pyramids, "
+                        "tets",
+                        "%lld, %lld, %lld, %lld", (long long)r.ended_columns,
+                        (long long)r.ended_kept, (long long)r.pyramids, (long long)r.tets);
   if (st2 >= 0)
     st2 = vm_report_row(report, "columns at full thickness", "%.1f %%", 100 * r.full_fraction);
   if (st2 >= 0)
@@ -799,7 +838,8 @@ int main(int argc, char **argv) {
             .o = vm_prism_opts_default(),
             .wo = vm_write_opts_default()};
   vm_mesh *m = NULL, *res = NULL;
-  double *elem_T = NULL; /* --region-thickness: one per wall element */
+  double *elem_T = NULL;  /* --region-thickness: one per wall element */
+  int32_t *elem_n = NULL; /* --region-layers: one per wall element */
   vm_report *report = NULL;
   vm_report_history *hist = NULL;
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
@@ -867,12 +907,28 @@ int main(int argc, char **argv) {
   }
   if (a.region) {
     double tmax = 0;
-    if ((rc = region_thickness(&cli, a.region, m, a.T_abs > 0 ? 1 : L, L, o->thickness, &elem_T,
-                               &tmax)) != VM_EXIT_OK)
+    if ((rc = region_values(&cli, "--region-thickness", a.region, m, a.T_abs > 0 ? 1 : L, L,
+                            o->thickness, &elem_T, &tmax)) != VM_EXIT_OK)
       goto done;
     /* the schedule is the thickest region's */
     o->thickness = tmax;
     o->elem_thickness = elem_T;
+  }
+  if (a.region_layers) {
+    double nmax = 0, *en = NULL;
+    if ((rc = region_values(&cli, "--region-layers", a.region_layers, m, 1, 1, o->nlayers, &en,
+                            &nmax)) != VM_EXIT_OK)
+      goto done;
+    elem_n = vm_alloc_array(cli.ctx, (size_t)(m->ne ? m->ne : 1), sizeof *elem_n);
+    if (!elem_n) {
+      vm_free(cli.ctx, en);
+      vm_cli_error(&cli, "out of memory");
+      rc = VM_EXIT_INPUT;
+      goto done;
+    }
+    for (int64_t e = 0; e < m->ne; e++) elem_n[e] = (int32_t)en[e];
+    vm_free(cli.ctx, en);
+    o->elem_layers = elem_n;
   }
   if (a.yplus > 0 || a.reynolds > 0 || a.ref_length > 0) {
     if (!(a.yplus > 0) || !(a.reynolds > 0)) {
@@ -940,6 +996,11 @@ int main(int argc, char **argv) {
   if (pass_wall_fields(&cli, m, res, r.wall_vertices) < 0 ||
       pass_wall_element_fields(&cli, m, res, r.wall_triangles) < 0 ||
       count_pairs(&cli, res, r.wall_vertices, &npairs) < 0 ||
+      /* the numbering's keys served the passing above: not written */
+      (vm_mesh_find_field(res, VM_PRISM_FIELD_COLUMN, VM_FIELD_VERTEX) &&
+       vm_mesh_remove_field(res, VM_PRISM_FIELD_COLUMN, VM_FIELD_VERTEX) < 0) ||
+      (vm_mesh_find_field(res, VM_PRISM_FIELD_WALL_FACE, VM_FIELD_ELEMENT) &&
+       vm_mesh_remove_field(res, VM_PRISM_FIELD_WALL_FACE, VM_FIELD_ELEMENT) < 0) ||
       vm_mesh_write(cli.ctx, res, a.out, a.fout, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
@@ -1004,6 +1065,7 @@ int main(int argc, char **argv) {
   }
 done:
   vm_free(cli.ctx, elem_T);
+  vm_free(cli.ctx, elem_n);
   vm_report_destroy(&report);
   vm_report_history_destroy(&hist);
   vm_mesh_destroy(&res);

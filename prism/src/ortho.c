@@ -821,12 +821,21 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     int64_t t = c / nl;
     int k = (int)(c % nl);
     double x[18];
+    /* where layers end (pr_end_layers): no cell where all three columns
+     * have ended, no side face where both of its have, and the top of the
+     * last cell of a stack is on the outer surface */
+    const int32_t *tc = p->tri + 3 * t;
+    int top_k[3];
+    for (int i = 0; i < 3; i++) top_k[i] = pr_col_top(p, tc[i], nl);
+    if (top_k[0] <= k && top_k[1] <= k && top_k[2] <= k) continue;
+    int last = k == nl - 1 || (top_k[0] <= k + 1 && top_k[1] <= k + 1 && top_k[2] <= k + 1);
     pr_prism_at(p, L, t, k, x);
     for (int f = 0; f < 5; f++) {
       double y[12];
+      if (f >= 2 && top_k[f - 2] <= k && top_k[(f - 1) % 3] <= k) continue;
       int n = face_of(x, f, y);
       /* the wall under layer 0 and the outer surface over the last */
-      if ((f == 0 && k == 0) || (f == 1 && k == nl - 1)) {
+      if ((f == 0 && k == 0) || (f == 1 && last)) {
         double sk = pr_foam_boundary_skew(y, n, cc + 3 * c);
         skew = sk > skew ? sk : skew;
         continue;

@@ -165,6 +165,14 @@ typedef struct pr_params {
   double split_mul[5];             /* {1, 0.8, 1.25, 0.64, 1.5}: factors of the
                                       schedule's split fraction tried where the
                                       straight split is not valid */
+  double end_count_round;          /* 0.5: with a layer count per region, a column
+                                      takes as many of the schedule's heights as
+                                      fit its aim, the last one counted where
+                                      the sum passes the aim by at most half of
+                                      it (the nearest level boundary) */
+  int end_certify_depth;           /* 6: subdivision levels of the Bernstein
+                                      certificate of a pyramid where layers end
+                                      (vm_jacobian_certify) */
   double split_max_frac;           /* 0.9: a changed split never takes more than 90 %
                                       of the remainder (the outer sublayer would be a
                                       sliver) */
@@ -345,6 +353,8 @@ static inline pr_params pr_params_default(void) {
       .restore_stop_change = 1e-6,
       .split_mul = {1, 0.8, 1.25, 0.64, 1.5},
       .split_max_frac = 0.9,
+      .end_count_round = 0.5,
+      .end_certify_depth = 6,
       .min_target_height = 1e-4,
       .tilt_limit_deg = 5,
       .medial_cap = 4,

@@ -34,88 +34,182 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
   const double *L = levels(p, &nlev);
   if (nlev < 2) return vm_error(ctx, VM_ERR_ARG, "prism: no layer built yet");
   int64_t nw = p->nw, nt = p->nt, nl = nlev - 1;
-  int64_t ne = nl * nt + 2 * nt;
+  /* where layers end (after marching), the levels above a column's top
+   * are left out: vid[k * nw + v] is the vertex of level k of column v */
+  int ends = p->done >= 5 && p->ended;
+  int32_t *vid = NULL;
+  int64_t nv = nlev * nw, ncell = nl * nt, nconn = 6 * nl * nt;
+  if (ends) {
+    vid = vm_alloc_array(ctx, (size_t)(nlev * nw), sizeof *vid);
+    if (!vid) return VM_ERR_NOMEM;
+    nv = 0;
+    for (int64_t k = 0; k < nlev; k++)
+      for (int64_t v = 0; v < nw; v++)
+        vid[k * nw + v] = k <= pr_col_top(p, v, (int)nl) ? (int32_t)nv++ : -1;
+    ncell = nconn = 0;
+    for (int64_t k = 0; k < nl; k++)
+      for (int64_t t = 0; t < nt; t++) {
+        int32_t col[6];
+        int lv[6];
+        int type = pr_cell_nodes(p, t, (int)k, (int)nl, col, lv);
+        if (type < 0) continue;
+        ncell++;
+        nconn += vm_elem_nverts(type);
+      }
+  }
+  int64_t ne = ncell + 2 * nt;
   vm_mesh *m = NULL;
   int st = vm_mesh_create(ctx, &m);
-  if (st) return st;
-  if ((st = vm_mesh_set_vertices(m, nlev * nw)) ||
-      (st = vm_mesh_set_elements(m, ne, 6 * nl * nt + 6 * nt)))
+  if (st) {
+    vm_free(ctx, vid);
+    return st;
+  }
+  if ((st = vm_mesh_set_vertices(m, nv)) || (st = vm_mesh_set_elements(m, ne, nconn + 6 * nt)))
     goto fail;
-  memcpy(m->xyz, L, (size_t)(3 * nw * nlev) * sizeof *m->xyz);
+  if (ends) {
+    for (int64_t k = 0; k < nlev; k++)
+      for (int64_t v = 0; v < nw; v++)
+        if (vid[k * nw + v] >= 0)
+          memcpy(m->xyz + 3 * (int64_t)vid[k * nw + v], L + 3 * (k * nw + v), 3 * sizeof *m->xyz);
+  } else {
+    memcpy(m->xyz, L, (size_t)(3 * nw * nlev) * sizeof *m->xyz);
+  }
   memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
   for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
+    /* the vertex of level k of column v */
+#define VID(k, v) (ends ? vid[(int64_t)(k)*nw + (v)] : (int32_t)((v) + (int64_t)(k)*nw))
   int64_t e = 0, c = 0;
-  for (int64_t k = 0; k < nl; k++)
-    for (int64_t t = 0; t < nt; t++, e++) {
-      m->etype[e] = VM_PRISM;
-      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + k * nw);
-      for (int i = 0; i < 3; i++) m->conn[c + 3 + i] = (int32_t)(p->tri[3 * t + i] + (k + 1) * nw);
-      c += 6;
-      m->eoff[e + 1] = c;
-    }
-  for (int s = 0; s < 2; s++)
-    for (int64_t t = 0; t < nt; t++, e++) {
-      m->etype[e] = VM_TRI;
-      for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + (s ? nl * nw : 0));
-      c += 3;
-      m->eoff[e + 1] = c;
-    }
+  int32_t *lay = NULL, *ph = NULL, *wf = NULL;
   /* vm_mesh_add_field may move the mesh's field table, so keep the data
    * pointers (separate allocations), never the vm_field pointers */
   vm_field *f;
-  int32_t *lay = NULL, *ph = NULL;
-  double *th = NULL;
   if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_LAYER, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
     goto fail;
   lay = f->data;
   if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_PHYS, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
     goto fail;
   ph = f->data;
+  if (ends) {
+    if ((st =
+             vm_mesh_add_field(m, VM_PRISM_FIELD_WALL_FACE, VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f)))
+      goto fail;
+    wf = f->data;
+  }
+  for (int64_t k = 0; k < nl; k++)
+    for (int64_t t = 0; t < nt; t++) {
+      int32_t col[6];
+      int lv[6];
+      int type = ends ? pr_cell_nodes(p, t, (int)k, (int)nl, col, lv) : VM_PRISM;
+      if (type < 0) continue;
+      m->etype[e] = (uint8_t)type;
+      if (ends) {
+        for (int i = 0; i < vm_elem_nverts(type); i++) m->conn[c + i] = VID(lv[i], col[i]);
+      } else {
+        for (int i = 0; i < 3; i++) m->conn[c + i] = (int32_t)(p->tri[3 * t + i] + k * nw);
+        for (int i = 0; i < 3; i++)
+          m->conn[c + 3 + i] = (int32_t)(p->tri[3 * t + i] + (k + 1) * nw);
+      }
+      c += vm_elem_nverts(type);
+      m->eoff[e + 1] = c;
+      lay[e] = (int32_t)k;
+      ph[e] = VM_PRISM_TAG_VOLUME;
+      if (wf) wf[e] = (int32_t)t;
+      e++;
+    }
+  for (int s = 0; s < 2; s++)
+    for (int64_t t = 0; t < nt; t++, e++) {
+      m->etype[e] = VM_TRI;
+      for (int i = 0; i < 3; i++) {
+        int32_t v = p->tri[3 * t + i];
+        m->conn[c + i] = s ? VID(pr_col_top(p, v, (int)nl), v) : v;
+      }
+      c += 3;
+      m->eoff[e + 1] = c;
+      lay[e] = -1;
+      ph[e] = s ? VM_PRISM_TAG_OUTER : VM_PRISM_TAG_WALL;
+      if (wf) wf[e] = (int32_t)t;
+    }
+    /* a vertex field with the value val(v) of its column on every level */
+#define COLUMN_FIELD(dst, val)                                                                     \
+  for (int64_t k_ = 0; k_ < nlev; k_++)                                                            \
+    for (int64_t v = 0; v < nw; v++)                                                               \
+      if (VID(k_, v) >= 0) (dst)[VID(k_, v)] = (val)
+  double *th = NULL;
   if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_THICKNESS, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
     goto fail;
   th = f->data;
-  for (int64_t k = 0; k < ne; k++) {
-    lay[k] = k < nl * nt ? (int32_t)(k / nt) : -1;
-    ph[k] = k < nl * nt        ? VM_PRISM_TAG_VOLUME
-            : k < nl * nt + nt ? VM_PRISM_TAG_WALL
-                               : VM_PRISM_TAG_OUTER;
+  double *len = vm_alloc_array(ctx, (size_t)nw, sizeof *len);
+  if (!len) {
+    st = VM_ERR_NOMEM;
+    goto fail;
   }
-  for (int64_t v = 0; v < nw; v++) {
-    double d = vm_dist3(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
-    for (int64_t k = 0; k < nlev; k++) th[k * nw + v] = d;
+  for (int64_t v = 0; v < nw; v++)
+    len[v] = vm_dist3(p->wall + 3 * v, L + (size_t)(3 * nw) * (size_t)nl + 3 * v);
+  COLUMN_FIELD(th, len[v]);
+  if (ends) {
+    int32_t *cv;
+    if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_COLUMN, VM_FIELD_VERTEX, VM_FIELD_I32, 1, &f)))
+      goto fail_len;
+    cv = f->data;
+    COLUMN_FIELD(cv, (int32_t)v);
   }
   if (p->medial) {
     double *mr, *fl;
     if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_MEDIAL, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
-      goto fail;
+      goto fail_len;
     mr = f->data;
     if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_FILL, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
-      goto fail;
+      goto fail_len;
     fl = f->data;
-    for (int64_t v = 0; v < nw; v++) {
-      double fill = pr_fill(th[v], p->tv[v], p->medial[v]);
-      for (int64_t k = 0; k < nlev; k++) {
-        mr[k * nw + v] = p->medial[v];
-        fl[k * nw + v] = fill;
-      }
-    }
+    COLUMN_FIELD(mr, p->medial[v]);
+    COLUMN_FIELD(fl, pr_fill(len[v], p->tv[v], p->medial[v]));
   }
   if (p->regional) {
     if ((st = vm_mesh_add_field(m, VM_PRISM_FIELD_TARGET, VM_FIELD_VERTEX, VM_FIELD_F64, 1, &f)))
-      goto fail;
+      goto fail_len;
     double *tg = f->data;
-    for (int64_t v = 0; v < nw; v++)
-      for (int64_t k = 0; k < nlev; k++) tg[k * nw + v] = p->tv[v];
+    COLUMN_FIELD(tg, p->tv[v]);
   }
+#undef COLUMN_FIELD
+#undef VID
+  vm_free(ctx, len);
+  len = NULL;
   if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:1", "wall")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
     goto fail;
+  vm_free(ctx, vid);
   *out = m;
   return VM_OK;
+fail_len:
+  vm_free(ctx, len);
 fail:
+  vm_free(ctx, vid);
   vm_mesh_destroy(&m);
   return st;
+}
+
+/* The least corner scaled Jacobian of a pyramid (at its base corners)
+ * or a tet (x: 5 or 4 vertices), 1 on the ideal one (equal edges);
+ * *inverted = 1 if a corner's determinant is not positive. */
+static double cell_sj(int type, const double *x, int *inverted) {
+  static const int tet[4][4] = {{0, 1, 2, 3}, {1, 2, 0, 3}, {2, 0, 1, 3}, {3, 2, 1, 0}};
+  static const int pyr[4][4] = {{0, 1, 3, 4}, {1, 2, 0, 4}, {2, 3, 1, 4}, {3, 0, 2, 4}};
+  const int(*cn)[4] = type == VM_TET ? tet : pyr;
+  double q = INFINITY, norm = sqrt(2.0);
+  *inverted = 0;
+  for (int i = 0; i < 4; i++) {
+    double e[3][3];
+    for (int j = 0; j < 3; j++)
+      for (int r = 0; r < 3; r++) e[j][r] = x[3 * cn[i][j + 1] + r] - x[3 * cn[i][0] + r];
+    double n[3];
+    vm_cross3(e[0], e[1], n);
+    double det = vm_dot3(n, e[2]), l = vm_norm3(e[0]) * vm_norm3(e[1]) * vm_norm3(e[2]);
+    double s = l > 0 ? norm * det / l : -1;
+    if (!(det > 0)) *inverted = 1;
+    q = s < q ? s : q;
+  }
+  return q;
 }
 
 static int cmp_double(const void *a, const void *b) {
@@ -173,23 +267,22 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     R.thick_min = tmin;
     R.thick_mean = tsum / (double)nw;
     R.thick_max = tmax;
-    R.prisms = (nlev - 1) * nt;
     R.layers = nlev - 1;
-    int64_t inv = 0, split = 0;
+    int64_t inv = 0, split = 0, cells = 0;
     double sj = INFINITY;
     for (int k = 0; k + 1 < nlev; k++)
       for (int64_t t = 0; t < nt; t++) {
         double x[18];
-        for (int i = 0; i < 3; i++) {
-          memcpy(x + 3 * i, L + k * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-          memcpy(x + 9 + 3 * i, L + (k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i], 3 * sizeof *x);
-        }
-        int bad;
-        double q = pr_prism_corner_quality(x, &bad);
+        int nv, bad;
+        int type = pr_cell_at(p, L, t, k, nlev - 1, x, &nv);
+        if (type < 0) continue;
+        cells += type == VM_PRISM;
+        double q = type == VM_PRISM ? pr_prism_corner_quality(x, &bad) : cell_sj(type, x, &bad);
         inv += bad;
-        split += vm_prism_split_check(x, NULL) > 0;
+        if (type == VM_PRISM) split += vm_prism_split_check(x, NULL) > 0;
         sj = q < sj ? q : sj;
       }
+    R.prisms = cells;
     R.inverted = inv;
     R.split_negative = split;
     R.sj_min = sj;
@@ -207,7 +300,7 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
       dev[v] = a;
       double gc = 0;
       int ok = 1;
-      for (int k = 0; k + 2 < nlev; k++) {
+      for (int k = 0; k + 2 <= pr_col_top(p, v, nlev - 1); k++) {
         double h0 = vm_dist3(L + k * lsz + 3 * v, L + (k + 1) * lsz + 3 * v);
         double h1 = vm_dist3(L + (k + 1) * lsz + 3 * v, L + (k + 2) * lsz + 3 * v);
         /* a zero height (none is made) counts as out of the band, not

@@ -5,6 +5,7 @@
 #define VARMESH_PRISM_STATE_H
 
 #include <stdint.h>
+#include <string.h>
 
 #include "geom.h"
 #include "intersect.h"
@@ -44,7 +45,12 @@ struct vm_prism {
   vm_problem *prob;
   double *tv;   /* nw: each column's aim T_v <= T (T everywhere unless
                    the options give a thickness per wall face) */
-  int regional; /* the options gave a thickness per wall face */
+  int regional; /* the options gave a thickness (or a layer count) per wall face */
+  int32_t *nlv; /* nw: each column's layer count (the least of its faces', at most
+                   what fits its aim),
+                   NULL unless the options give a count per wall face; after
+                   marching, levels nlv[v]..nlev-1 of column v are its top */
+  int ended;    /* pr_end_layers has ended some columns' layers */
   double *h;    /* nw target heights */
   double *cap;  /* nw upper bounds of the thickness left by cutting */
   uint8_t *cut; /* nw: rounds the column was cut in (saturates at 255) */
@@ -74,6 +80,63 @@ static inline void pr_prism_at(const vm_prism *p, const double *L, int64_t t, in
       x[3 * i + r] = L[k * lsz + 3 * (size_t)p->tri[3 * t + i] + r];
       x[9 + 3 * i + r] = L[(k + 1) * lsz + 3 * (size_t)p->tri[3 * t + i] + r];
     }
+}
+
+/* Column v's last level (its top) among nl layers: nl, or its own count
+ * where layers end (p->nlv). */
+static inline int pr_col_top(const vm_prism *p, int64_t v, int nl) {
+  return p->ended && p->nlv[v] < nl ? p->nlv[v] : nl;
+}
+
+/* The cell of triangle t in layer k of nl layers where layers end: its
+ * type (VM_PRISM; VM_PYRAMID where one column has ended below level k + 1,
+ * VM_TET where two have; -1: no cell, all three have) and its vertices as
+ * columns col[i] and levels lv[i] in varmesh order. A pyramid's base is
+ * the side quad of the two columns going on, its apex the ended column's
+ * top; a tet stands on the layer's bottom triangle, its apex the one column
+ * going on. Without ending layers, always the prism. */
+static inline int pr_cell_nodes(const vm_prism *p, int64_t t, int k, int nl, int32_t *col,
+                                int *lv) {
+  const int32_t *c = p->tri + 3 * t;
+  int ended[3], ne = 0;
+  for (int i = 0; i < 3; i++) ne += ended[i] = pr_col_top(p, c[i], nl) <= k;
+  if (ne == 0) {
+    for (int i = 0; i < 3; i++) {
+      col[i] = col[3 + i] = c[i];
+      lv[i] = k;
+      lv[3 + i] = k + 1;
+    }
+    return VM_PRISM;
+  }
+  if (ne == 3) return -1;
+  int i = 0;
+  while (ended[i] != (ne == 1)) i++; /* the ended one (a pyramid) or the one going on (a tet) */
+  int32_t a = c[(i + 1) % 3], b = c[(i + 2) % 3], e = c[i];
+  if (ne == 1) {
+    int32_t cc[5] = {a, a, b, b, e};
+    int ll[5] = {k, k + 1, k + 1, k, pr_col_top(p, e, nl)};
+    memcpy(col, cc, sizeof cc);
+    memcpy(lv, ll, sizeof ll);
+    return VM_PYRAMID;
+  }
+  int32_t cc[4] = {e, a, b, e};
+  int ll[4] = {k, pr_col_top(p, a, nl), pr_col_top(p, b, nl), k + 1};
+  memcpy(col, cc, sizeof cc);
+  memcpy(lv, ll, sizeof ll);
+  return VM_TET;
+}
+
+/* The cell's coordinates (3 per vertex) from the levels L (nw vertices
+ * each); returns its type as pr_cell_nodes, *nv its vertex count. */
+static inline int pr_cell_at(const vm_prism *p, const double *L, int64_t t, int k, int nl,
+                             double *x, int *nv) {
+  int32_t col[6];
+  int lv[6];
+  int type = pr_cell_nodes(p, t, k, nl, col, lv);
+  *nv = type == VM_PRISM ? 6 : type == VM_PYRAMID ? 5 : type == VM_TET ? 4 : 0;
+  for (int i = 0; i < *nv; i++)
+    memcpy(x + 3 * i, L + (size_t)lv[i] * (size_t)(3 * p->nw) + 3 * (size_t)col[i], 3 * sizeof *x);
+  return type;
 }
 
 /* The wall triangle across edge i (tri[i], tri[i + 1]) of triangle t (-1:
@@ -135,6 +198,17 @@ double pr_percentile(double *x, int64_t n, double q);
 /* The exterior medial radius of every wall vertex (radius, nw), at most
  * `cap` (see medial.c). */
 int pr_medial_radius(vm_prism *p, double cap, double *radius);
+
+/* ---- layers ending per region (ends.c) ---- */
+
+/* With a layer count per column (p->nlv), after marching: each column
+ * with fewer layers than the stack has its levels put along its course at
+ * the schedule's first height and its own growth, the levels above its
+ * count at its top; a column whose ending leaves a cell invalid (a corner
+ * tet, a 3-tet split or a face pyramid not positive, a pyramid not
+ * certified) keeps all its layers. Fills the report's ended_columns,
+ * ended_kept, pyramids and tets. */
+int pr_end_layers(vm_prism *p);
 
 /* ---- the non-orthogonality relief (ortho.c) ---- */
 

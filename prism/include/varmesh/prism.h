@@ -32,6 +32,14 @@ extern "C" {
 /* f64 per vertex: the column's own aim T_v; written only when
  * vm_prism_opts.elem_thickness is given */
 #define VM_PRISM_FIELD_TARGET "target_thickness"
+/* Where layers end (vm_prism_opts.elem_layers), the numbering is no
+ * longer column by column in layers, so the result says where each vertex
+ * and element comes from: i32 per vertex, the wall vertex of its column
+ * (0..nw-1, vm_prism_create's numbering); i32 per element, the wall
+ * triangle its stack stands on (0..nt-1, quads split as vm_prism_create
+ * splits them) */
+#define VM_PRISM_FIELD_COLUMN "column"
+#define VM_PRISM_FIELD_WALL_FACE "wall_face"
 enum {
   VM_PRISM_TAG_WALL = 1,  /* wall triangles (the input surface) */
   VM_PRISM_TAG_OUTER = 2, /* outer boundary triangles */
@@ -110,6 +118,23 @@ typedef struct vm_prism_opts {
    * the geometry leaves and the fill are each column's against its own
    * aim. Read by vm_prism_create only. */
   const double *elem_thickness;
+  /* NULL (default): every column has nlayers layers. Else one layer count
+   * per element of the wall (as elem_thickness), each in [1, nlayers]: the
+   * stack over a face stops after its count, the layers it has following
+   * the schedule's first height and growth (so, without elem_thickness, a
+   * face of n layers aims at the sum of the schedule's first n heights). A
+   * column has the least count of its faces, and at most as many of the
+   * schedule's heights as fit its (graded) aim: where a thicker region is
+   * shortened towards a thinner one, its layers end a few at a time along
+   * the slope. Over a face whose columns' counts differ, the layers above
+   * the smaller counts end in pyramids (one column ended) and tetrahedra
+   * (two ended), conformally. Where ending a column's layers makes a cell
+   * invalid (a corner tet, a 3-tet split or a face pyramid not positive, a
+   * pyramid not certified) or a face more skewed than before and than
+   * OpenFOAM's limit with a margin, the column gives a layer back, up to
+   * all of them (the report counts those kept whole). Read by
+   * vm_prism_create only. */
+  const int32_t *elem_layers;
   vm_prism_progress_fn progress;
   void *user;
 } vm_prism_opts;
@@ -171,13 +196,18 @@ typedef struct vm_prism_report {
   /* the room the geometry leaves (vm_prism_medial_radius; all 0 if it was
    * not computed): a column has room for T where its wall vertex's
    * exterior medial radius is at least 1.05 T */
-  double medial_room;            /* share of the columns with room */
-  double medial_reach;           /* of those, the share at full thickness (1 if none) */
-  int64_t medial_short;          /* columns with room short of full thickness */
-  double medial_fill;            /* mean over all columns of min(1, achieved / min(T, radius)):
-                                    the layer's fill of what the geometry allows */
-  double medial_fill_rest;       /* the same over the columns without room (1 if none) */
-  double medial_time;            /* seconds spent computing the radii */
+  double medial_room;      /* share of the columns with room */
+  double medial_reach;     /* of those, the share at full thickness (1 if none) */
+  int64_t medial_short;    /* columns with room short of full thickness */
+  double medial_fill;      /* mean over all columns of min(1, achieved / min(T, radius)):
+                              the layer's fill of what the geometry allows */
+  double medial_fill_rest; /* the same over the columns without room (1 if none) */
+  double medial_time;      /* seconds spent computing the radii */
+  /* with a layer count per wall face (vm_prism_opts.elem_layers): the
+   * columns ended below the stack's layer count, those kept whole because
+   * ending them would have made a cell invalid, and the cells that end
+   * the layers (prisms counts only whole prisms) */
+  int64_t ended_columns, ended_kept, pyramids, tets;
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
   int reoriented; /* the wall was oriented inwards and its triangles were turned */
@@ -235,10 +265,12 @@ int vm_prism_march(vm_prism *p);
 const vm_mesh *vm_prism_layer(const vm_prism *p);
 
 /* The result: N-layer prism mesh (after vm_prism_march) with vertices
- * column by column in layers (vertex k*nw + v is level k of column v), the
- * prisms layer by layer, then the wall triangles and the outer triangles as
- * boundary faces; fields VM_PRISM_FIELD_LAYER, VM_PRISM_FIELD_THICKNESS,
- * VM_PRISM_FIELD_PHYS and attributes "gmsh:physical_name:2:1" = "wall",
+ * column by column in layers (vertex k*nw + v is level k of column v; with
+ * a layer count per wall face, the levels above a column's own count are
+ * left out and the numbering is the same order without them), the
+ * cells layer by layer (prisms, and where layers end pyramids and tets),
+ * then the wall triangles and the outer triangles as boundary faces; fields VM_PRISM_FIELD_LAYER,
+ * VM_PRISM_FIELD_THICKNESS, VM_PRISM_FIELD_PHYS and attributes "gmsh:physical_name:2:1" = "wall",
  * "gmsh:physical_name:2:2" = "outer", "gmsh:physical_name:3:3" = "layer".
  * Wall vertices are FIXED and bit-identical to the input. Free with
  * vm_mesh_destroy. Before marching, the single layer is returned. */
