@@ -75,7 +75,8 @@ static int cell_ok(const vm_prism *p, int64_t t, int k, int nl, int split_before
     pr_prism_corner_quality(x, &inv);
     if (inv) return 0;
     if (!split_before && vm_prism_split_check(x, NULL) > 0) return 0;
-  } else if (type == VM_PYRAMID && vm_jacobian_certify(type, x, p->k.end_certify_depth, NULL) != VM_JAC_VALID) {
+  } else if (type == VM_PYRAMID &&
+             vm_jacobian_certify(type, x, p->k.end_certify_depth, NULL) != VM_JAC_VALID) {
     return 0;
   }
   double vol = 0;
