@@ -282,9 +282,11 @@ static int region_values(vm_cli *cli, const char *opt, const char *spec, const v
   *out = NULL;
   region_item *items = NULL;
   size_t n = 0, cap = 0;
+  const int count = strcmp(opt, "--region-layers") == 0;
+  const char *X = count ? "N" : "X";
   const char *colon = strrchr(spec, ':');
   if (!colon || colon == spec || !colon[1])
-    return vm_cli_usage_error(cli, "%s '%s': expects FIELD:ID=X,...", opt, spec);
+    return vm_cli_usage_error(cli, "%s '%s': expects FIELD:ID=%s,...", opt, spec, X);
   char name[256];
   size_t nl = (size_t)(colon - spec);
   if (nl >= sizeof name) return vm_cli_usage_error(cli, "%s: the field name is too long", opt);
@@ -309,11 +311,10 @@ static int region_values(vm_cli *cli, const char *opt, const char *spec, const v
     if (end == s || *end != '=' || errno || k < INT32_MIN || k > INT32_MAX) {
       vm_free(cli->ctx, et);
       vm_free(cli->ctx, items);
-      return vm_cli_usage_error(cli, "%s: item %d ('%s'): expects ID=X", opt, item, s);
+      return vm_cli_usage_error(cli, "%s: item %d ('%s'): expects ID=%s", opt, item, s, X);
     }
     s = end + 1;
     double x = strtod(s, &end);
-    int count = strcmp(opt, "--region-layers") == 0;
     if (count && !(end == s || (*end && *end != ',')) && !(x == floor(x) && x >= 1 && x <= T)) {
       vm_free(cli->ctx, et);
       vm_free(cli->ctx, items);

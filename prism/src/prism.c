@@ -351,6 +351,9 @@ static void region_counts(vm_prism *p) {
   if (!p->nlv) return;
   int n = p->rep.layers_requested;
   for (int64_t v = 0; v < p->nw; v++) {
+    /* a column aiming at T keeps its count (the schedule's last height
+     * may be a short remainder: --first-height with --growth) */
+    if (!(p->tv[v] < p->o.thickness)) continue;
     double s = 0;
     int k = 1;
     for (; k < n; k++) {
