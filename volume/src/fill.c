@@ -183,11 +183,14 @@ static double tet_angles(const double *p[4], double *lo, double *hi) {
   return sj;
 }
 
-int vm_fill_tet_quality_of(vm_ctx *ctx, const vm_mesh *m, vm_fill_tet_quality *q) {
+/* vm_fill_tet_quality_of over the tets from element e0 on (the fill's own,
+ * after the input's cells: a layer's tets where its layers end are not the
+ * fill's); a face counts where one of its cells is such a tet. */
+static int tet_quality_from(vm_ctx *ctx, const vm_mesh *m, int64_t e0, vm_fill_tet_quality *q) {
   memset(q, 0, sizeof *q);
   q->min_dihedral = 180;
   q->sj_min = 1;
-  for (int64_t e = 0; e < m->ne; e++) {
+  for (int64_t e = e0; e < m->ne; e++) {
     if (m->etype[e] != VM_TET) continue;
     const int32_t *c = m->conn + m->eoff[e];
     const double *p[4] = {m->xyz + 3 * c[0], m->xyz + 3 * c[1], m->xyz + 3 * c[2],
@@ -206,7 +209,7 @@ int vm_fill_tet_quality_of(vm_ctx *ctx, const vm_mesh *m, vm_fill_tet_quality *q
   for (int64_t i = 0; i + 1 < nf; i++) {
     if (!same_face(&f[i], &f[i + 1])) continue;
     int32_t a = f[i].cell, b = f[i + 1].cell;
-    int ta = m->etype[a] == VM_TET, tb = m->etype[b] == VM_TET;
+    int ta = m->etype[a] == VM_TET && a >= e0, tb = m->etype[b] == VM_TET && b >= e0;
     if (!ta && !tb) continue;
     double va = fabs(cell_volume(m, a)), vb = fabs(cell_volume(m, b));
     double r = va > vb ? (vb > 0 ? va / vb : INFINITY) : (va > 0 ? vb / va : INFINITY);
@@ -219,6 +222,10 @@ int vm_fill_tet_quality_of(vm_ctx *ctx, const vm_mesh *m, vm_fill_tet_quality *q
   }
   vm_free(ctx, f);
   return VM_OK;
+}
+
+int vm_fill_tet_quality_of(vm_ctx *ctx, const vm_mesh *m, vm_fill_tet_quality *q) {
+  return tet_quality_from(ctx, m, 0, q);
 }
 
 /* ---------- the size field: a kd-tree over the envelope's vertices ---------- */
@@ -792,13 +799,16 @@ done:
 /* Points that break Gmsh's slivers of four envelope vertices (flat tets in
  * slightly concave kinks of the envelope, which Delaunay keeps: no other
  * point is in their small circumsphere): one just off the envelope above
- * each, inside that sphere. Appended to *q (3 each, *nq of them). */
-static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t nin, const int32_t *vid,
+ * each, inside that sphere. Appended to *q (3 each, *nq of them). The
+ * fill's tets are elements e0.. of the merged mesh o (merge: the input's
+ * kept elements come first: a layer's own tets, where its layers end, are
+ * not the fill's). */
+static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin, const int32_t *vid,
                          const double *nrm, double min_deg, double **q, int64_t *nq,
                          int64_t *nsliver) {
   *nsliver = 0;
   int64_t n = *nq;
-  for (int64_t e = 0; e < o->ne; e++) {
+  for (int64_t e = e0; e < o->ne; e++) {
     if (o->etype[e] != VM_TET) continue;
     const int32_t *c = o->conn + o->eoff[e];
     if (c[0] >= nin || c[1] >= nin || c[2] >= nin || c[3] >= nin) continue;
@@ -1647,7 +1657,10 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   }
   if (!st) st = merge(ctx, in, &E, &F, &R, &res);
   int64_t ns = 0;
-  if (!st && !(st = sliver_points(ctx, res, in->nv, vid, nrm, 10, &q, &nq, &ns)) && ns) {
+  if (!st &&
+      !(st = sliver_points(ctx, res, res->ne - F.nf - (int64_t)R.nt, in->nv, vid, nrm, 10, &q, &nq,
+                           &ns)) &&
+      ns) {
     vm_log(ctx, VM_LOG_INFO,
            "fill: %lld slivers of envelope vertices: meshing again with a point in each",
            (long long)ns);
@@ -1683,7 +1696,8 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   {
     int64_t nflat = 0;
     double worst = 180, at[3] = {0, 0, 0};
-    for (int64_t e = 0; e < res->ne; e++) {
+    /* the fill's own tets (merge puts them after the input's cells) */
+    for (int64_t e = res->ne - F.nf - (int64_t)R.nt; e < res->ne; e++) {
       if (res->etype[e] != VM_TET) continue;
       const int32_t *cv = res->conn + res->eoff[e];
       if (cv[0] >= in->nv || cv[1] >= in->nv || cv[2] >= in->nv || cv[3] >= in->nv) continue;
@@ -1708,7 +1722,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
              (long long)nflat, worst, at[0], at[1], at[2]);
   }
   rep.new_vertices = res->nv - in->nv;
-  if ((st = vm_fill_tet_quality_of(ctx, res, &rep.before))) goto done;
+  if ((st = tet_quality_from(ctx, res, res->ne - F.nf - (int64_t)R.nt, &rep.before))) goto done;
   vm_log(ctx, VM_LOG_INFO,
          "fill: %lld tets, %lld new vertices in %.2f s; tets: min dihedral %.2f deg, min "
          "scaled Jacobian %.3f; volume ratio across the envelope %.3g, between tets %.3g",
@@ -1719,7 +1733,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     double t2 = now();
     if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, F.nv, &o, &rep.opt_free))) goto done;
     rep.time_opt = now() - t2;
-    if ((st = vm_fill_tet_quality_of(ctx, res, &rep.after))) goto done;
+    if ((st = tet_quality_from(ctx, res, res->ne - F.nf - (int64_t)R.nt, &rep.after))) goto done;
     vm_log(ctx, VM_LOG_INFO,
            "fill: optimized %lld vertices within %d rings of the envelope in %.2f s: min "
            "dihedral %.2f deg, min scaled Jacobian %.3f; volume ratio across the envelope %.3g, "
