@@ -263,8 +263,9 @@ static int opt_thickness_rel(vm_cli *cli, const vm_opt *opt, const char *value, 
 /* --region-thickness SPEC on the wall m: one thickness per element into
  * *out (m->ne, vm_free'd by the caller), the unit `unit` (1: absolute, or
  * the model's length `length`), T the thickness elsewhere; *tmax the
- * largest. --region-layers SPEC (opt): the same with layer counts, whole
- * numbers in [1, T] (T the stack's count, unit 1). */
+ * largest; opt names the option in messages. With count set
+ * (--region-layers), the same with layer counts, whole numbers in [1, T]
+ * (T the stack's count, unit 1). */
 typedef struct {
   int32_t id, order; /* the value, its place in the list */
   double x;          /* its thickness */
@@ -277,12 +278,12 @@ static int cmp_region_item(const void *a, const void *b) {
   return (p->order > q->order) - (p->order < q->order);
 }
 
-static int region_values(vm_cli *cli, const char *opt, const char *spec, const vm_mesh *m,
-                         double unit, double length, double T, double **out, double *tmax) {
+static int region_values(vm_cli *cli, const char *opt, int count, const char *spec,
+                         const vm_mesh *m, double unit, double length, double T, double **out,
+                         double *tmax) {
   *out = NULL;
   region_item *items = NULL;
   size_t n = 0, cap = 0;
-  const int count = strcmp(opt, "--region-layers") == 0;
   const char *X = count ? "N" : "X";
   const char *colon = strrchr(spec, ':');
   if (!colon || colon == spec || !colon[1])
@@ -908,7 +909,7 @@ int main(int argc, char **argv) {
   }
   if (a.region) {
     double tmax = 0;
-    if ((rc = region_values(&cli, "--region-thickness", a.region, m, a.T_abs > 0 ? 1 : L, L,
+    if ((rc = region_values(&cli, "--region-thickness", 0, a.region, m, a.T_abs > 0 ? 1 : L, L,
                             o->thickness, &elem_T, &tmax)) != VM_EXIT_OK)
       goto done;
     /* the schedule is the thickest region's */
@@ -917,7 +918,7 @@ int main(int argc, char **argv) {
   }
   if (a.region_layers) {
     double nmax = 0, *en = NULL;
-    if ((rc = region_values(&cli, "--region-layers", a.region_layers, m, 1, 1, o->nlayers, &en,
+    if ((rc = region_values(&cli, "--region-layers", 1, a.region_layers, m, 1, 1, o->nlayers, &en,
                             &nmax)) != VM_EXIT_OK)
       goto done;
     elem_n = vm_alloc_array(cli.ctx, (size_t)(m->ne ? m->ne : 1), sizeof *elem_n);
