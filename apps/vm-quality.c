@@ -7,6 +7,7 @@
 #include "cli.h"
 #include "cli_report.h"
 #include "cli_verify.h"
+#include "varmesh/planar.h"
 #include "varmesh/io.h"
 #include "varmesh/jacobian.h"
 #include "varmesh/quality.h"
@@ -173,6 +174,21 @@ int main(int argc, char **argv) {
     vm_cli_error(&cli, "%s: the mesh has no elements (%lld vertices)", a.path, (long long)m->nv);
     rc = VM_EXIT_INPUT;
     goto done;
+  }
+  {
+    /* a 2D mesh in a plane is measured in the plane's coordinates, with the
+     * orientation its boundary gives, as vm-volume optimizes it */
+    int64_t counts[VM_NTYPES];
+    vm_plane_frame f;
+    if (vm_mesh_count_types(m, counts) == 2 && vm_mesh_plane_frame(m, VM_PLANE_TOL, &f) == VM_OK) {
+      vm_mesh_to_plane(m, &f);
+      if (f.flip && !cli.quiet)
+        fprintf(stderr,
+                "vm-quality: %s: a 2D mesh whose elements and boundary turn clockwise seen from "
+                "its plane's normal: that orientation is taken as positive\n",
+                a.path);
+    }
+    vm_ctx_clear_error(cli.ctx);
   }
   if (vm_mesh_quality(m, &a.qo, &q) < 0 || vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
     rc = vm_cli_input_error(&cli, NULL);

@@ -11,6 +11,7 @@
 #include "cli_verify.h"
 #include "varmesh/io.h"
 #include "varmesh/jacobian.h"
+#include "varmesh/planar.h"
 #include "varmesh/quality.h"
 #include "varmesh/slip.h"
 #include "varmesh/topology.h"
@@ -144,9 +145,11 @@ static const vm_opt opts[] = {
 
 static const vm_cli_spec spec = {
     "usage: vm-volume [options] IN OUT\n"
-    "Untangle (Section 5 of the paper) and optimize a volume mesh; fixed vertices\n"
-    "(int point field 'fixed', the file's own flags, and by default the boundary)\n"
-    "never move. OUT is written in the format of its extension, else IN's.\n",
+    "Untangle (Section 5 of the paper) and optimize a volume mesh, or a 2D mesh of\n"
+    "triangles and quads in a plane (any plane; its boundary gives the orientation);\n"
+    "fixed vertices (int point field 'fixed', the file's own flags, and by default\n"
+    "the boundary) never move. OUT is written in the format of its extension, else\n"
+    "IN's.\n",
     opts,
     "exit: 0 valid result: every cell certified det J > 0 everywhere, checked as\n"
     "vm-quality --verify does (exact predicates, Bernstein certification); 1 bad input\n"
@@ -175,6 +178,7 @@ typedef struct {
   vm_jac_report cert; /* the independent certification of the written mesh */
   int staged;         /* the schedule that ran last */
   int fell_back;      /* the first schedule stalled, the other one ran */
+  int planar;         /* a 2D mesh in a plane */
 } outcome;
 
 /* The boundary conditions of this run on m's flags (the file's own flags are
@@ -301,9 +305,17 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
                  "--boundary-tolerance %g: the shape is not kept%s",
                  a->out, r->shape_dist, r->shape_at[0], r->shape_at[1], r->shape_at[2],
                  100 * r->shape_dist / r->shape_diag, a->boundary_tol,
-                 a->free_boundary ? "; --slip-boundary keeps it on the surface"
-                                  : "; a smaller --feature-angle keeps more of its edges and "
-                                    "corners");
+                 r->planar          ? "; a larger --boundary-tolerance accepts it"
+                 : a->free_boundary ? "; --slip-boundary keeps it on the surface"
+                                    : "; a smaller --feature-angle keeps more of its edges and "
+                                      "corners");
+  if (rc == VM_EXIT_CHECK && !r->shape_moved && !r->flat &&
+      (r->bad > 0 || !r->rep.valid || r->cert.invalid + r->cert.undecided > 0))
+    vm_cli_error(cli,
+                 "%s: not valid: %lld of %lld cells not certified det J > 0 everywhere, %lld "
+                 "inverted corner simplices in %lld elements; the best state is written",
+                 a->out, (long long)(r->cert.invalid + r->cert.undecided), (long long)r->cert.cells,
+                 (long long)r->q.all.inverted_nodes, (long long)r->q.all.inverted_elems);
   if (r->flat > 0)
     vm_cli_error(cli,
                  "%s: %lld elements are flat (scaled Jacobian below --min-sj %g): the worst, "
@@ -379,6 +391,9 @@ typedef struct {
   int32_t *vsurf0;        /* stage's boundary conditions are for this run only */
   vm_report *report;
   vm_report_history *hist;
+  int planar;           /* a 2D mesh, optimized in the coordinates of its plane */
+  vm_plane_frame plane; /* that plane */
+  double *xyz0, *x2d0;  /* planar: the input's coordinates and the plane's */
 } stage;
 
 static void stage_free(vm_ctx *ctx, stage *s) {
@@ -386,19 +401,106 @@ static void stage_free(vm_ctx *ctx, stage *s) {
   vm_volume_shape_destroy(&s->shape);
   if (s->vflag0) vm_free(ctx, s->vflag0);
   if (s->vsurf0) vm_free(ctx, s->vsurf0);
+  vm_free(ctx, s->xyz0);
+  vm_free(ctx, s->x2d0);
   vm_report_destroy(&s->report);
   vm_report_history_destroy(&s->hist);
   vm_mesh_destroy(&s->before);
   vm_mesh_destroy(&s->m);
 }
 
+/* A 2D mesh in a plane (z = 0, another axis-aligned plane or a tilted one)
+ * to the plane's own coordinates: the stage runs on it in 2D. A surface
+ * that is not planar is refused: its optimization is the surface stage's. */
+static int to_plane(vm_cli *cli, const args *a, stage *s) {
+  vm_mesh *m = s->m;
+  if (vm_mesh_plane_frame(m, VM_PLANE_TOL, &s->plane) < 0) {
+    const double *x = s->plane.worst >= 0 ? m->xyz + 3 * s->plane.worst : NULL;
+    if (!x) return vm_cli_input_error(cli, a->in);
+    vm_cli_error(cli,
+                 "%s: the triangles and quadrilaterals are not in one plane (vertex %lld at "
+                 "(%.6g, %.6g, %.6g) is %.3g off it): vm-volume takes volume meshes and planar "
+                 "2D meshes; vm-surface optimizes surface meshes",
+                 a->in, (long long)s->plane.worst, x[0], x[1], x[2], s->plane.offset);
+    return VM_EXIT_INPUT;
+  }
+  if (a->slip_boundary) {
+    vm_cli_error(cli,
+                 "%s: --slip-boundary takes volume meshes; the boundary of a planar mesh is "
+                 "fixed, or moves with --free-boundary",
+                 a->in);
+    return VM_EXIT_USAGE;
+  }
+  if (a->report_dir) {
+    vm_cli_error(cli, "%s: --report draws volume meshes; vm-quality --report draws this one",
+                 a->in);
+    return VM_EXIT_USAGE;
+  }
+  int64_t pair[2];
+  int32_t edge[2];
+  int64_t nconf = vm_mesh_orientation_conflicts_2d(m, pair, edge);
+  if (nconf < 0) return vm_cli_input_error(cli, NULL);
+  if (nconf > 0) {
+    vm_cli_error(cli,
+                 "%s: the elements are not oriented alike: elements %lld and %lld run through "
+                 "their shared edge (%lld, %lld) in the same direction (%lld such edges); "
+                 "number every element's vertices the same way round first",
+                 a->in, (long long)pair[0], (long long)pair[1], (long long)edge[0],
+                 (long long)edge[1], (long long)nconf);
+    return VM_EXIT_INPUT;
+  }
+  size_t n = (size_t)m->nv * 3;
+  s->xyz0 = vm_alloc_array(cli->ctx, n, sizeof *s->xyz0);
+  s->x2d0 = vm_alloc_array(cli->ctx, n, sizeof *s->x2d0);
+  if (!s->xyz0 || !s->x2d0) return vm_cli_input_error(cli, NULL);
+  memcpy(s->xyz0, m->xyz, n * sizeof *s->xyz0);
+  vm_mesh_to_plane(m, &s->plane);
+  memcpy(s->x2d0, m->xyz, n * sizeof *s->x2d0);
+  s->planar = 1;
+  if (!cli->quiet) {
+    const vm_plane_frame *f = &s->plane;
+    const char axis_name[] = "xyz";
+    char where[160];
+    if (f->axis >= 0)
+      snprintf(where, sizeof where, "the plane %c = %.9g", axis_name[f->axis], f->level);
+    else
+      snprintf(where, sizeof where,
+               "the plane through (%.6g, %.6g, %.6g) with normal (%.4f, %.4f, %.4f)", f->o[0],
+               f->o[1], f->o[2], f->n[0], f->n[1], f->n[2]);
+    fprintf(stderr, "vm-volume: %s: a 2D mesh in %s, optimized in that plane%s\n", a->in, where,
+            f->flip ? "; its elements turn clockwise seen from the plane's normal, and so "
+                      "does its boundary: that orientation is taken as positive"
+                    : "");
+  }
+  return VM_EXIT_OK;
+}
+
+/* What is written: a planar mesh back in its plane (what did not move bit
+ * for bit as it was read). */
+static int write_mesh(vm_cli *cli, const args *a, stage *s) {
+  if (!s->planar)
+    return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0
+               ? vm_cli_input_error(cli, NULL)
+               : VM_EXIT_OK;
+  vm_mesh *w = NULL;
+  if (vm_mesh_clone(s->m, &w) < 0) return vm_cli_input_error(cli, NULL);
+  vm_mesh_from_plane(w, &s->plane, s->x2d0, s->xyz0);
+  int st = vm_mesh_write(cli->ctx, w, a->out, a->fout, &a->wo);
+  vm_mesh_destroy(&w);
+  return st < 0 ? vm_cli_input_error(cli, NULL) : VM_EXIT_OK;
+}
+
 /* IN, with its own flags saved. */
 static int read_input(vm_cli *cli, const args *a, stage *s) {
   int64_t counts[VM_NTYPES];
+  int rc;
   if (vm_mesh_read(cli->ctx, a->in, VM_FMT_AUTO, &s->m) < 0) return vm_cli_input_error(cli, NULL);
   vm_mesh *m = s->m;
-  if (vm_mesh_count_types(m, counts) != 3) {
-    vm_cli_error(cli, "%s: no volume elements (tet, pyramid, prism, hex) to optimize", a->in);
+  int tdim = vm_mesh_count_types(m, counts);
+  if (tdim == 2 && (rc = to_plane(cli, a, s)) != VM_EXIT_OK) return rc;
+  if (tdim != 3 && tdim != 2) {
+    vm_cli_error(
+        cli, "%s: no elements to optimize (tet, pyramid, prism, hex; tri, quad in a plane)", a->in);
     return VM_EXIT_INPUT;
   }
   s->vflag0 = vm_malloc(cli->ctx, (size_t)m->nv + 1);
@@ -476,6 +578,14 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
       return vm_cli_input_error(cli, NULL);
     r->shape_moved = r->shape_dist > a->boundary_tol * r->shape_diag;
   }
+  if (s->planar) {
+    /* where things are, said in the file's coordinates */
+    double p[3];
+    vm_plane_to_space(&s->plane, r->shape_at, p);
+    memcpy(r->shape_at, p, sizeof p);
+    vm_plane_to_space(&s->plane, r->flat_at, p);
+    memcpy(r->flat_at, p, sizeof p);
+  }
   return VM_EXIT_OK;
 }
 
@@ -501,11 +611,12 @@ static int has_type(const vm_mesh *m, int type) {
 /* Volume elements certified inverted whose vertices are all fixed: nothing
  * the stage may move can repair them. Their number; the first in *first. */
 static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
-  int64_t n = 0;
+  int64_t n = 0, counts[VM_NTYPES];
+  int tdim = vm_mesh_count_types(m, counts);
   *first = -1;
   for (int64_t e = 0; e < m->ne; e++) {
     int t = m->etype[e], nv = (int)(m->eoff[e + 1] - m->eoff[e]), fixed = 1;
-    if (vm_elem_dim(t) != 3) continue;
+    if (vm_elem_dim(t) != tdim) continue;
     double x[3 * VM_MAX_ELEM_VERTS];
     for (int k = 0; k < nv; k++) {
       int32_t v = m->conn[m->eoff[e] + k];
@@ -528,8 +639,8 @@ static void restore_flags(stage *s) {
  * back), exit 3. */
 static int write_unchanged(vm_cli *cli, const args *a, stage *s) {
   restore_flags(s);
-  return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0 ? vm_cli_input_error(cli, NULL)
-                                                                    : VM_EXIT_CHECK;
+  int rc = write_mesh(cli, a, s);
+  return rc == VM_EXIT_OK ? VM_EXIT_CHECK : rc;
 }
 
 /* Merge the report of a fallback run into the first one's. */
@@ -599,9 +710,12 @@ int main(int argc, char **argv) {
       /* fixed vertices force the fold: say so at once, the input written */
       vm_cli_error(&cli,
                    "%s: element %lld (%s) is inverted and all its vertices are fixed (%lld "
-                   "such elements): no motion of the others can untangle it; --slip-boundary "
-                   "lets boundary vertices slide (--free-boundary move); %s written unchanged",
-                   a.in, (long long)first, vm_elem_name(s.m->etype[first]), (long long)nimp, a.out);
+                   "such elements): no motion of the others can untangle it; %s; %s written "
+                   "unchanged",
+                   a.in, (long long)first, vm_elem_name(s.m->etype[first]), (long long)nimp,
+                   s.planar ? "--free-boundary lets boundary vertices move"
+                            : "--slip-boundary lets boundary vertices slide (--free-boundary move)",
+                   a.out);
       rc = write_unchanged(&cli, &a, &s);
       goto done;
     }
@@ -624,6 +738,7 @@ int main(int argc, char **argv) {
       goto done;
     }
   }
+  r.planar = s.planar;
   /* by default the schedule follows the mesh: staged where there are hexahedra */
   a.auto_schedule = !a.o.staged && !a.direct;
   r.staged = a.o.staged || (a.auto_schedule && has_type(s.m, VM_HEX));
@@ -673,10 +788,7 @@ int main(int argc, char **argv) {
   }
   if ((rc = check_result(&cli, &a, &s, &r)) != VM_EXIT_OK) goto done;
   restore_flags(&s);
-  if (vm_mesh_write(cli.ctx, s.m, a.out, a.fout, &a.wo) < 0) {
-    rc = vm_cli_input_error(&cli, NULL);
-    goto done;
-  }
+  if ((rc = write_mesh(&cli, &a, &s)) != VM_EXIT_OK) goto done;
   if ((rc = run_code(&r)) == VM_EXIT_OK) {
     /* before success is reported, vm-quality --verify's exact checks (CGAL
      * predicates, no arithmetic shared with the solver) on the written mesh */

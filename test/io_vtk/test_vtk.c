@@ -1139,6 +1139,10 @@ static void test_bad_vtk(vm_ctx *ctx) {
   BAD("keyword.vtk", "POINTS 1 double\n0 0 0\nFOO 3\n", "unknown keyword 'FOO'");
   BAD("nocells.vtk", "POINTS 1 double\n0 0 0\nCELL_TYPES 1\n5\n", "CELL_TYPES without CELLS");
   BAD("dtype.vtk", "POINTS 1 bit\n0 0 0\n", "bit");
+  BAD("dtype_cells.vtk",
+      "POINTS 3 double\n0 0 0 1 0 0 0 1 0\nCELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n"
+      "POINT_DATA 3\nSCALARS fixed bit 1\nLOOKUP_TABLE default\n0 1 2\n",
+      "out of range");
   BAD("badnum.vtk", "POINTS 1 double\n0 0 x\n", "not a number");
   BAD("badflag.vtk", "POINTS 1 double\n0 0 0\nPOINT_DATA 1\nSCALARS vm_flag int\n7\n",
       "vm_flag: point 0 has flag 7");

@@ -320,7 +320,7 @@ static int patch_mesh(vm_ctx *ctx, const vm_mesh *b, const int32_t *fpatch, int3
  * strict: faces shared by more than two elements are an error (else they
  * are not boundary faces and are left out). */
 static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, int strict, vm_mesh **bout,
-                            int32_t **bvert, int64_t *nb) {
+                            int32_t **bvert, int64_t *nb, double *lift) {
   int64_t nface = 0, nonman = 0;
   int32_t *fv = NULL, *g2l = NULL, *bv = NULL;
   uint8_t *fnv = NULL;
@@ -348,8 +348,17 @@ static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, int strict, vm_mesh *
   for (int64_t f = 0; f < nface; f++)
     for (int k = 0; k < fnv[f]; k++)
       if (g2l[fv[4 * f + k]] < 0) g2l[fv[4 * f + k]] = (int32_t)n++;
-  bv = vm_alloc_array(ctx, (size_t)n, sizeof *bv);
-  if (!bv || (st = vm_mesh_create(ctx, &b)) < 0 || (st = vm_mesh_set_vertices(b, n)) < 0) {
+  /* a planar mesh's boundary is edges: a wall standing on them, as high as
+   * a hundredth of their extent, has the same distances in the plane (a
+   * point of the plane is nearest a wall at the wall's foot) */
+  int edges = fnv[0] == 2;
+  if (edges && (!lift || strict)) {
+    st = vm_error(ctx, VM_ERR_ARG, "slip boundary: the mesh has no volume elements");
+    goto fail;
+  }
+  int64_t nall = edges ? 2 * n : n;
+  bv = vm_alloc_array(ctx, (size_t)nall, sizeof *bv);
+  if (!bv || (st = vm_mesh_create(ctx, &b)) < 0 || (st = vm_mesh_set_vertices(b, nall)) < 0) {
     st = st < 0 ? st : VM_ERR_NOMEM;
     goto fail;
   }
@@ -358,17 +367,38 @@ static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, int strict, vm_mesh *
       bv[g2l[v]] = (int32_t)v;
       memcpy(b->xyz + 3 * g2l[v], m->xyz + 3 * v, 3 * sizeof(double));
     }
+  if (lift) *lift = 0;
+  if (edges) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < n; i++)
+      for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(lo[k], b->xyz[3 * i + k]);
+        hi[k] = fmax(hi[k], b->xyz[3 * i + k]);
+      }
+    double h = hypot(hypot(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]) / 100;
+    if (!(h > 0) || !isfinite(h)) h = 1;
+    for (int64_t i = 0; i < n; i++) {
+      bv[n + i] = bv[i];
+      memcpy(b->xyz + 3 * (n + i), b->xyz + 3 * i, 3 * sizeof(double));
+      b->xyz[3 * (n + i) + 2] += h;
+    }
+    *lift = h;
+  }
   for (int64_t f = 0; f < nface; f++) {
     int32_t q[4];
     for (int k = 0; k < fnv[f]; k++) q[k] = g2l[fv[4 * f + k]];
-    if ((st = vm_mesh_add_element(b, fnv[f] == 4 ? VM_QUAD : VM_TRI, q)) < 0) goto fail;
+    if (edges) {
+      q[2] = (int32_t)(q[1] + n);
+      q[3] = (int32_t)(q[0] + n);
+    }
+    if ((st = vm_mesh_add_element(b, fnv[f] == 3 ? VM_TRI : VM_QUAD, q)) < 0) goto fail;
   }
   vm_free(ctx, fv);
   vm_free(ctx, fnv);
   vm_free(ctx, g2l);
   *bout = b;
   *bvert = bv;
-  *nb = n;
+  *nb = nall;
   return VM_OK;
 fail:
   vm_free(ctx, fv);
@@ -397,7 +427,7 @@ int vm_volume_slip_create(vm_ctx *ctx, vm_mesh *m, double feature_deg, double co
   int32_t *vsurf = NULL, *fpatch = NULL, *vpatch = NULL;
   uint8_t *vt = NULL;
   int64_t ntangled = 0, nfold = 0;
-  int st = boundary_surface(ctx, m, 1, &b, &s->bvert, &s->nb);
+  int st = boundary_surface(ctx, m, 1, &b, &s->bvert, &s->nb, NULL);
   if (st < 0) goto fail;
   if ((st = vm_surface_detect_features(b, feature_deg, corner_deg, &f)) < 0) goto fail;
   if ((st = tangled_vertices(ctx, m, s->bvert, s->nb, &vt, &ntangled)) < 0) goto fail;
@@ -499,6 +529,7 @@ struct vm_volume_shape {
   int32_t *bvert; /* its vertices in the volume mesh */
   int64_t nb;
   double diag;
+  double lift; /* a planar mesh: the height of the wall on its boundary edges */
 };
 
 void vm_volume_shape_destroy(vm_volume_shape **p) {
@@ -516,7 +547,7 @@ int vm_volume_shape_create(vm_ctx *ctx, const vm_mesh *m, vm_volume_shape **out)
   vm_volume_shape *s = vm_calloc(ctx, 1, sizeof *s);
   if (!s) return VM_ERR_NOMEM;
   s->ctx = ctx;
-  int st = boundary_surface(ctx, m, 0, &s->b, &s->bvert, &s->nb);
+  int st = boundary_surface(ctx, m, 0, &s->b, &s->bvert, &s->nb, &s->lift);
   if (st < 0) {
     vm_volume_shape_destroy(&s);
     return st;
@@ -535,8 +566,10 @@ int vm_volume_shape_deviation(vm_volume_shape *s, const vm_mesh *m, double *dist
   vm_mesh *now = NULL;
   int st = vm_mesh_clone(s->b, &now);
   if (st < 0) return st;
-  for (int64_t i = 0; i < s->nb; i++)
+  for (int64_t i = 0; i < s->nb; i++) {
     memcpy(now->xyz + 3 * i, m->xyz + 3 * (int64_t)s->bvert[i], 3 * sizeof(double));
+    if (s->lift > 0 && i >= s->nb / 2) now->xyz[3 * i + 2] += s->lift;
+  }
   double ab = 0, ba = 0, ab_at[3] = {0, 0, 0}, ba_at[3] = {0, 0, 0};
   st = vm_surface_hausdorff_at(s->b, now, s->diag / 200, &ab, &ba, ab_at, ba_at);
   vm_mesh_destroy(&now);

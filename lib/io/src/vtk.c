@@ -172,7 +172,7 @@ int vm_vtk_report_lost(vm_ctx *ctx, const vm_mesh *m, const char *path, int flag
 
 typedef struct {
   int size;  /* bytes per value in binary files */
-  char kind; /* 'i' signed, 'u' unsigned, 'f' floating point */
+  char kind; /* 'i' signed, 'u' unsigned, 'f' floating point, 'b' bit (text only) */
 } dtype;
 
 static const struct {
@@ -258,6 +258,14 @@ static int get_dtype(vtkrd *r, dtype *t, const char *rec) {
   size_t n;
   int st = vm_lex_word(&r->lx, &s, &n, "a data type");
   if (st) return st;
+  if (vm_tok_is(s, n, "bit") && strcmp(rec, "POINTS") != 0 && !strstr(rec, "OFFSETS")) {
+    /* a data array's (Mesquite writes its 'fixed' flags so): 0 and 1 in
+     * text, read as small integers; in binary packed 8 per byte */
+    if (r->binary)
+      return vm_lex_fail(&r->lx, "%s: data type 'bit' is supported in ASCII files only", rec);
+    *t = (dtype){1, 'b'};
+    return VM_OK;
+  }
   for (size_t i = 0; i < sizeof dtype_tab / sizeof dtype_tab[0]; i++)
     if (vm_tok_is(s, n, dtype_tab[i].name)) {
       *t = dtype_tab[i].t;
@@ -505,7 +513,9 @@ static int read_array(vtkrd *r, const char *fname, int64_t ntuples, int ncomp, c
   void *tmp =
       vm_alloc_array(ctx, count > 0 ? (size_t)count : 1, isint ? sizeof(int64_t) : sizeof(double));
   if (!tmp) return VM_ERR_NOMEM;
-  if (isint)
+  if (isint && t->kind == 'b')
+    st = read_ints(r, t, count, tmp, 0, 1, &d);
+  else if (isint)
     st = read_ints(r, t, count, tmp, INT32_MIN, INT32_MAX, &d);
   else
     st = read_reals(r, t, count, tmp, 0, &d);
