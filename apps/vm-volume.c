@@ -39,6 +39,7 @@ static void progress(void *user, const vm_volume_progress *p) {
 
 typedef struct {
   const char *in, *out, *report_dir;
+  const char *reference; /* --reference: target shapes from this mesh */
   int json, free_boundary, slip_boundary, fout, every, method, direct;
   int repair;        /* index into repairs[] */
   int auto_schedule; /* neither --staged nor --direct: chosen from the mesh, with fallback */
@@ -99,6 +100,10 @@ static const vm_opt opts[] = {
      .choices = repairs},
     {"--target-size", NULL, VM_OPT_DOUBLE, A(o.target_size), "H",
      "ideal element edge length (default: total volume kept)", .lo = 1e-300, .hi = 1e300},
+    {"--reference", NULL, VM_OPT_STRING, A(reference), "REF",
+     "target shapes from REF, IN's mesh in its rest shape (same vertices and elements): its "
+     "cells' shapes and sizes are the ideal ones (instead of --target-size)",
+     .error = "expects a mesh file"},
     {"--max-iter", NULL, VM_OPT_INT, A(o.max_iter), "N", "untangling iterations (default 20000)",
      .lo = 0, .hi = 1e8},
     {"--opt-iter", NULL, VM_OPT_INT, A(o.opt_iter), "N",
@@ -179,6 +184,7 @@ typedef struct {
   int staged;         /* the schedule that ran last */
   int fell_back;      /* the first schedule stalled, the other one ran */
   int planar;         /* a 2D mesh in a plane */
+  int mirrored;       /* a volume mesh numbered against VTK's orientation */
 } outcome;
 
 /* The boundary conditions of this run on m's flags (the file's own flags are
@@ -296,6 +302,12 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
             "vm-volume: the boundary moved by at most %.3e (Hausdorff), %.3g %% of its "
             "diagonal, within --boundary-tolerance %g\n",
             r->shape_dist, 100 * r->shape_dist / r->shape_diag, a->boundary_tol);
+  if (r->mirrored && rc == VM_EXIT_OK && !cli->quiet)
+    fprintf(stderr,
+            "vm-volume: warning: %s keeps %s's numbering, in which a valid cell has a negative "
+            "volume by VTK's convention: vm-quality and solvers read its cells as inverted until "
+            "each one's vertices are numbered the other way round\n",
+            a->out, a->in);
   /* the shape and flatness verdicts are on a finished run's result only */
   if (rc == VM_EXIT_INTERRUPTED) return;
   if (r->shape_moved)
@@ -379,6 +391,8 @@ static void print_json(const args *a, const outcome *r, int rc) {
            rep->split_valid ? "true" : "false", rep->time_split);
   printf(", \"t_reached\": ");
   vm_json_double(stdout, rep->t_reached);
+  printf(", \"planar\": %s, \"orientation_reversed\": %s", r->planar ? "true" : "false",
+         r->mirrored ? "true" : "false");
   printf(", \"verified\": %s}\n", r->verified ? "true" : "false");
 }
 
@@ -394,6 +408,8 @@ typedef struct {
   int planar;           /* a 2D mesh, optimized in the coordinates of its plane */
   vm_plane_frame plane; /* that plane */
   double *xyz0, *x2d0;  /* planar: the input's coordinates and the plane's */
+  int mirrored;         /* volume elements numbered the other way round: x negated */
+  vm_mesh *ref;         /* --reference */
 } stage;
 
 static void stage_free(vm_ctx *ctx, stage *s) {
@@ -403,6 +419,7 @@ static void stage_free(vm_ctx *ctx, stage *s) {
   if (s->vsurf0) vm_free(ctx, s->vsurf0);
   vm_free(ctx, s->xyz0);
   vm_free(ctx, s->x2d0);
+  vm_mesh_destroy(&s->ref);
   vm_report_destroy(&s->report);
   vm_report_history_destroy(&s->hist);
   vm_mesh_destroy(&s->before);
@@ -478,6 +495,15 @@ static int to_plane(vm_cli *cli, const args *a, stage *s) {
 /* What is written: a planar mesh back in its plane (what did not move bit
  * for bit as it was read). */
 static int write_mesh(vm_cli *cli, const args *a, stage *s) {
+  if (s->mirrored) {
+    /* negation is exact: every coordinate back bit for bit */
+    vm_mesh *w = NULL;
+    if (vm_mesh_clone(s->m, &w) < 0) return vm_cli_input_error(cli, NULL);
+    for (int64_t v = 0; v < w->nv; v++) w->xyz[3 * v] = -w->xyz[3 * v];
+    int st = vm_mesh_write(cli->ctx, w, a->out, a->fout, &a->wo);
+    vm_mesh_destroy(&w);
+    return st < 0 ? vm_cli_input_error(cli, NULL) : VM_EXIT_OK;
+  }
   if (!s->planar)
     return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0
                ? vm_cli_input_error(cli, NULL)
@@ -488,6 +514,53 @@ static int write_mesh(vm_cli *cli, const args *a, stage *s) {
   int st = vm_mesh_write(cli->ctx, w, a->out, a->fout, &a->wo);
   vm_mesh_destroy(&w);
   return st < 0 ? vm_cli_input_error(cli, NULL) : VM_EXIT_OK;
+}
+
+/* --reference: IN's mesh in its rest shape, its cells the targets. */
+static int read_reference(vm_cli *cli, const args *a, stage *s) {
+  const vm_mesh *m = s->m;
+  if (s->planar) {
+    vm_cli_error(cli, "%s: --reference takes volume meshes", a->reference);
+    return VM_EXIT_USAGE;
+  }
+  if (vm_mesh_read(cli->ctx, a->reference, VM_FMT_AUTO, &s->ref) < 0)
+    return vm_cli_input_error(cli, NULL);
+  vm_mesh *r = s->ref;
+  int same = r->nv == m->nv && r->ne == m->ne;
+  int64_t bad = -1;
+  for (int64_t e = 0; same && e < m->ne; e++) {
+    int64_t k = m->eoff[e + 1] - m->eoff[e];
+    if (r->etype[e] != m->etype[e] || r->eoff[e + 1] - r->eoff[e] != k ||
+        memcmp(r->conn + r->eoff[e], m->conn + m->eoff[e], (size_t)k * sizeof *m->conn) != 0)
+      bad = e, same = 0;
+  }
+  if (!same) {
+    if (bad >= 0)
+      vm_cli_error(cli, "%s: not %s's mesh in another shape: element %lld differs", a->reference,
+                   a->in, (long long)bad);
+    else
+      vm_cli_error(cli,
+                   "%s: not %s's mesh in another shape: %lld vertices and %lld elements "
+                   "against %lld and %lld",
+                   a->reference, a->in, (long long)r->nv, (long long)r->ne, (long long)m->nv,
+                   (long long)m->ne);
+    return VM_EXIT_INPUT;
+  }
+  double vr = vm_mesh_signed_volume(r);
+  if (!(vr != 0) || (vr < 0) != s->mirrored) {
+    vm_cli_error(cli,
+                 "%s: its total signed volume is %s, %s's %s: the two are not numbered the same "
+                 "way round",
+                 a->reference,
+                 vr < 0   ? "negative"
+                 : vr > 0 ? "positive"
+                          : "0",
+                 a->in, s->mirrored ? "negative" : "positive");
+    return VM_EXIT_INPUT;
+  }
+  if (s->mirrored)
+    for (int64_t v = 0; v < r->nv; v++) r->xyz[3 * v] = -r->xyz[3 * v];
+  return VM_EXIT_OK;
 }
 
 /* IN, with its own flags saved. */
@@ -503,6 +576,20 @@ static int read_input(vm_cli *cli, const args *a, stage *s) {
         cli, "%s: no elements to optimize (tet, pyramid, prism, hex; tri, quad in a plane)", a->in);
     return VM_EXIT_INPUT;
   }
+  if (tdim == 3 && vm_mesh_signed_volume(m) < 0) {
+    /* the boundary encloses a negative volume: the cells are numbered the
+     * other way round (a mirror's convention), not nearly all inverted;
+     * the run takes the mesh mirrored, and the output gets its x back */
+    s->mirrored = 1;
+    for (int64_t v = 0; v < m->nv; v++) m->xyz[3 * v] = -m->xyz[3 * v];
+    if (!cli->quiet)
+      fprintf(stderr,
+              "vm-volume: %s: the cells are numbered the other way round from VTK's convention "
+              "(the total signed volume is negative): untangled and optimized in that "
+              "orientation\n",
+              a->in);
+  }
+  if (a->reference && (rc = read_reference(cli, a, s)) != VM_EXIT_OK) return rc;
   s->vflag0 = vm_malloc(cli->ctx, (size_t)m->nv + 1);
   s->vsurf0 = vm_alloc_array(cli->ctx, (size_t)m->nv + 1, sizeof *s->vsurf0);
   if (!s->vflag0 || !s->vsurf0) return vm_cli_input_error(cli, NULL);
@@ -577,6 +664,10 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
     if (vm_volume_shape_deviation(s->shape, s->m, &r->shape_dist, &r->shape_diag, r->shape_at) < 0)
       return vm_cli_input_error(cli, NULL);
     r->shape_moved = r->shape_dist > a->boundary_tol * r->shape_diag;
+  }
+  if (s->mirrored) {
+    r->shape_at[0] = -r->shape_at[0];
+    r->flat_at[0] = -r->flat_at[0];
   }
   if (s->planar) {
     /* where things are, said in the file's coordinates */
@@ -681,6 +772,10 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "--staged and --direct exclude each other");
     goto done;
   }
+  if (a.reference && a.o.target_size > 0) {
+    rc = vm_cli_usage_error(&cli, "--reference and --target-size exclude each other");
+    goto done;
+  }
   if (a.free_boundary && a.slip_boundary) {
     rc = vm_cli_usage_error(&cli, "--free-boundary and --slip-boundary exclude each other");
     goto done;
@@ -732,13 +827,15 @@ int main(int argc, char **argv) {
                    "%s: fixed vertex %lld at (%.6g, %.6g, %.6g) lies outside the %s boundary "
                    "(%lld such vertices): no motion of the others can untangle the mesh; "
                    "--free-boundary lets the boundary move; %s written unchanged",
-                   a.in, (long long)first, x[0], x[1], x[2], a.slip_boundary ? "sliding" : "fixed",
-                   (long long)nout, a.out);
+                   a.in, (long long)first, s.mirrored ? -x[0] : x[0], x[1], x[2],
+                   a.slip_boundary ? "sliding" : "fixed", (long long)nout, a.out);
       rc = write_unchanged(&cli, &a, &s);
       goto done;
     }
   }
   r.planar = s.planar;
+  r.mirrored = s.mirrored;
+  if (s.ref) a.o.target_xyz = s.ref->xyz;
   /* by default the schedule follows the mesh: staged where there are hexahedra */
   a.auto_schedule = !a.o.staged && !a.direct;
   r.staged = a.o.staged || (a.auto_schedule && has_type(s.m, VM_HEX));

@@ -129,6 +129,9 @@ int main(void) {
   int32_t tv[4] = {0, 1, 2, 3};
   vm_mesh_add_element(m, VM_TET, tv);
   CHECK(vm_mesh_plane_frame(m, VM_PLANE_TOL, &f) == VM_ERR_ARG, "a tet: not a 2D mesh");
+  CHECK_NEAR(vm_mesh_signed_volume(m), 1.0 / 6, 1e-15, "the unit tet's signed volume");
+  m->xyz[0 + 3] = -1; /* (1,0,0) -> (-1,0,0): the tet numbered the other way round */
+  CHECK_NEAR(vm_mesh_signed_volume(m), -1.0 / 6, 1e-15, "mirrored, the signed volume's sign");
   vm_mesh_destroy(&m);
   vm_ctx_destroy(&ctx);
   return vmtest_end("planar");

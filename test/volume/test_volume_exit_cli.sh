@@ -14,20 +14,24 @@ check() { if ! eval "$1"; then echo "FAIL: $2"; fail=1; else echo "ok: $2"; fi; 
 
 cat >"$dir/bad.vtk" <<'VTK'
 # vtk DataFile Version 3.0
-inverted hex, every vertex fixed
+an inverted hex beside a valid one (the total volume positive: not a mesh numbered the other way round), every vertex fixed
 ASCII
 DATASET UNSTRUCTURED_GRID
-POINTS 8 double
+POINTS 16 double
 0 0 0 1 0 0 1 1 0 0 1 0
 0 0 -1 1 0 -1 1 1 -1 0 1 -1
-CELLS 1 9
+3 0 0 5 0 0 5 1 0 3 1 0
+3 0 1 5 0 1 5 1 1 3 1 1
+CELLS 2 18
 8 0 1 2 3 4 5 6 7
-CELL_TYPES 1
+8 8 9 10 11 12 13 14 15
+CELL_TYPES 2
 12
-POINT_DATA 8
+12
+POINT_DATA 16
 SCALARS fixed int 1
 LOOKUP_TABLE default
-1 1 1 1 1 1 1 1
+1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1
 VTK
 start=$(date +%s)
 "$vol" --time-limit 60 "$dir/bad.vtk" "$dir/bad_out.vtk" 2>"$dir/bad.err"

@@ -247,3 +247,30 @@ int64_t vm_mesh_orientation_conflicts_2d(const vm_mesh *m, int64_t first[2], int
   vm_free(m->ctx, d);
   return bad;
 }
+
+double vm_mesh_signed_volume(const vm_mesh *m) {
+  double s = 0;
+  for (int64_t e = 0; e < m->ne; e++) {
+    int t = m->etype[e], faces[6][4], nfv[6];
+    if (vm_elem_dim(t) != 3) continue;
+    const int32_t *c = m->conn + m->eoff[e];
+    int nf = vm_elem_faces(t, faces, nfv);
+    /* the faces' triangles (outward) seen from the first vertex, each
+     * relative to it: the divergence theorem, exact for planar faces */
+    const double *o = m->xyz + 3 * (int64_t)c[0];
+    double v = 0;
+    for (int f = 0; f < nf; f++)
+      for (int k = 1; k + 1 < nfv[f]; k++) {
+        const double *a = m->xyz + 3 * (int64_t)c[faces[f][0]];
+        const double *b = m->xyz + 3 * (int64_t)c[faces[f][k]];
+        const double *d = m->xyz + 3 * (int64_t)c[faces[f][k + 1]];
+        double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]};
+        double w[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+        double z[3] = {d[0] - o[0], d[1] - o[1], d[2] - o[2]}, x[3];
+        cross3(w, z, x);
+        v += dot3(u, x);
+      }
+    s += v / 6;
+  }
+  return s;
+}

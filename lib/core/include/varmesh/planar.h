@@ -64,6 +64,12 @@ void vm_plane_to_space(const vm_plane_frame *f, const double q[3], double p[3]);
  * by the shoelace formula). */
 double vm_mesh_signed_area_2d(const vm_mesh *m);
 
+/* The total signed volume of m's volume elements (each by its faces,
+ * outward as vm_elem_faces orders them): negative when the elements are
+ * numbered the other way round from VTK's convention (a tangled mesh's
+ * folds cancel; the boundary decides). */
+double vm_mesh_signed_volume(const vm_mesh *m);
+
 /* Edges of m's 2D elements that two elements run through in the same
  * direction: the elements are not oriented alike (a tangled mesh's are; its
  * geometry folds, not its order). Their number (or VM_ERR_NOMEM); the first
