@@ -492,8 +492,8 @@ static int to_plane(vm_cli *cli, const args *a, stage *s) {
   return VM_EXIT_OK;
 }
 
-/* What is written: a planar mesh back in its plane (what did not move bit
- * for bit as it was read). */
+/* What is written: a mesh run mirrored with its x back (exact), a planar
+ * mesh back in its plane (what did not move bit for bit as it was read). */
 static int write_mesh(vm_cli *cli, const args *a, stage *s) {
   if (s->mirrored) {
     /* negation is exact: every coordinate back bit for bit */
