@@ -492,25 +492,25 @@ static int to_plane(vm_cli *cli, const args *a, stage *s) {
   return VM_EXIT_OK;
 }
 
+/* x -> -x for every vertex: a mirror, exact both ways (every coordinate
+ * back bit for bit). */
+static void negate_x(vm_mesh *m) {
+  for (int64_t v = 0; v < m->nv; v++) m->xyz[3 * v] = -m->xyz[3 * v];
+}
+
 /* What is written: a mesh run mirrored with its x back (exact), a planar
  * mesh back in its plane (what did not move bit for bit as it was read). */
 static int write_mesh(vm_cli *cli, const args *a, stage *s) {
-  if (s->mirrored) {
-    /* negation is exact: every coordinate back bit for bit */
-    vm_mesh *w = NULL;
-    if (vm_mesh_clone(s->m, &w) < 0) return vm_cli_input_error(cli, NULL);
-    for (int64_t v = 0; v < w->nv; v++) w->xyz[3 * v] = -w->xyz[3 * v];
-    int st = vm_mesh_write(cli->ctx, w, a->out, a->fout, &a->wo);
-    vm_mesh_destroy(&w);
-    return st < 0 ? vm_cli_input_error(cli, NULL) : VM_EXIT_OK;
-  }
-  if (!s->planar)
+  if (!s->planar && !s->mirrored)
     return vm_mesh_write(cli->ctx, s->m, a->out, a->fout, &a->wo) < 0
                ? vm_cli_input_error(cli, NULL)
                : VM_EXIT_OK;
   vm_mesh *w = NULL;
   if (vm_mesh_clone(s->m, &w) < 0) return vm_cli_input_error(cli, NULL);
-  vm_mesh_from_plane(w, &s->plane, s->x2d0, s->xyz0);
+  if (s->mirrored)
+    negate_x(w);
+  else
+    vm_mesh_from_plane(w, &s->plane, s->x2d0, s->xyz0);
   int st = vm_mesh_write(cli->ctx, w, a->out, a->fout, &a->wo);
   vm_mesh_destroy(&w);
   return st < 0 ? vm_cli_input_error(cli, NULL) : VM_EXIT_OK;
@@ -558,8 +558,7 @@ static int read_reference(vm_cli *cli, const args *a, stage *s) {
                  a->in, s->mirrored ? "negative" : "positive");
     return VM_EXIT_INPUT;
   }
-  if (s->mirrored)
-    for (int64_t v = 0; v < r->nv; v++) r->xyz[3 * v] = -r->xyz[3 * v];
+  if (s->mirrored) negate_x(r);
   return VM_EXIT_OK;
 }
 
@@ -581,7 +580,7 @@ static int read_input(vm_cli *cli, const args *a, stage *s) {
      * other way round (a mirror's convention), not nearly all inverted;
      * the run takes the mesh mirrored, and the output gets its x back */
     s->mirrored = 1;
-    for (int64_t v = 0; v < m->nv; v++) m->xyz[3 * v] = -m->xyz[3 * v];
+    negate_x(m);
     if (!cli->quiet)
       fprintf(stderr,
               "vm-volume: %s: the cells are numbered the other way round from VTK's convention "

@@ -352,7 +352,7 @@ static int boundary_surface(vm_ctx *ctx, const vm_mesh *m, int strict, vm_mesh *
    * a hundredth of their extent, has the same distances in the plane (a
    * point of the plane is nearest a wall at the wall's foot) */
   int edges = fnv[0] == 2;
-  if (edges && (!lift || strict)) {
+  if (edges && !lift) {
     st = vm_error(ctx, VM_ERR_ARG, "slip boundary: the mesh has no volume elements");
     goto fail;
   }

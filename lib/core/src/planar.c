@@ -93,7 +93,7 @@ int vm_mesh_plane_frame(const vm_mesh *m, double tol, vm_plane_frame *f) {
   f->axis = -1;
   double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi);
   newell_normal(m, f->n);
-  if (!unit3(f->n) || sqrt(dot3(f->n, f->n)) < 0.5) {
+  if (!unit3(f->n)) {
     corner_normal(m, f->n);
     if (!unit3(f->n)) return vm_error(m->ctx, VM_ERR_ARG, "no plane: every element is flat");
   }
