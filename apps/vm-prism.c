@@ -712,7 +712,13 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
          r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
   for (int k = 0; k < VM_PRISM_NPHASES; k++)
     printf("\"%s\": %.3f, ", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
-  printf("\"total\": %.3f}}\n", r.time_total);
+  printf("\"total\": %.3f}, \"march_time\": {", r.time_total);
+  for (int k = 0; k < VM_PRISM_NMARCH_STEPS; k++)
+    printf("%s\"%s\": %.3f", k ? ", " : "", vm_prism_march_step_name(k), r.march_time[k]);
+  printf("}, \"peak_mb\": {");
+  for (int k = 0; k < VM_PRISM_NPHASES; k++)
+    printf("\"%s\": %.1f, ", vm_prism_phase_name((vm_prism_phase)k), r.peak_mb[k]);
+  printf("\"run\": %.1f}}\n", vm_peak_memory_mb());
 }
 
 /* --report: the wall coloured by its columns' fill of the allowed

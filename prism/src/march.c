@@ -1232,6 +1232,7 @@ int vm_prism_march(vm_prism *p) {
              (long long)os.split_before, (long long)os.split_after, os.split_sj, os.split_time);
   }
   ts[7] = omp_get_wtime();
+  for (int k = 0; k < VM_PRISM_NMARCH_STEPS; k++) p->rep.march_time[k] += ts[k + 1] - ts[k];
   vm_log(ctx, VM_LOG_INFO,
          "prism: marching steps (s): splits %.2f, stack smoothing %.2f, redistribution %.2f, "
          "orthogonal first level %.2f, orthogonal solve %.2f, skewness relief %.2f, "

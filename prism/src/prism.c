@@ -13,6 +13,13 @@ const char *vm_prism_phase_name(vm_prism_phase ph) {
   return (int)ph >= 0 && ph < VM_PRISM_NPHASES ? names[ph] : "unknown";
 }
 
+const char *vm_prism_march_step_name(int k) {
+  static const char *const names[VM_PRISM_NMARCH_STEPS] = {
+      "splits",           "stack_smoothing", "redistribution", "orthogonal_first_level",
+      "orthogonal_solve", "skewness_relief", "nonortho_relief"};
+  return k >= 0 && k < VM_PRISM_NMARCH_STEPS ? names[k] : "unknown";
+}
+
 double vm_prism_yplus_height(double yplus, double reynolds, double ref_length) {
   if (!(yplus > 0) || !(ref_length > 0) || !(reynolds >= 10 && reynolds <= 1e12) ||
       !isfinite(yplus) || !isfinite(ref_length))
@@ -642,6 +649,7 @@ static int run_phases(vm_prism *p) {
                                       vm_prism_restore, vm_prism_march};
   for (int k = p->done; k < VM_PRISM_NPHASES; k++) {
     st = phase[k](p);
+    p->rep.peak_mb[k] = vm_peak_memory_mb();
     if (st < 0) return st;
     if (st == VM_WARN_TIME) p->rep.timed_out = 1;
     if (st > 0 && !warn) warn = st;

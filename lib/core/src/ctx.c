@@ -6,6 +6,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__unix__) || defined(__APPLE__)
+#include <sys/resource.h>
+#endif
 
 #include "ctx_private.h"
 
@@ -177,5 +180,19 @@ uint64_t vm_ctx_rand_u64(vm_ctx *ctx) {
 }
 
 double vm_ctx_rand_unit(vm_ctx *ctx) { return (double)(vm_ctx_rand_u64(ctx) >> 11) * 0x1.0p-53; }
+
+double vm_peak_memory_mb(void) {
+#if defined(__unix__) || defined(__APPLE__)
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru)) return 0;
+#ifdef __APPLE__
+  return (double)ru.ru_maxrss / (1024.0 * 1024.0); /* bytes there */
+#else
+  return (double)ru.ru_maxrss / 1024.0; /* KiB */
+#endif
+#else
+  return 0;
+#endif
+}
 
 const char *vm_version(void) { return VM_VERSION_STRING; }

@@ -59,6 +59,13 @@ typedef enum {
 /* Name of a phase ("thin", "springback", "cut", "restore", "march"). */
 const char *vm_prism_phase_name(vm_prism_phase ph);
 
+/* The marching's steps, in order (their seconds are in the report). */
+#define VM_PRISM_NMARCH_STEPS 7
+/* Name of a marching step k ("splits", "stack_smoothing",
+ * "redistribution", "orthogonal_first_level", "orthogonal_solve",
+ * "skewness_relief", "nonortho_relief"; "unknown" out of range). */
+const char *vm_prism_march_step_name(int k);
+
 typedef struct vm_prism_progress {
   vm_prism_phase phase;
   int step;       /* solver iteration, cutting round, smoothing pass or layer */
@@ -210,6 +217,11 @@ typedef struct vm_prism_report {
   int64_t ended_columns, ended_kept, pyramids, tets;
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
+  double march_time[VM_PRISM_NMARCH_STEPS]; /* seconds per marching step */
+  /* the process's peak resident memory (MiB, vm_peak_memory_mb) when each
+   * phase ended: the phase that raised it is the one whose figure is
+   * above its predecessor's (0: the phase did not run) */
+  double peak_mb[VM_PRISM_NPHASES];
   int reoriented; /* the wall was oriented inwards and its triangles were turned */
   int timed_out;  /* 1: the time limit stopped a phase (vm_prism_run returns VM_WARN_TIME) */
 } vm_prism_report;

@@ -95,6 +95,11 @@ uint64_t vm_ctx_rand_u64(vm_ctx *ctx);
 /* Uniform in [0, 1). */
 double vm_ctx_rand_unit(vm_ctx *ctx);
 
+/* The process's peak resident memory so far, in MiB (getrusage's
+ * ru_maxrss: what the caller holds is in it too); 0 where the platform
+ * does not give it. For figures, never for decisions. */
+double vm_peak_memory_mb(void);
+
 /* Library version string, e.g. "0.1.0". */
 const char *vm_version(void);
 
