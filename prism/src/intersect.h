@@ -59,7 +59,7 @@ int pr_soup_create(vm_ctx *ctx, pr_rt *rt, const pr_isect_params *k, int64_t ntr
 void pr_soup_destroy(vm_ctx *ctx, pr_soup **s);
 /* Pairs of intersecting triangles at coordinates xyz (see
  * vm_prism_find_intersections). */
-int pr_soup_intersections(vm_ctx *ctx, const pr_soup *s, const double *xyz, int64_t *npairs,
+int pr_soup_intersections(vm_ctx *ctx, pr_soup *s, const double *xyz, int64_t *npairs,
                           int64_t **pairs);
 /* The same answer, computed from the soup's last query where few vertices
  * moved since: pairs of two unmoved faces are kept, and only the edges of
