@@ -7,7 +7,8 @@
  * back that vertex and a few rings around it, and leaves every other
  * vertex where the motion took it, bit for bit. A motion with no fold is
  * left alone; a start that intersects itself is not the back-off's to
- * fix; quads are not checked. */
+ * fix; quads are not checked. A fold that 8 rings of back-off cannot
+ * take back undoes the whole motion. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +17,10 @@
 #include "varmesh/shapes.h"
 #include "varmesh/surface.h"
 #include "vmtest.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
 
 static vm_mesh *sphere(vm_ctx *ctx) {
   vm_mesh *m = NULL;
@@ -101,6 +106,45 @@ int main(void) {
         "folded start: %lld pairs, %lld put back", (long long)s.self_intersections,
         (long long)s.adapt_backed_off);
   CHECK(vm_surface_unfold(NULL, x0, &s) == VM_ERR_ARG, "NULL mesh");
+
+  /* a fold no 8 rings can take back: on a finer sphere (about 40 rings
+   * from the equator to a pole) the northern half turned by half a turn
+   * about z, the turn growing from 0 at the equator to pi at z = 0.1; the
+   * seam the back-off leaves between restored and turned vertices folds
+   * again wherever it is: the whole motion is undone, the surface before
+   * it (free of pairs) comes back bit for bit */
+  vm_mesh *f = NULL;
+  double c0[3] = {0, 0, 0};
+  CHECK(vm_mesh_create(ctx, &f) == 0 && vm_gen_icosphere(f, c0, 1.0, 5, 0, NULL) == 0,
+        "fine icosphere");
+  if (f) {
+    int64_t fn = f->nv;
+    size_t fsz = 3 * (size_t)fn * sizeof(double);
+    double *f0 = malloc(fsz);
+    memcpy(f0, f->xyz, fsz);
+    for (int64_t v = 0; v < fn; v++) {
+      double *q = f->xyz + 3 * v;
+      double a = q[2] <= 0 ? 0 : q[2] >= 0.1 ? M_PI : M_PI * q[2] / 0.1;
+      double x = cos(a) * q[0] - sin(a) * q[1], y = sin(a) * q[0] + cos(a) * q[1];
+      q[0] = x;
+      q[1] = y;
+    }
+    int64_t fp = 0;
+    CHECK(vm_surface_self_intersections(f, &fp, NULL) == 0 && fp > 0, "the turn makes %lld pairs",
+          (long long)fp);
+    memset(&s, 0, sizeof s);
+    CHECK(vm_surface_unfold(f, f0, &s) == 0, "unfold (turn): %s", vm_ctx_error(ctx));
+    int64_t fl = -1;
+    CHECK(vm_surface_self_intersections(f, &fl, NULL) == 0 && fl == 0 &&
+              s.self_intersections == 0 && s.adapt.flipped == 0,
+          "turn: %lld pairs left (summary %lld, flipped %lld)", (long long)fl,
+          (long long)s.self_intersections, (long long)s.adapt.flipped);
+    CHECK(!memcmp(f->xyz, f0, fsz) && s.adapt_backed_off == fn,
+          "turn: the motion is undone, every vertex back bit for bit (%lld of %lld put back)",
+          (long long)s.adapt_backed_off, (long long)fn);
+    free(f0);
+  }
+  vm_mesh_destroy(&f);
 
   free(bad0);
   free(x0);
