@@ -643,7 +643,8 @@ static int64_t reversed(const vm_mesh *m, const double *x0, uint8_t *mark) {
   return n;
 }
 
-/* vm_surface_unfold (surface.h): rounds of 1, 2, 4 and 8 rings. */
+/* vm_surface_unfold (surface.h): rounds of 1, 2, 4, 8, 16 and 32 rings,
+ * then the whole surface. */
 int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   if (!m || !x0 || !s) return VM_ERR_ARG;
   vm_ctx *ctx = m->ctx;
@@ -679,8 +680,9 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
     vm_free(ctx, pairs);
     return VM_ERR_NOMEM;
   }
-  static const int rings[] = {1, 2, 4, 8};
-  for (int round = 0; round < 4 && (n > 0 || flipped > 0); round++) {
+  static const int rings[] = {1, 2, 4, 8, 16, 32};
+  const int nround = (int)(sizeof rings / sizeof *rings);
+  for (int round = 0; round < nround && (n > 0 || flipped > 0); round++) {
     /* seeds: the offending elements' vertices */
     for (int64_t i = 0; i < 2 * n; i++) {
       const int32_t *c = m->conn + m->eoff[pairs[i]];
@@ -708,8 +710,8 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   }
   /* the last resort: the surface before the adaptation, free of pairs
    * (checked above). Without it the aircraft at vm-gen's resolution 16
-   * came out with 158 pairs and 40 reversed elements left after the 8
-   * rings, written with a warning, and vm-prism refused it. */
+   * came out with 158 pairs and 40 reversed elements left after rounds of
+   * up to 8 rings, written with a warning, and vm-prism refused it. */
   int64_t left = n, left_flipped = flipped;
   if (st >= 0 && (n > 0 || flipped > 0)) {
     memcpy(m->xyz, x0, 3 * (size_t)nv * sizeof *x0);
@@ -727,7 +729,7 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   if (left > 0 || left_flipped > 0)
     vm_log(ctx, VM_LOG_WARN,
            "adapt: the adapted surface folded (%lld intersecting triangle pairs, e.g. near "
-           "(%g, %g, %g)) and putting back up to 8 rings around the folds left %lld pairs and "
+           "(%g, %g, %g)) and putting back up to 63 rings around the folds left %lld pairs and "
            "%lld reversed elements: the adaptation is undone (every vertex where it was before "
            "it)",
            (long long)s->folds_found, s->fold_at[0], s->fold_at[1], s->fold_at[2], (long long)left,

@@ -7,8 +7,8 @@
  * back that vertex and a few rings around it, and leaves every other
  * vertex where the motion took it, bit for bit. A motion with no fold is
  * left alone; a start that intersects itself is not the back-off's to
- * fix; quads are not checked. A fold that 8 rings of back-off cannot
- * take back undoes the whole motion. */
+ * fix; quads are not checked. A fold that no round of the back-off (up
+ * to 63 rings) can take back undoes the whole motion. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -107,7 +107,7 @@ int main(void) {
         (long long)s.adapt_backed_off);
   CHECK(vm_surface_unfold(NULL, x0, &s) == VM_ERR_ARG, "NULL mesh");
 
-  /* a fold no 8 rings can take back: on a finer sphere (about 40 rings
+  /* a fold no local back-off can take back: on a finer sphere (about 160 rings
    * from the equator to a pole) the northern half turned by half a turn
    * about z, the turn growing from 0 at the equator to pi at z = 0.1; the
    * seam the back-off leaves between restored and turned vertices folds
@@ -115,7 +115,7 @@ int main(void) {
    * it (free of pairs) comes back bit for bit */
   vm_mesh *f = NULL;
   double c0[3] = {0, 0, 0};
-  CHECK(vm_mesh_create(ctx, &f) == 0 && vm_gen_icosphere(f, c0, 1.0, 5, 0, NULL) == 0,
+  CHECK(vm_mesh_create(ctx, &f) == 0 && vm_gen_icosphere(f, c0, 1.0, 7, 0, NULL) == 0,
         "fine icosphere");
   if (f) {
     int64_t fn = f->nv;
