@@ -705,7 +705,7 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
       if (mark[v]) memcpy(m->xyz + 3 * v, x0 + 3 * v, 3 * sizeof *x0);
     vm_free(ctx, pairs);
     pairs = NULL;
-    if ((st = count_pairs(m, &n, &pairs, s->fold_at)) < 0) break;
+    if ((st = count_pairs(m, &n, &pairs, NULL)) < 0) break;
     flipped = reversed(m, x0, NULL);
   }
   /* the last resort: the surface before the adaptation, free of pairs
