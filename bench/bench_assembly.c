@@ -4,7 +4,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 
 #include "meshgen.h"
@@ -94,9 +93,7 @@ int main(int argc, char **argv) {
   rc |= run(ctx, 32, VM_RULE_CORNER);
   rc |= run(ctx, 32, VM_RULE_GEOMETRIC);
   if (big > 0) rc |= run(ctx, big, VM_RULE_CORNER);
-  struct rusage ru;
-  getrusage(RUSAGE_SELF, &ru);
-  printf("peak RSS %.1f MB\n", (double)ru.ru_maxrss / 1024.0);
+  printf("peak RSS %.1f MB\n", vm_peak_memory_mb());
   vm_ctx_destroy(&ctx);
   return rc;
 }

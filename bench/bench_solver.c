@@ -11,7 +11,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 
 #include "meshgen.h"
@@ -25,11 +24,7 @@ static double cpu_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static double peak_rss_mb(void) {
-  struct rusage ru;
-  getrusage(RUSAGE_SELF, &ru);
-  return (double)ru.ru_maxrss / 1024.0;
-}
+static double peak_rss_mb(void) { return vm_peak_memory_mb(); }
 
 /* The x-coordinate system of the implicit minimizer for a mesh whose free
  * vertices are the interior ones: diagonal (H_vv)_00, off-diagonals

@@ -123,14 +123,17 @@ static void tri_boxes(const double *xyz, const int32_t *tri, const int32_t *prim
   }
 }
 
-RTCScene pr_tri_scene(pr_rt *rt, const double *xyz, const int32_t *tri, const int32_t *prims,
-                      int64_t nprim, double pad, float *box, void *data,
-                      RTCIntersectFunctionN isect, RTCOccludedFunctionN occl) {
-  tri_boxes(xyz, tri, prims, nprim, pad, box);
-  RTCScene scene = rtcNewScene(rt->dev);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
-  RTCGeometry g = rtcNewGeometry(rt->dev, RTC_GEOMETRY_TYPE_USER);
+/* A committed scene of one user geometry over nprim boxes (box_bounds
+ * reads them from data's first member). refit != 0: a scene whose tree
+ * is refitted, not rebuilt, when its geometry is committed again (*geom:
+ * the geometry, held by the scene). */
+static RTCScene user_scene(RTCDevice dev, int64_t nprim, void *data, RTCIntersectFunctionN isect,
+                           RTCOccludedFunctionN occl, int refit, RTCGeometry *geom) {
+  RTCScene scene = rtcNewScene(dev);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | (refit ? RTC_SCENE_FLAG_DYNAMIC : 0));
+  rtcSetSceneBuildQuality(scene, refit ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM);
+  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+  if (refit) rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
   rtcSetGeometryUserPrimitiveCount(g, (unsigned int)nprim);
   rtcSetGeometryUserData(g, data);
   rtcSetGeometryBoundsFunction(g, box_bounds, NULL);
@@ -140,7 +143,15 @@ RTCScene pr_tri_scene(pr_rt *rt, const double *xyz, const int32_t *tri, const in
   rtcAttachGeometry(scene, g);
   rtcReleaseGeometry(g);
   rtcCommitScene(scene);
+  if (geom) *geom = g;
   return scene;
+}
+
+RTCScene pr_tri_scene(pr_rt *rt, const double *xyz, const int32_t *tri, const int32_t *prims,
+                      int64_t nprim, double pad, float *box, void *data,
+                      RTCIntersectFunctionN isect, RTCOccludedFunctionN occl) {
+  tri_boxes(xyz, tri, prims, nprim, pad, box);
+  return user_scene(rt->dev, nprim, data, isect, occl, 0, NULL);
 }
 
 /* orient(a, b, c, d) = (a - d) . ((b - d) x (c - d)), with a tolerance
@@ -314,20 +325,7 @@ static int collect_hits(vm_ctx *ctx, pr_soup *so, const double *xyz, const int32
       if (so->scene) rtcReleaseScene(so->scene);
       so->spad = 2 * pad;
       tri_boxes(xyz, tri, NULL, nprim, so->spad, dp->box);
-      so->scene = rtcNewScene(dev);
-      rtcSetSceneFlags(so->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
-      rtcSetSceneBuildQuality(so->scene, RTC_BUILD_QUALITY_LOW);
-      so->geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-      rtcSetGeometryBuildQuality(so->geom, RTC_BUILD_QUALITY_REFIT);
-      rtcSetGeometryUserPrimitiveCount(so->geom, (unsigned int)nprim);
-      rtcSetGeometryUserData(so->geom, dp);
-      rtcSetGeometryBoundsFunction(so->geom, box_bounds, NULL);
-      rtcSetGeometryIntersectFunction(so->geom, edge_intersect);
-      rtcSetGeometryOccludedFunction(so->geom, edge_occluded);
-      rtcCommitGeometry(so->geom);
-      rtcAttachGeometry(so->scene, so->geom);
-      rtcReleaseGeometry(so->geom); /* the scene holds it */
-      rtcCommitScene(so->scene);
+      so->scene = user_scene(dev, nprim, dp, edge_intersect, edge_occluded, 1, &so->geom);
     }
     scene = so->scene;
     pad = so->spad;
