@@ -656,11 +656,16 @@ int vm_surface_unfold(vm_mesh *m, const double *x0, vm_surface_summary *s) {
   if (st < 0) return st;
   int64_t flipped = reversed(m, x0, NULL);
   s->self_intersections = n;
+  /* what the caller's summary said of the surface before (the adaptation's
+   * own count of flipped elements, which keep_angles may have taken back
+   * already) is replaced by what is left */
+  s->adapt.flipped = flipped;
+  s->folds_found = n;
+  s->adapt_backed_off = 0;
   if (n == 0 && flipped == 0) {
     vm_free(ctx, pairs);
     return VM_OK;
   }
-  s->folds_found = n;
   /* the surface before: is it free of pairs itself? */
   vm_mesh *before = NULL;
   int64_t n0 = 0;
@@ -897,7 +902,7 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
    * angles once more if that moved anything) */
   if ((st >= 0 || st == VM_ERR_INTERRUPTED) && s->adapted && x0) {
     double floor = s->adapt.min_angle_before < 20 ? s->adapt.min_angle_before : 20;
-    int64_t r1 = 0, r2 = 0;
+    int64_t r1 = 0, r2 = 0, flipped0 = s->adapt.flipped;
     int keep = st, b = keep_angles(m, x0, floor, &r1);
     if (b >= 0) b = vm_surface_unfold(m, x0, s);
     if (b >= 0 && s->adapt_backed_off > 0) b = keep_angles(m, x0, floor, &r2);
@@ -913,6 +918,11 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
              "angle smaller than "
              "%.2f deg; smallest angle now %.2f deg",
              (long long)s->angle_restored, floor, vm_surface_min_angle(m));
+    if (b >= 0 && flipped0 > 0 && s->adapt.flipped == 0 && s->self_intersections == 0)
+      vm_log(ctx, VM_LOG_INFO,
+             "adapt: none of the %lld elements the adaptation flipped is left reversed, and no "
+             "triangles intersect (checked exactly)",
+             (long long)flipped0);
   }
   /* and, independently, against the repaired input's normals */
   if (st >= 0 && all_triangles(m) && (input || x0)) {

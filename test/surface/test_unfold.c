@@ -6,7 +6,8 @@
  * back-off leaves no intersecting pair and no reversed triangle, puts
  * back that vertex and a few rings around it, and leaves every other
  * vertex where the motion took it, bit for bit. A motion with no fold is
- * left alone; a start that intersects itself is not the back-off's to
+ * left alone, and the summary then says no element is reversed whatever
+ * it said before; a start that intersects itself is not the back-off's to
  * fix; quads are not checked. A fold that no round of the back-off (up
  * to 63 rings) can take back undoes the whole motion. */
 #include <math.h>
@@ -57,6 +58,11 @@ int main(void) {
   memcpy(moved, m->xyz, sz);
   vm_surface_summary s;
   memset(&s, 0, sizeof s);
+  /* the adaptation's own count of flipped elements, which the angle floor
+   * may have taken back before this check: what is left replaces it (a
+   * stale count made vm-surface exit 3 on a Gmsh-meshed wing whose
+   * result had no reversed element) */
+  s.adapt.flipped = 92;
   CHECK(vm_surface_unfold(m, x0, &s) == 0, "unfold (no fold): %s", vm_ctx_error(ctx));
   CHECK(s.self_intersections == 0 && s.adapt.flipped == 0 && s.adapt_backed_off == 0,
         "no fold: %lld pairs, %lld flipped, %lld put back", (long long)s.self_intersections,
