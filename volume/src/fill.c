@@ -939,6 +939,301 @@ static void gmsh_result_free(gmsh_result *R) {
   memset(R, 0, sizeof *R);
 }
 
+/* ---------- edge removal on slivers of envelope vertices ---------- */
+
+/* Rounds of edge removal at most, and the largest ring taken */
+enum { FLIP_ROUNDS = 4, FLIP_RING_MAX = 7 };
+
+static double orient(const double *a, const double *b, const double *c, const double *d) {
+  double u[3], v[3], w[3], x[3];
+  vm_sub3(b, a, u);
+  vm_sub3(c, a, v);
+  vm_sub3(d, a, w);
+  vm_cross3(u, v, x);
+  return vm_dot3(x, w);
+}
+
+/* The triangulations of the convex polygon 0..n-1 (n <= FLIP_RING_MAX):
+ * each a list of n - 2 triangles (i < j < k), into tri (at most 42 of
+ * them, Catalan(5)); returns how many. */
+static int polygon_triangulations(int n, int tri[][FLIP_RING_MAX - 2][3]) {
+  /* depth first over the choices: the pending edge (lo, hi) with the
+   * least depth takes apex lo + 1 + choice[depth]; the choice vectors in
+   * lexicographic order give every triangulation once */
+  int cnt = 0, choice[FLIP_RING_MAX] = {0};
+  for (;;) {
+    int pend[FLIP_RING_MAX][2], np = 1, nt = 0, depth = 0, last_open = -1;
+    int cur[FLIP_RING_MAX - 2][3];
+    pend[0][0] = 0;
+    pend[0][1] = n - 1;
+    while (np > 0) {
+      np--;
+      int lo = pend[np][0], hi = pend[np][1];
+      if (hi - lo < 2) continue;
+      int opts = hi - lo - 1;
+      if (choice[depth] + 1 < opts) last_open = depth;
+      int m = lo + 1 + choice[depth++];
+      cur[nt][0] = lo;
+      cur[nt][1] = m;
+      cur[nt][2] = hi;
+      nt++;
+      pend[np][0] = lo;
+      pend[np++][1] = m;
+      pend[np][0] = m;
+      pend[np++][1] = hi;
+    }
+    memcpy(tri[cnt++], cur, sizeof cur);
+    if (last_open < 0) break;
+    choice[last_open]++;
+    for (int k = last_open + 1; k < FLIP_RING_MAX; k++) choice[k] = 0;
+  }
+  return cnt;
+}
+
+/* Edge removal (Shewchuk's) on Gmsh's flat tets of four envelope vertices
+ * (node tags 1..nenv): for each such tet (min dihedral below 5 degrees),
+ * each of its edges whose tets close a ring of 3..FLIP_RING_MAX around it
+ * (an edge of the envelope or the far field has an open fan) is replaced,
+ * with its ring, by the triangulation of the ring's polygon that gives
+ * the best least dihedral angle, when that is better than the ring's own:
+ * 2(n - 2) tets for n. The ring's outer faces stay, so every envelope
+ * triangle is still a face. The new tets keep Gmsh's orientation; a
+ * triangulation whose tets do not all have it, or do not fill the ring's
+ * volume, is not taken. In rounds (a ring's vertices wait for the next
+ * round once a ring around them changed), in tet order: deterministic. */
+static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflips) {
+  *nflips = 0;
+  if (R->nt == 0) return VM_OK;
+  size_t maxtag = 0;
+  for (size_t i = 0; i < R->nn; i++)
+    if (R->ntag[i] > maxtag) maxtag = R->ntag[i];
+  if (maxtag > 4 * (R->nn + nenv) + 16)
+    return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned node tags up to %zu for %zu nodes", maxtag,
+                    R->nn);
+  for (size_t i = 0; i < 4 * R->nt; i++)
+    if (R->tnode[i] > maxtag || R->tnode[i] == 0)
+      return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with node tag %zu", R->tnode[i]);
+  int64_t *at = vm_alloc_array(ctx, maxtag + 1, sizeof *at);
+  uint8_t *lock = vm_calloc(ctx, maxtag + 1, 1);
+  int(*tris_n)[42][FLIP_RING_MAX - 2][3] = vm_alloc_array(ctx, FLIP_RING_MAX + 1, sizeof *tris_n);
+  size_t *cnt = NULL, *adj = NULL;
+  int st = at && lock && tris_n ? VM_OK : VM_ERR_NOMEM;
+  if (st) goto done;
+  for (size_t t = 0; t <= maxtag; t++) at[t] = -1;
+  for (size_t i = 0; i < R->nn; i++) at[R->ntag[i]] = (int64_t)i;
+  for (size_t i = 0; i < 4 * R->nt; i++)
+    if (at[R->tnode[i]] < 0) {
+      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with an unknown node %zu",
+                    R->tnode[i]);
+      goto done;
+    }
+  int ntri[FLIP_RING_MAX + 1] = {0};
+  for (int n = 3; n <= FLIP_RING_MAX; n++) ntri[n] = polygon_triangulations(n, tris_n[n]);
+  /* the orientation of Gmsh's tets */
+  double sgn = 0;
+  for (size_t t = 0; t < R->nt && sgn == 0; t++) {
+    const size_t *c = R->tnode + 4 * t;
+    double o = orient(R->coord + 3 * at[c[0]], R->coord + 3 * at[c[1]], R->coord + 3 * at[c[2]],
+                      R->coord + 3 * at[c[3]]);
+    sgn = o > 0 ? 1 : o < 0 ? -1 : 0;
+  }
+  for (int round = 0; round < FLIP_ROUNDS; round++) {
+    size_t nt = R->nt;
+    /* vertex -> tets */
+    vm_free(ctx, cnt);
+    vm_free(ctx, adj);
+    cnt = vm_calloc(ctx, maxtag + 2, sizeof *cnt);
+    adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
+    uint8_t *dead = vm_calloc(ctx, nt + 1, 1);
+    size_t cap = nt + 64, nnew = 0;
+    size_t *nw = vm_alloc_array(ctx, 4 * cap, sizeof *nw);
+    if (!cnt || !adj || !dead || !nw) {
+      vm_free(ctx, dead);
+      vm_free(ctx, nw);
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    for (size_t i = 0; i < 4 * nt; i++) cnt[R->tnode[i] + 1]++;
+    for (size_t t = 1; t <= maxtag + 1; t++) cnt[t] += cnt[t - 1];
+    {
+      size_t *fillp = vm_alloc_array(ctx, maxtag + 1, sizeof *fillp);
+      if (!fillp) {
+        vm_free(ctx, dead);
+        vm_free(ctx, nw);
+        st = VM_ERR_NOMEM;
+        goto done;
+      }
+      memcpy(fillp, cnt, (maxtag + 1) * sizeof *fillp);
+      for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) adj[fillp[R->tnode[4 * t + k]]++] = t;
+      vm_free(ctx, fillp);
+    }
+    memset(lock, 0, maxtag + 1);
+    int64_t flips = 0;
+    for (size_t t = 0; t < nt; t++) {
+      if (dead[t]) continue;
+      const size_t *c = R->tnode + 4 * t;
+      if (c[0] > nenv || c[1] > nenv || c[2] > nenv || c[3] > nenv) continue;
+      if (lock[c[0]] || lock[c[1]] || lock[c[2]] || lock[c[3]]) continue;
+      const double *p[4];
+      for (int k = 0; k < 4; k++) p[k] = R->coord + 3 * at[c[k]];
+      double lo, hi;
+      tet_angles(p, &lo, &hi);
+      if (lo * 180 / PI >= 5) continue;
+      static const int ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+      for (int e = 0; e < 6; e++) {
+        size_t u = c[ed[e][0]], v = c[ed[e][1]];
+        /* the ring: tets holding both u and v */
+        size_t ring[FLIP_RING_MAX + 1], pr[FLIP_RING_MAX + 1][2];
+        int n = 0, over = 0;
+        for (size_t j = cnt[u]; j < cnt[u + 1]; j++) {
+          size_t s2 = adj[j];
+          const size_t *d = R->tnode + 4 * s2;
+          int hv = d[0] == v || d[1] == v || d[2] == v || d[3] == v;
+          if (!hv) continue;
+          if (n == FLIP_RING_MAX + 1 || dead[s2]) {
+            over = 1;
+            break;
+          }
+          int q = 0;
+          for (int k = 0; k < 4; k++)
+            if (d[k] != u && d[k] != v) pr[n][q++] = d[k];
+          ring[n++] = s2;
+        }
+        if (over || n < 3 || n > FLIP_RING_MAX) continue;
+        /* chain the pairs into a cycle w[0..n-1] */
+        size_t w[FLIP_RING_MAX];
+        uint8_t used[FLIP_RING_MAX + 1] = {0};
+        w[0] = pr[0][0];
+        w[1] = pr[0][1];
+        used[0] = 1;
+        int len = 2, closed = 0;
+        while (len <= n) {
+          size_t last = w[len - 1];
+          int found = -1;
+          for (int k = 0; k < n && found < 0; k++)
+            if (!used[k] && (pr[k][0] == last || pr[k][1] == last)) found = k;
+          if (found < 0) break;
+          used[found] = 1;
+          size_t nx = pr[found][0] == last ? pr[found][1] : pr[found][0];
+          if (nx == w[0]) {
+            closed = len == n;
+            break;
+          }
+          if (len == n) break;
+          w[len++] = nx;
+        }
+        if (!closed) continue;
+        /* the ring's own least angle and volume */
+        double old = PI, vol0 = 0;
+        for (int k = 0; k < n; k++) {
+          const size_t *d = R->tnode + 4 * ring[k];
+          const double *q[4];
+          for (int i = 0; i < 4; i++) q[i] = R->coord + 3 * at[d[i]];
+          double l2, h2;
+          tet_angles(q, &l2, &h2);
+          if (l2 < old) old = l2;
+          vol0 += fabs(orient(q[0], q[1], q[2], q[3]));
+        }
+        const double *pu = R->coord + 3 * at[u], *pv = R->coord + 3 * at[v];
+        int best = -1;
+        double bq = old;
+        for (int k = 0; k < ntri[n]; k++) {
+          double qmin = PI, vol = 0;
+          int ok = 1;
+          for (int j = 0; j < n - 2 && ok; j++) {
+            const int *tr = tris_n[n][k][j];
+            const double *a = R->coord + 3 * at[w[tr[0]]], *b = R->coord + 3 * at[w[tr[1]]],
+                         *cc = R->coord + 3 * at[w[tr[2]]];
+            double ou = orient(a, b, cc, pu), ov = orient(a, b, cc, pv);
+            if (!(ou * ov < 0)) {
+              ok = 0;
+              break;
+            }
+            const double *q1[4] = {a, b, cc, pu}, *q2[4] = {a, b, cc, pv};
+            double l1, h1, l2, h2;
+            tet_angles(q1, &l1, &h1);
+            tet_angles(q2, &l2, &h2);
+            qmin = fmin(qmin, fmin(l1, l2));
+            vol += fabs(ou) + fabs(ov);
+          }
+          if (!ok || !(fabs(vol - vol0) <= 1e-9 * vol0)) continue;
+          if (qmin > bq) {
+            bq = qmin;
+            best = k;
+          }
+        }
+        if (best < 0) continue;
+        /* applied */
+        if (nnew + 2 * (size_t)(n - 2) > cap) {
+          cap = 2 * cap + 2 * FLIP_RING_MAX;
+          size_t *t2 = vm_realloc(ctx, nw, 4 * cap * sizeof *t2);
+          if (!t2) {
+            vm_free(ctx, dead);
+            vm_free(ctx, nw);
+            st = VM_ERR_NOMEM;
+            goto done;
+          }
+          nw = t2;
+        }
+        for (int j = 0; j < n - 2; j++) {
+          const int *tr = tris_n[n][best][j];
+          size_t tv[2][4] = {{w[tr[0]], w[tr[1]], w[tr[2]], u}, {w[tr[0]], w[tr[1]], w[tr[2]], v}};
+          for (int h = 0; h < 2; h++) {
+            const double *a = R->coord + 3 * at[tv[h][0]], *b = R->coord + 3 * at[tv[h][1]],
+                         *cc = R->coord + 3 * at[tv[h][2]], *d = R->coord + 3 * at[tv[h][3]];
+            if (orient(a, b, cc, d) * sgn < 0) {
+              size_t x = tv[h][0];
+              tv[h][0] = tv[h][1];
+              tv[h][1] = x;
+            }
+            memcpy(nw + 4 * nnew++, tv[h], sizeof tv[h]);
+          }
+        }
+        for (int k = 0; k < n; k++) {
+          dead[ring[k]] = 1;
+          const size_t *d = R->tnode + 4 * ring[k];
+          for (int i = 0; i < 4; i++) lock[d[i]] = 1;
+        }
+        flips++;
+        break;
+      }
+    }
+    if (flips) {
+      size_t keep = 0;
+      for (size_t t = 0; t < nt; t++) keep += !dead[t];
+      size_t *out = gmshMalloc(4 * (keep + nnew) * sizeof *out);
+      if (!out) {
+        vm_free(ctx, dead);
+        vm_free(ctx, nw);
+        st = VM_ERR_NOMEM;
+        goto done;
+      }
+      size_t o = 0;
+      for (size_t t = 0; t < nt; t++)
+        if (!dead[t]) {
+          memcpy(out + 4 * o, R->tnode + 4 * t, 4 * sizeof *out);
+          o++;
+        }
+      memcpy(out + 4 * o, nw, 4 * nnew * sizeof *out);
+      gmshFree(R->tnode);
+      R->tnode = out;
+      R->nt = keep + nnew;
+      *nflips += flips;
+    }
+    vm_free(ctx, dead);
+    vm_free(ctx, nw);
+    if (!flips) break;
+  }
+done:
+  vm_free(ctx, at);
+  vm_free(ctx, lock);
+  vm_free(ctx, tris_n);
+  vm_free(ctx, cnt);
+  vm_free(ctx, adj);
+  return st;
+}
+
 /* Mesh the region between the envelope (node tags = input index + 1) and
  * the far field (node tags base + 1 ...) with the size field S. */
 static int gmsh_fill(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_surface *F,
@@ -1757,6 +2052,36 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
       st = st2;
       gmsh_result_free(&R2);
     }
+  }
+  /* the slivers the points left: edge removal, then the merge again (its
+   * checks failing, Gmsh's tets as they were) */
+  if (!st) {
+    int64_t nflip = 0;
+    size_t nt0 = R.nt, *t0 = gmshMalloc(4 * (nt0 ? nt0 : 1) * sizeof *t0);
+    if (!t0) st = VM_ERR_NOMEM;
+    if (!st) {
+      memcpy(t0, R.tnode, 4 * nt0 * sizeof *t0);
+      st = flip_slivers(ctx, &R, (size_t)in->nv, &nflip);
+    }
+    vm_mesh *res2 = NULL;
+    if (!st && nflip && (st = merge(ctx, in, &E, &F, &R, &res2)) == VM_ERR_BACKEND) {
+      vm_log(ctx, VM_LOG_WARN, "fill: %s; the edge removal around slivers is undone",
+             vm_ctx_error(ctx));
+      vm_ctx_clear_error(ctx);
+      gmshFree(R.tnode);
+      R.tnode = t0;
+      R.nt = nt0;
+      t0 = NULL;
+      st = VM_OK;
+    } else if (!st && nflip) {
+      vm_log(ctx, VM_LOG_INFO,
+             "fill: %lld edges around slivers of envelope vertices removed (their rings "
+             "triangulated anew)",
+             (long long)nflip);
+      vm_mesh_destroy(&res);
+      res = res2;
+    }
+    gmshFree(t0);
   }
   vm_free(ctx, q);
   vm_free(ctx, seen);
