@@ -799,13 +799,6 @@ done:
 /* Meshing passes with points in the slivers, at most */
 enum { FILL_SLIVER_PASSES = 4 };
 
-/* Points that break Gmsh's slivers of four envelope vertices (flat tets in
- * slightly concave kinks of the envelope, which Delaunay keeps: no other
- * point is in their small circumsphere): one just off the envelope above
- * each, inside that sphere. Appended to *q (3 each, *nq of them). The
- * fill's tets are elements e0.. of the merged mesh o (merge: the input's
- * kept elements come first: a layer's own tets, where its layers end, are
- * not the fill's). */
 typedef struct {
   int32_t v[4]; /* ascending */
 } quad_key;
@@ -822,9 +815,16 @@ static int quad_cmp(const void *a, const void *b) {
   return 0;
 }
 
-/* The slivers passes before had a point for (sorted in seen[0..*nseen)):
- * one that is still there gets none again (the same point twice made
- * Gmsh's Delaunay fail); this pass's are added to seen. */
+/* Points that break Gmsh's slivers of four envelope vertices (flat tets in
+ * slightly concave kinks of the envelope, which Delaunay keeps: no other
+ * point is in their small circumsphere): one off the envelope above each,
+ * inside that sphere. Appended to *q (3 each, *nq of them). The fill's
+ * tets are elements e0.. of the merged mesh o (merge: the input's kept
+ * elements come first: a layer's own tets, where its layers end, are not
+ * the fill's). The slivers the passes before had a point for are sorted
+ * in seen[0..*nseen): one that is still there gets none again (the same
+ * point twice made Gmsh's Delaunay fail; *nrepeat counts them); this
+ * pass's are added to seen. *nsliver: every sliver found. */
 static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin, const int32_t *vid,
                          const double *nrm, double min_deg, double **q, int64_t *nq,
                          int64_t *nsliver, quad_key **seen, int64_t *nseen, int64_t *nrepeat) {
