@@ -898,7 +898,7 @@ static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin,
     n++;
   }
   *nq = n;
-  qsort(*seen, (size_t)*nseen, sizeof **seen, quad_cmp);
+  if (*nseen > 1) qsort(*seen, (size_t)*nseen, sizeof **seen, quad_cmp);
   return VM_OK;
 }
 
@@ -2060,7 +2060,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     size_t nt0 = R.nt, *t0 = gmshMalloc(4 * (nt0 ? nt0 : 1) * sizeof *t0);
     if (!t0) st = VM_ERR_NOMEM;
     if (!st) {
-      memcpy(t0, R.tnode, 4 * nt0 * sizeof *t0);
+      if (nt0) memcpy(t0, R.tnode, 4 * nt0 * sizeof *t0);
       st = flip_slivers(ctx, &R, (size_t)in->nv, &nflip);
     }
     vm_mesh *res2 = NULL;
