@@ -5,7 +5,7 @@
 # nothing; repairable input (flipped faces, a zero-area face) is repaired,
 # and refused when the repair is off; usage errors exit 2.
 set -u
-gen=$1 surf=$2 conv=$3
+gen=$1 surf=$2 conv=$3 geo=$4
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -66,40 +66,15 @@ bad "$dir/flipped.obj" "consistently oriented surface; the first is element" \
 bad "$dir/needle.obj" "zero-area element [0-9]* at (" "zero-area triangle with --repair no" adapt --repair no
 bad "$dir/open.stl" "open surface: e.g. the border edge (" "open surface with --repair no" adapt --repair no
 bad "$dir/trunc.stl" "end of file" "truncated file, adapt step" adapt --repair no
-# a wing as Gmsh meshes one from CAD (ONERA M6 planform, NACA 0010
-# sections, a sharp trailing edge, flat caps; 33,652 triangles sized by
-# curvature): the adaptation flips some triangles that the angle floor
-# then takes back, and the run must say so and exit 0 (it exited 3 on
-# the adaptation's stale count, which stopped `make` at its first stage)
+# a wing as Gmsh meshes one from CAD (test/support/wing_m6.geo: ONERA M6
+# planform, NACA 0010 sections, a sharp trailing edge, flat caps; 33,652
+# triangles sized by curvature): the adaptation flips some triangles that
+# the angle floor then takes back, and the run must say so and exit 0 (it
+# exited 3 on the adaptation's stale count, which stopped `make` at its
+# first stage)
 if command -v gmsh >/dev/null 2>&1; then
-  cat >"$dir/wing.geo" <<'GEO'
-SetFactory("OpenCASCADE");
-N = 60; c0 = 0.806; c1 = 0.806 * 0.56; yt = 1.196; xt = yt * Tan(30 * Pi / 180);
-For s In {0:1}
-  y = s * yt; xle = s * xt; c = c0 + s * (c1 - c0);
-  up[] = {};
-  For i In {0:N}
-    x = 0.5 * (1 - Cos(Pi * (N - i) / N));
-    t = 0.5 * (0.2969 * Sqrt(x) - 0.1260 * x - 0.3516 * x^2 + 0.2843 * x^3 - 0.1036 * x^4);
-    p = newp; Point(p) = {xle + c * x, y, c * t}; up[] += p;
-  EndFor
-  lo[] = {up[N]};
-  For i In {1:N-1}
-    x = 0.5 * (1 - Cos(Pi * i / N));
-    t = 0.5 * (0.2969 * Sqrt(x) - 0.1260 * x - 0.3516 * x^2 + 0.2843 * x^3 - 0.1036 * x^4);
-    p = newp; Point(p) = {xle + c * x, y, -c * t}; lo[] += p;
-  EndFor
-  lo[] += up[0];
-  l1 = newl; Spline(l1) = up[];
-  l2 = newl; Spline(l2) = lo[];
-  w[s] = newll; Wire(w[s]) = {l1, l2};
-EndFor
-Ruled ThruSections(1) = {w[0], w[1]};
-Mesh.MeshSizeMax = 0.03;
-Mesh.MeshSizeMin = 0.0015;
-Mesh.MeshSizeFromCurvature = 16;
-GEO
-  gmsh -2 "$dir/wing.geo" -o "$dir/wing.stl" -format stl >"$dir/gmsh.txt" 2>&1
+  gmsh -2 "$geo" -clmax 0.03 -clmin 0.0015 -clcurv 16 -o "$dir/wing.stl" -format stl \
+    >"$dir/gmsh.txt" 2>&1
   check '[ -s "$dir/wing.stl" ]' "Gmsh meshes the wing"
   "$surf" --json "$dir/wing.stl" "$dir/wing.vmsh" >"$dir/wing.json" 2>"$dir/wing.txt"
   rc=$?

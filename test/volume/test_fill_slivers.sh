@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # test/volume/test_fill_slivers.sh: the fill's tets of four envelope
 # vertices on an envelope that wraps a wing's leading edge. A wing as Gmsh
-# meshes one from CAD (ONERA M6 planform, NACA 0010 sections, 7,036
-# triangles sized by curvature), 3 layers at T = 5 %: around the leading
-# edge the layer's top stretches the wall's small triangles chordwise about
-# sevenfold, and Gmsh's Delaunay leaves flat tets of four envelope vertices
-# there, which no vertex of the fill may move. The passes with a point in
+# meshes one from CAD (test/support/wing_m6.geo: ONERA M6 planform, NACA
+# 0010 sections; here 7,036 triangles sized by curvature), 3 layers at
+# T = 5 %: around the leading edge the layer's top stretches the wall's
+# small triangles chordwise about sevenfold, and Gmsh's Delaunay leaves
+# flat tets of four envelope vertices there, which no vertex of the fill
+# may move. The passes with a point in
 # each sliver (halfway up its circumsphere, again while they leave fewer)
 # and then edge removal around the slivers left must bring them down: at
 # most 110 of them (82 measured; 131 with the passes alone, 200 with a
@@ -14,7 +15,7 @@
 # faces); the envelope's vertices bit-identical; the fill the same bit
 # for bit on a second run.
 set -u
-prism=$1 fill=$2 conv=$3
+prism=$1 fill=$2 conv=$3 geo=$4
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail=0
@@ -23,34 +24,7 @@ if ! command -v gmsh >/dev/null 2>&1; then
   echo "FAIL: gmsh is not installed (.ci/install-deps installs it)"
   exit 1
 fi
-cat >"$dir/wing.geo" <<'GEO'
-SetFactory("OpenCASCADE");
-N = 60; c0 = 0.806; c1 = 0.806 * 0.56; yt = 1.196; xt = yt * Tan(30 * Pi / 180);
-For s In {0:1}
-  y = s * yt; xle = s * xt; c = c0 + s * (c1 - c0);
-  up[] = {};
-  For i In {0:N}
-    x = 0.5 * (1 - Cos(Pi * (N - i) / N));
-    t = 0.5 * (0.2969 * Sqrt(x) - 0.1260 * x - 0.3516 * x^2 + 0.2843 * x^3 - 0.1036 * x^4);
-    p = newp; Point(p) = {xle + c * x, y, c * t}; up[] += p;
-  EndFor
-  lo[] = {up[N]};
-  For i In {1:N-1}
-    x = 0.5 * (1 - Cos(Pi * i / N));
-    t = 0.5 * (0.2969 * Sqrt(x) - 0.1260 * x - 0.3516 * x^2 + 0.2843 * x^3 - 0.1036 * x^4);
-    p = newp; Point(p) = {xle + c * x, y, -c * t}; lo[] += p;
-  EndFor
-  lo[] += up[0];
-  l1 = newl; Spline(l1) = up[];
-  l2 = newl; Spline(l2) = lo[];
-  w[s] = newll; Wire(w[s]) = {l1, l2};
-EndFor
-Ruled ThruSections(1) = {w[0], w[1]};
-Mesh.MeshSizeMax = 0.08;
-Mesh.MeshSizeMin = 0.004;
-Mesh.MeshSizeFromCurvature = 8;
-GEO
-gmsh -2 "$dir/wing.geo" -o "$dir/wing.stl" -format stl >"$dir/gmsh.txt" 2>&1
+gmsh -2 "$geo" -clmax 0.08 -clmin 0.004 -clcurv 8 -o "$dir/wing.stl" -format stl >"$dir/gmsh.txt" 2>&1
 check '[ -s "$dir/wing.stl" ]' "Gmsh meshes the wing"
 "$prism" -q -t 0.05 -n 3 "$dir/wing.stl" "$dir/layer.vmsh"
 check '[ $? -eq 0 ]' "vm-prism: 3 layers at 5 %"

@@ -796,8 +796,9 @@ done:
   return st;
 }
 
-/* Meshing passes with points in the slivers, at most */
-enum { FILL_SLIVER_PASSES = 4 };
+/* Meshing passes with points in the slivers, at most; a tet of four
+ * envelope vertices is flat below this least dihedral angle (degrees) */
+enum { FILL_SLIVER_PASSES = 4, FILL_FLAT_DEG = 5 };
 
 typedef struct {
   int32_t v[4]; /* ascending */
@@ -944,15 +945,6 @@ static void gmsh_result_free(gmsh_result *R) {
 /* Rounds of edge removal at most, and the largest ring taken */
 enum { FLIP_ROUNDS = 4, FLIP_RING_MAX = 7 };
 
-static double orient(const double *a, const double *b, const double *c, const double *d) {
-  double u[3], v[3], w[3], x[3];
-  vm_sub3(b, a, u);
-  vm_sub3(c, a, v);
-  vm_sub3(d, a, w);
-  vm_cross3(u, v, x);
-  return vm_dot3(x, w);
-}
-
 /* The triangulations of the convex polygon 0..n-1 (n <= FLIP_RING_MAX):
  * each a list of n - 2 triangles (i < j < k), into tri (at most 42 of
  * them, Catalan(5)); returns how many. */
@@ -1016,7 +1008,8 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
   int64_t *at = vm_alloc_array(ctx, maxtag + 1, sizeof *at);
   uint8_t *lock = vm_calloc(ctx, maxtag + 1, 1);
   int(*tris_n)[42][FLIP_RING_MAX - 2][3] = vm_alloc_array(ctx, FLIP_RING_MAX + 1, sizeof *tris_n);
-  size_t *cnt = NULL, *adj = NULL;
+  size_t *cnt = NULL, *adj = NULL, *fillp = NULL, *nw = NULL;
+  uint8_t *dead = NULL;
   int st = at && lock && tris_n ? VM_OK : VM_ERR_NOMEM;
   if (st) goto done;
   for (size_t t = 0; t <= maxtag; t++) at[t] = -1;
@@ -1033,41 +1026,32 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
   double sgn = 0;
   for (size_t t = 0; t < R->nt && sgn == 0; t++) {
     const size_t *c = R->tnode + 4 * t;
-    double o = orient(R->coord + 3 * at[c[0]], R->coord + 3 * at[c[1]], R->coord + 3 * at[c[2]],
-                      R->coord + 3 * at[c[3]]);
+    double o = tet_vol(R->coord + 3 * at[c[0]], R->coord + 3 * at[c[1]], R->coord + 3 * at[c[2]],
+                       R->coord + 3 * at[c[3]]);
     sgn = o > 0 ? 1 : o < 0 ? -1 : 0;
   }
   for (int round = 0; round < FLIP_ROUNDS; round++) {
     size_t nt = R->nt;
     /* vertex -> tets */
-    vm_free(ctx, cnt);
     vm_free(ctx, adj);
-    cnt = vm_calloc(ctx, maxtag + 2, sizeof *cnt);
-    adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
-    uint8_t *dead = vm_calloc(ctx, nt + 1, 1);
+    vm_free(ctx, dead);
+    vm_free(ctx, nw);
     size_t cap = nt + 64, nnew = 0;
-    size_t *nw = vm_alloc_array(ctx, 4 * cap, sizeof *nw);
-    if (!cnt || !adj || !dead || !nw) {
-      vm_free(ctx, dead);
-      vm_free(ctx, nw);
+    adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
+    dead = vm_calloc(ctx, nt + 1, 1);
+    nw = vm_alloc_array(ctx, 4 * cap, sizeof *nw);
+    if (!cnt) cnt = vm_alloc_array(ctx, maxtag + 2, sizeof *cnt);
+    if (!fillp) fillp = vm_alloc_array(ctx, maxtag + 1, sizeof *fillp);
+    if (!cnt || !fillp || !adj || !dead || !nw) {
       st = VM_ERR_NOMEM;
       goto done;
     }
+    memset(cnt, 0, (maxtag + 2) * sizeof *cnt);
     for (size_t i = 0; i < 4 * nt; i++) cnt[R->tnode[i] + 1]++;
     for (size_t t = 1; t <= maxtag + 1; t++) cnt[t] += cnt[t - 1];
-    {
-      size_t *fillp = vm_alloc_array(ctx, maxtag + 1, sizeof *fillp);
-      if (!fillp) {
-        vm_free(ctx, dead);
-        vm_free(ctx, nw);
-        st = VM_ERR_NOMEM;
-        goto done;
-      }
-      memcpy(fillp, cnt, (maxtag + 1) * sizeof *fillp);
-      for (size_t t = 0; t < nt; t++)
-        for (int k = 0; k < 4; k++) adj[fillp[R->tnode[4 * t + k]]++] = t;
-      vm_free(ctx, fillp);
-    }
+    memcpy(fillp, cnt, (maxtag + 1) * sizeof *fillp);
+    for (size_t t = 0; t < nt; t++)
+      for (int k = 0; k < 4; k++) adj[fillp[R->tnode[4 * t + k]]++] = t;
     memset(lock, 0, maxtag + 1);
     int64_t flips = 0;
     for (size_t t = 0; t < nt; t++) {
@@ -1079,7 +1063,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
       for (int k = 0; k < 4; k++) p[k] = R->coord + 3 * at[c[k]];
       double lo, hi;
       tet_angles(p, &lo, &hi);
-      if (lo * 180 / PI >= 5) continue;
+      if (lo * 180 / PI >= FILL_FLAT_DEG) continue;
       static const int ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
       for (int e = 0; e < 6; e++) {
         size_t u = c[ed[e][0]], v = c[ed[e][1]];
@@ -1133,7 +1117,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
           double l2, h2;
           tet_angles(q, &l2, &h2);
           if (l2 < old) old = l2;
-          vol0 += fabs(orient(q[0], q[1], q[2], q[3]));
+          vol0 += fabs(tet_vol(q[0], q[1], q[2], q[3]));
         }
         const double *pu = R->coord + 3 * at[u], *pv = R->coord + 3 * at[v];
         int best = -1;
@@ -1145,7 +1129,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
             const int *tr = tris_n[n][k][j];
             const double *a = R->coord + 3 * at[w[tr[0]]], *b = R->coord + 3 * at[w[tr[1]]],
                          *cc = R->coord + 3 * at[w[tr[2]]];
-            double ou = orient(a, b, cc, pu), ov = orient(a, b, cc, pv);
+            double ou = tet_vol(a, b, cc, pu), ov = tet_vol(a, b, cc, pv);
             if (!(ou * ov < 0)) {
               ok = 0;
               break;
@@ -1169,8 +1153,6 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
           cap = 2 * cap + 2 * FLIP_RING_MAX;
           size_t *t2 = vm_realloc(ctx, nw, 4 * cap * sizeof *t2);
           if (!t2) {
-            vm_free(ctx, dead);
-            vm_free(ctx, nw);
             st = VM_ERR_NOMEM;
             goto done;
           }
@@ -1182,7 +1164,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
           for (int h = 0; h < 2; h++) {
             const double *a = R->coord + 3 * at[tv[h][0]], *b = R->coord + 3 * at[tv[h][1]],
                          *cc = R->coord + 3 * at[tv[h][2]], *d = R->coord + 3 * at[tv[h][3]];
-            if (orient(a, b, cc, d) * sgn < 0) {
+            if (tet_vol(a, b, cc, d) * sgn < 0) {
               size_t x = tv[h][0];
               tv[h][0] = tv[h][1];
               tv[h][1] = x;
@@ -1204,8 +1186,6 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
       for (size_t t = 0; t < nt; t++) keep += !dead[t];
       size_t *out = gmshMalloc(4 * (keep + nnew) * sizeof *out);
       if (!out) {
-        vm_free(ctx, dead);
-        vm_free(ctx, nw);
         st = VM_ERR_NOMEM;
         goto done;
       }
@@ -1221,8 +1201,6 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
       R->nt = keep + nnew;
       *nflips += flips;
     }
-    vm_free(ctx, dead);
-    vm_free(ctx, nw);
     if (!flips) break;
   }
 done:
@@ -1231,6 +1209,9 @@ done:
   vm_free(ctx, tris_n);
   vm_free(ctx, cnt);
   vm_free(ctx, adj);
+  vm_free(ctx, fillp);
+  vm_free(ctx, dead);
+  vm_free(ctx, nw);
   return st;
 }
 
@@ -2108,7 +2089,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
       double lo, hi;
       tet_angles(p, &lo, &hi);
       lo *= 180 / PI;
-      if (lo >= 5) continue;
+      if (lo >= FILL_FLAT_DEG) continue;
       nflat++;
       if (lo < worst) {
         worst = lo;
