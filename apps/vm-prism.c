@@ -485,6 +485,11 @@ static const vm_opt opts[] = {
      "--growth the ratio is solved for, so the layers fill the thickness; with both, the growth "
      "law is kept and fewer layers may be made)",
      .fn = opt_growth},
+    {"--max-aspect", NULL, VM_OPT_DOUBLE, A(o.max_aspect), "A",
+     "without --first-height or --yplus: a column's first height is at least the longest wall "
+     "edge at it over A, its layers growing more slowly (default 30: OpenFOAM's determinant "
+     "check fails near 40; 0: the same first height everywhere)",
+     .lo = 0, .hi = 1e300},
     {"--yplus", NULL, VM_OPT_DOUBLE, A(yplus), "Y",
      "first-layer height for a target y+ by the flat-plate estimate (needs --reynolds; "
      "docs/prism.md)",
@@ -609,12 +614,15 @@ enum { EXIT_SHORT = 5 };
 static void print_summary(const char *out, const vm_prism_report *r, int64_t npairs, int rc,
                           int interrupted, int timed_out) {
   int bad = r->inverted > 0 || npairs > 0;
-  char ends[128] = "";
+  char ends[128] = "", raised[96] = "";
+  if (r->first_raised)
+    snprintf(raised, sizeof raised, " to %g at %lld columns", r->first_height_max,
+             (long long)r->first_raised);
   if (r->pyramids || r->tets)
     snprintf(ends, sizeof ends, " (and %lld pyramids, %lld tets where layers end)",
              (long long)r->pyramids, (long long)r->tets);
   fprintf(stderr,
-          "vm-prism: %s: %lld prisms%s in %d layers (first %g, growth %g), %.1f%% of columns at "
+          "vm-prism: %s: %lld prisms%s in %d layers (first %g%s, growth %g), %.1f%% of columns at "
           "full thickness, thickness/T min %.3f mean %.3f, inverted corner tets %lld, prisms not "
           "positive in every 3-tet split %lld, min "
           "scaled Jacobian %.3f, normal deviation max %.2f deg (%lld of %lld smooth vertices "
@@ -622,7 +630,7 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
           "growth %.3f, OpenFOAM non-orthogonality max %.1f deg (%lld faces beyond 70), "
           "skewness max %.2f, room for T at %.1f%% of columns (%.1f%% of those at full "
           "thickness), fill of the allowed thickness %.3f, %.2f s%s\n",
-          out, (long long)r->prisms, ends, r->layers, r->first_height, r->growth,
+          out, (long long)r->prisms, ends, r->layers, r->first_height, raised, r->growth,
           100 * r->full_fraction, r->thick_min, r->thick_mean, (long long)r->inverted,
           (long long)r->split_negative, r->sj_min, r->normal_dev_max,
           (long long)r->normal_dev_over5, (long long)r->smooth_vertices, (long long)npairs,
@@ -656,7 +664,9 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, L);
   printf(", \"first_height\": ");
   vm_json_double(stdout, r.first_height);
-  printf(", \"growth\": ");
+  printf(", \"first_height_max\": ");
+  vm_json_double(stdout, r.first_height_max);
+  printf(", \"first_raised\": %lld, \"growth\": ", (long long)r.first_raised);
   vm_json_double(stdout, r.growth);
   printf(", \"reoriented\": %s, \"needles_in\": %lld, \"surface_stage\": %s, \"needles\": %lld",
          r.reoriented ? "true" : "false", (long long)needles_in, surface ? "true" : "false",

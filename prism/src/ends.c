@@ -35,7 +35,7 @@ static void end_column(vm_prism *p, int64_t v, int n, int nl, const double *old)
   arc[0] = 0;
   for (int k = 1; k <= nl; k++)
     arc[k] = arc[k - 1] + vm_dist3(old + k * lsz + 3 * v, old + (k - 1) * lsz + 3 * v);
-  double len = arc[nl], h1 = p->sched[0];
+  double len = arc[nl], h1 = pr_first_height(p, v);
   const double *top = old + (size_t)nl * lsz + 3 * v, *w = old + 3 * v, *o1 = old + lsz + 3 * v;
   int equal = !(h1 * n < len);
   double rc = equal ? 1 : pr_growth_ratio(h1, n, len, p->k.sched_bisect_iter), a = 0, h = h1;

@@ -398,10 +398,13 @@ static double tilt_allowed(const vm_prism *p, int64_t v) {
 
 /* Column v's own schedule: the shares frac_c[k] (k = 0..nl) of its length
  * `len` at which its levels stand. A column at the full thickness `tot`
- * (or beyond it) takes the schedule's shares `frac` (common_fractions). A column the stage had to
- * shorten keeps the schedule's first height h1 (what the user asked for,
- * from --first-height or --yplus: the wall's cells the same height
- * everywhere, as a solver's wall treatment assumes) and the growth law,
+ * (or beyond it) takes the schedule's shares `frac` (common_fractions),
+ * unless its first height is its own (p->h1v: long wall edges; then it is
+ * on its own schedule as a shortened column). A column the stage had to
+ * shorten keeps its first height h1 (the schedule's, what the user asked
+ * for with --first-height or --yplus: the wall's cells the same height
+ * everywhere, as a solver's wall treatment assumes; or its own where
+ * raised) and the growth law,
  * with its own ratio r_c in [1, r] so that h1 (1 + r_c + ... + r_c^(nl-1))
  * = len; where even equal heights of h1 exceed len, equal heights len/nl.
  * Scaling the whole schedule instead made a column shortened to a tenth of
@@ -410,11 +413,13 @@ static double tilt_allowed(const vm_prism *p, int64_t v) {
  * when there are fewer levels than the schedule's or the column is at full
  * thickness, so the change is continuous at len = T. Returns whether the
  * column has a schedule of its own. */
-static int column_fractions(const vm_prism *p, int nl, double len, const double *frac, double tot,
-                            double *frac_c) {
+static int column_fractions(const vm_prism *p, int64_t v, int nl, double len, const double *frac,
+                            double tot, double *frac_c) {
   memcpy(frac_c, frac, (size_t)(nl + 1) * sizeof *frac_c);
-  if (nl != p->rep.layers_requested || nl < 2 || !(len > 0) || !(len < tot)) return 0;
-  double h1 = p->sched[0];
+  double h1 = pr_first_height(p, v);
+  if (nl != p->rep.layers_requested || nl < 2 || !(len > 0) ||
+      (!(len < tot) && !(h1 > p->sched[0])))
+    return 0;
   if (h1 * nl >= len) {
     for (int k = 1; k < nl; k++) frac_c[k] = (double)k / nl;
     return 1;
@@ -489,7 +494,7 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
-      int own = column_fractions(p, nl, arc[nl], frac, tot, fc);
+      int own = column_fractions(p, v, nl, arc[nl], frac, tot, fc);
       /* the largest relative move off the column's own schedule and off
        * the common one: nothing to do where the column is on it already */
       double dev = 0, dev_common = 0;
@@ -625,7 +630,7 @@ static int skew_relief(vm_prism *p, int64_t *count, double *before, double *afte
       for (int k = 0; k <= nl; k++) memcpy(old + 3 * k, p->lev + k * lsz + 3 * v, 3 * sizeof *old);
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
-      column_fractions(p, nl, arc[nl], frac, tot, fc);
+      column_fractions(p, v, nl, arc[nl], frac, tot, fc);
       for (int g = 0; g < ng; g++) {
         double gamma = p->k.relief_gamma[g];
         if (!(gamma > 0)) continue;
@@ -1067,7 +1072,8 @@ int vm_prism_march(vm_prism *p) {
   double rem = 0;
   for (int k = 0; k < n; k++) rem += p->sched[k];
   /* with a thickness or a layer count per region, each column aiming
-   * below T splits at its own schedule's shares (column_fractions, from its length now): a
+   * below T (and each column with a first height of its own, p->h1v)
+   * splits at its own schedule's shares (column_fractions, from its length now): a
    * thinner region's first layer at the first height (the common shares
    * scaled to a short column made it len/T of the first height, and the
    * redistribution after the splits could not always move it back: 0.14
@@ -1076,7 +1082,7 @@ int vm_prism_march(vm_prism *p) {
    * (Splitting such a column at its own count here, its other levels in
    * a thin band under its top, stopped the marching at split 15 of 19 on
    * the demo aircraft: wedges where a band meets a full column.) */
-  if (p->regional && n >= 2) {
+  if ((p->regional || p->h1v) && n >= 2) {
     own = vm_alloc_array(ctx, (size_t)(n + 1) * (size_t)nw + 2 * (size_t)(n + 1), sizeof *own);
     if (!own) {
       st = VM_ERR_NOMEM;
@@ -1087,8 +1093,8 @@ int vm_prism_march(vm_prism *p) {
     /* a column aiming at T keeps the common split, as without regions
      * (bit for bit: its row starts with -1) */
     for (int64_t v = 0; v < nw; v++) {
-      int mine = p->tv[v] < p->o.thickness &&
-                 column_fractions(p, n, vm_dist3(outer + 3 * v, p->wall + 3 * v), frac, tot, fc);
+      int mine = (p->tv[v] < p->o.thickness || pr_first_height(p, v) > p->sched[0]) &&
+                 column_fractions(p, v, n, vm_dist3(outer + 3 * v, p->wall + 3 * v), frac, tot, fc);
       if (mine)
         memcpy(own + (size_t)(n + 1) * (size_t)v, fc, (size_t)(n + 1) * sizeof *fc);
       else
@@ -1115,14 +1121,24 @@ int vm_prism_march(vm_prism *p) {
     vm_node_stats ns;
     int it = 0;
     pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, vn, dr, 0);
-    for (int j = 0; j < nmul; j++) {
+    /* with shares of their own (regions, raised first heights), the
+     * columns' own splits first; where none of those is valid, the
+     * schedule's common split for every column, as without them (the
+     * redistribution below puts the columns on their own shares where
+     * that stays valid): on vm-gen aircraft remeshed by vm-surface --size
+     * graded the raised first heights' own split was not valid at any
+     * multiplier, and the marching stopped at its first split */
+    int common = 0; /* the split taken is the common one, own shares refused */
+    for (int jj = 0; jj < (own ? 2 : 1) * nmul; jj++) {
+      int j = jj % nmul, use_own = own && jj < nmul;
+      common = own && !use_own;
       double f = f0 * fmul[j];
       if (j > 0 && f > kp->split_max_frac) continue;
       memcpy(m2->xyz, base, lsz * sizeof *m2->xyz);
       for (int64_t v = 0; v < nw; v++) {
         double *mv = m2->xyz + lsz + 3 * v;
         double fv = f;
-        if (own && own[(size_t)(n + 1) * (size_t)v] >= 0) {
+        if (use_own && own[(size_t)(n + 1) * (size_t)v] >= 0) {
           const double *fc = own + (size_t)(n + 1) * (size_t)v;
           fv = (fc[k + 1] - fc[k]) / (1 - fc[k]) * fmul[j];
           if (fv > kp->split_max_frac) fv = kp->split_max_frac;
@@ -1183,6 +1199,11 @@ int vm_prism_march(vm_prism *p) {
       st = VM_OK;
       break;
     }
+    if (common)
+      vm_log(ctx, VM_LOG_INFO,
+             "prism: split %d of %d: the columns' own shares are not valid; the schedule's "
+             "common split taken",
+             k + 1, n - 1);
     memcpy(p->lev + (size_t)(k + 1) * lsz, m2->xyz + lsz, lsz * sizeof *p->lev);
     pr_progress(p, VM_PRISM_PHASE_MARCH, k + 1, p->sched[k], 0, 0);
   }

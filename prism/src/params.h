@@ -83,6 +83,9 @@ typedef struct pr_params {
                             (1 - 1e-9) T (no sliver last layer from rounding) */
   int sched_bisect_iter; /* 200: bisection steps for the growth ratio (far
                             more than double precision needs; cheap) */
+  double first_slope;    /* 0.01: neighbouring columns' first heights
+                            (opts max_aspect) differ by at most this times
+                            their distance; see prism.c's first_heights */
   double region_slope;   /* 0.5: with a thickness per wall face, neighbouring
                             columns' aims differ by at most 0.5 times the
                             wall distance between them (the outer surface
@@ -319,6 +322,7 @@ static inline pr_params pr_params_default(void) {
               .fair_quality = 0.05},
       .sched_fit_tol = 1e-9,
       .sched_bisect_iter = 200,
+      .first_slope = 0.01,
       .region_slope = 0.5,
       .thin_height = 0.5,
       .thin_limit_height = 1e-6,

@@ -59,11 +59,19 @@ struct vm_prism {
   int nlev;      /* levels (layers + 1); 0 before marching */
   double *lev;   /* nlev * 3 * nw */
   double *sched; /* heights of the schedule (nlayers) */
+  double *h1v;   /* nw: each column's first height, the schedule's raised where
+                    the wall's edges are long (opts max_aspect); NULL: the
+                    schedule's everywhere */
 
   double *medial; /* nw exterior medial radii (medial.c), NULL until asked */
 
   vm_prism_report rep;
 };
+
+/* Column v's first height: the schedule's, or its own (p->h1v). */
+static inline double pr_first_height(const vm_prism *p, int64_t v) {
+  return p->h1v ? p->h1v[v] : p->sched[0];
+}
 
 /* The wall's connectivity as plain arrays (geom.h). */
 static inline pr_surf pr_wall_surf(const vm_prism *p) {

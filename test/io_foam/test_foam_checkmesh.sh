@@ -5,7 +5,9 @@
 # ASCII and binary), vm-gen's rotated cube at angle 0 (hexahedra and
 # tetrahedra) through vm-convert, and a vm-prism layer on a sphere written
 # straight to a case, whose patches are the wall (type wall) and the outer
-# surface (type patch); writing again into a case keeps its 0/ and system/.
+# surface (type patch); writing again into a case keeps its 0/ and system/;
+# thin first layers pass the determinant check of -allGeometry with
+# vm-prism's default --max-aspect and fail it without.
 # potentialFoam, when installed, runs on the mixed cube's patches. Skipped
 # (77) when checkMesh is not installed. vm-quality's count of OpenFOAM's
 # negative volumes and face pyramids equals checkMesh's on tangled rotated
@@ -125,4 +127,23 @@ cp "$dir/p.foam/system/controlDict" "$dir/cd.before"
 check '[ $? -eq 0 ] && mesh_ok "$dir/p.foam" && grep -q "^    hexahedra: *216$" "$dir/p.foam.log"' "written again into the case: the hexahedra replace the prisms"
 check 'grep -q "user data" "$dir/p.foam/0/U" && cmp -s "$dir/cd.before" "$dir/p.foam/system/controlDict"' "0/U and system/controlDict kept"
 check '[ -z "$(ls -A "$dir/p.foam/constant" | grep "^\.")" ]' "no temporary directory left in constant/"
+# thin first layers: 20 layers at growth 1.2 put the first cell at 1/110 of
+# the sphere's wall edges, which OpenFOAM's determinant check (with
+# -allGeometry) fails; by default (--max-aspect 30) every column's first
+# height is raised to its longest wall edge / 30 and its layers grow more
+# slowly, and the check passes; --max-aspect 0 keeps the schedule's first
+# height everywhere (the check fails: the test can tell them apart)
+for a in default 0; do
+  opt=; [ $a = 0 ] && opt="--max-aspect 0"
+  "$prism" -q --json -t 0.3 -n 20 $opt "$dir/sphere.stl" "$dir/thin$a.foam" >"$dir/thin$a.json" 2>"$dir/thin$a.err"
+  check '[ $? -eq 0 ]' "vm-prism -t 0.3 -n 20${opt:+ $opt} sphere.stl"
+  checkMesh -case "$dir/thin$a.foam" -allGeometry >"$dir/thin$a.log" 2>&1
+done
+check 'grep -q "^Mesh OK\.$" "$dir/thindefault.log" && grep -q "Cell determinant check OK" "$dir/thindefault.log"' "default first heights: checkMesh -allGeometry OK (least determinant $(sed -n 's/.*Cell determinant (wellposedness) : minimum: \([0-9.e-]*\).*/\1/p' "$dir/thindefault.log"))"
+check 'grep -q "small determinant" "$dir/thin0.log"' "--max-aspect 0: cells with a small determinant ($(sed -n 's/.*number of cells: //p' "$dir/thin0.log"))"
+raised=$(sed -n 's/.*"first_raised": \([0-9]*\).*/\1/p' "$dir/thindefault.json")
+wv=$(sed -n 's/.*"wall_vertices": \([0-9]*\).*/\1/p' "$dir/thindefault.json")
+gmax=$(sed -n 's/.*"growth_max": \([0-9.e+-]*\).*/\1/p' "$dir/thindefault.json")
+check '[ -n "$raised" ] && [ "$raised" = "$wv" ] && awk "BEGIN{exit !($gmax <= 1.2 + 1e-6)}"' "every column's first height raised ($raised of $wv), largest growth $gmax <= 1.2"
+check '[ "$(sed -n "s/.*\"first_raised\": \([0-9]*\).*/\1/p" "$dir/thin0.json")" = 0 ]' "--max-aspect 0 raises none"
 exit $fail

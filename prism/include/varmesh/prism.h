@@ -88,6 +88,18 @@ typedef struct vm_prism_opts {
   double growth;         /* ratio r >= 1 of successive heights, or <= 0: from
                             first_height (default 1.2); if both are given, the
                             growth law is kept and the layer count may drop */
+  double max_aspect;     /* without first_height: a column's first height is
+                            at least the longest wall edge at its vertex over
+                            this (at most its aim over the layer count, equal
+                            heights), its growth ratio smaller so its layers
+                            still fill it: no cell wider than max_aspect times
+                            its height where the thickness allows. OpenFOAM's
+                            cell determinant falls below its 0.001 at about
+                            39 for a right prism on an equilateral triangle
+                            (0.0025 at 30); sheared cells fall sooner.
+                            Default 30; 0: the schedule's first height
+                            everywhere. With first_height (a y+ asked for)
+                            the wall's cells keep that height */
   double theta;          /* of the balanced measure (default 0.8) */
   double cut_factor;     /* target height reduction per cut, in (0.5, 1) (default 0.85) */
   int springback_iter;   /* implicit iterations of the springback at full height
@@ -167,6 +179,8 @@ typedef struct vm_prism_report {
   int layers_requested, layers; /* layers is less if the remainder was dropped */
   double thickness;             /* T */
   double first_height, growth;  /* of the schedule used */
+  double first_height_max;      /* the largest column's first height (max_aspect) */
+  int64_t first_raised;         /* columns whose first height max_aspect raised */
   double thin_min, thin_max;    /* heights of the thin layer */
   int springback_iter;          /* implicit iterations, all solves */
   int cut_rounds;
