@@ -287,7 +287,7 @@ static int build_adjacency(vm_prism *p) {
 static int grade_along_wall(vm_prism *p, double *f, double slope) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw;
-  /* heap of (aim, vertex), lazily updated: at most nw + one entry per
+  /* heap of (value, vertex), lazily updated: at most nw + one entry per
    * directed edge */
   int64_t cap = nw + p->vv_off[nw], n = 0;
   struct he {
