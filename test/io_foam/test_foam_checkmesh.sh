@@ -141,9 +141,9 @@ for a in default 0; do
 done
 check 'grep -q "^Mesh OK\.$" "$dir/thindefault.log" && grep -q "Cell determinant check OK" "$dir/thindefault.log"' "default first heights: checkMesh -allGeometry OK (least determinant $(sed -n 's/.*Cell determinant (wellposedness) : minimum: \([0-9.e-]*\).*/\1/p' "$dir/thindefault.log"))"
 check 'grep -q "small determinant" "$dir/thin0.log"' "--max-aspect 0: cells with a small determinant ($(sed -n 's/.*number of cells: //p' "$dir/thin0.log"))"
-raised=$(sed -n 's/.*"first_raised": \([0-9]*\).*/\1/p' "$dir/thindefault.json")
-wv=$(sed -n 's/.*"wall_vertices": \([0-9]*\).*/\1/p' "$dir/thindefault.json")
-gmax=$(sed -n 's/.*"growth_max": \([0-9.e+-]*\).*/\1/p' "$dir/thindefault.json")
+num() { sed -n "s/.*\"$1\": \([0-9.eE+-]*\).*/\1/p" "$2"; } # a number of the JSON summary
+raised=$(num first_raised "$dir/thindefault.json") wv=$(num wall_vertices "$dir/thindefault.json")
+gmax=$(num growth_max "$dir/thindefault.json")
 check '[ -n "$raised" ] && [ "$raised" = "$wv" ] && awk "BEGIN{exit !($gmax <= 1.2 + 1e-6)}"' "every column's first height raised ($raised of $wv), largest growth $gmax <= 1.2"
-check '[ "$(sed -n "s/.*\"first_raised\": \([0-9]*\).*/\1/p" "$dir/thin0.json")" = 0 ]' "--max-aspect 0 raises none"
+check '[ "$(num first_raised "$dir/thin0.json")" = 0 ]' "--max-aspect 0 raises none"
 exit $fail
