@@ -182,8 +182,10 @@ static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, i
  * carry valid layers, and the cutting would spend minutes finding that
  * out. The wall's triangles (quads split as vm_prism_create splits them);
  * a wall that is not a manifold triangle surface is left to the stage's
- * own checks. Returns the exit code. */
-static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *w) {
+ * own checks. Returns the exit code; with npairs, a wall that intersects
+ * itself is not an error: the count goes to *npairs. */
+static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *w,
+                                    int64_t *npairs) {
   vm_mesh *t = NULL;
   int64_t nt = 0, count = 0;
   int32_t *pairs = NULL;
@@ -212,6 +214,8 @@ static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *
   int rc = VM_EXIT_OK;
   if (st == VM_ERR_NOMEM) {
     rc = vm_cli_input_error(cli, NULL);
+  } else if (st == VM_OK && count > 0 && npairs) {
+    *npairs = count; /* the caller sends the wall through the surface stage */
   } else if (st == VM_OK && count > 0) {
     double c[3] = {0, 0, 0};
     const int32_t *tri = t->conn + 3 * (int64_t)pairs[0];
@@ -427,14 +431,15 @@ static int64_t wall_needles(const vm_mesh *m, double deg, double *amin) {
  * (repaired, slivers removed, the input remeshed to sizes from its
  * curvature where needles are left, adapted by the 2D functional), in
  * place: the layers are then those of `vm-surface IN W; vm-prism W`. `why`
- * is said first; *nneedle, *amin: the triangles under 1 degree and the
+ * is said first; keep_ok: --keep-wall would take the wall as it is (named
+ * in the messages); *nneedle, *amin: the triangles under 1 degree and the
  * smallest angle, before and then after. */
-static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, int64_t *nneedle,
-                         double *amin, char *said, size_t nsaid) {
+static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *why, int keep_ok,
+                         int64_t *nneedle, double *amin, char *said, size_t nsaid) {
   vm_log(cli->ctx, VM_LOG_WARN,
-         "%s: %s; the wall goes through the surface stage first, as vm-surface would take it "
-         "(--keep-wall: as it is)",
-         in, why);
+         "%s: %s; the wall goes through the surface stage first, as vm-surface would take "
+         "it%s",
+         in, why, keep_ok ? " (--keep-wall: as it is)" : "");
   vm_surface_opts so = vm_surface_opts_default();
   so.soup = vm_cli_soup_format(in);
   vm_mesh_apply_fixed_field(m);
@@ -449,8 +454,9 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
   if (st < 0) {
     /* an open wall is refused either way: no advice then */
     vm_cli_error(cli, "%s: the surface stage: %s%s", in, vm_ctx_error(cli->ctx),
-                 s.open ? " (the layer needs a closed wall)"
-                        : " (--keep-wall extrudes the wall as it is)");
+                 s.open    ? " (the layer needs a closed wall)"
+                 : keep_ok ? " (--keep-wall extrudes the wall as it is)"
+                           : "");
     return VM_EXIT_INPUT;
   }
   if (s.adapted && s.adapt.flipped > 0)
@@ -894,7 +900,24 @@ int main(int argc, char **argv) {
   int64_t nneedle = wall_needles(m, 1.0, &needle_min), needles_in = nneedle;
   int surface_ran = 0;
   char surface_said[256] = "";
-  if (nneedle > 0 && a.keep_wall) {
+  /* a wall that intersects itself (the parts of an assembly overlapping:
+   * a wing through a fuselage) goes there too: the surface stage's repair
+   * replaces overlapping closed parts by their union */
+  int64_t wall_pairs = 0;
+  if (!a.keep_wall && (rc = check_wall_intersections(&cli, a.in, m, &wall_pairs)) != VM_EXIT_OK)
+    goto done;
+  if (wall_pairs > 0) {
+    char why[256];
+    snprintf(why, sizeof why,
+             "the wall intersects itself (%lld pairs of triangles): overlapping closed parts are "
+             "replaced by their union",
+             (long long)wall_pairs);
+    if ((rc = surface_stage(&cli, a.in, m, why, 0, &nneedle, &needle_min, surface_said,
+                            sizeof surface_said)) != VM_EXIT_OK)
+      goto done;
+    surface_ran = 1;
+    L = model_length(m);
+  } else if (nneedle > 0 && a.keep_wall) {
     vm_log(cli.ctx, VM_LOG_WARN,
            "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
            "of T (vm-gen wing at T = 20 %%: 3.7 %% of its columns reach T, 99.9 %% after the "
@@ -906,7 +929,7 @@ int main(int argc, char **argv) {
              "%lld triangles under 1 degree (smallest %.3g): the columns over them would fall "
              "short of T",
              (long long)nneedle, needle_min);
-    if ((rc = surface_stage(&cli, a.in, m, why, &nneedle, &needle_min, surface_said,
+    if ((rc = surface_stage(&cli, a.in, m, why, 1, &nneedle, &needle_min, surface_said,
                             sizeof surface_said)) != VM_EXIT_OK)
       goto done;
     surface_ran = 1;
@@ -977,7 +1000,7 @@ int main(int argc, char **argv) {
                             o->first_height, o->thickness);
     goto done;
   }
-  if ((rc = check_wall_intersections(&cli, a.in, m)) != VM_EXIT_OK) goto done;
+  if ((rc = check_wall_intersections(&cli, a.in, m, NULL)) != VM_EXIT_OK) goto done;
   /* the report is made (or refused) before the run */
   if (a.report) {
     char title[512];

@@ -59,6 +59,11 @@ static const vm_opt opts[] = {
      .choices = tri},
     {"--open-ok", NULL, VM_OPT_FLAG, A(so.repair_opts.require_closed), NULL,
      "accept an open surface (borders become feature lines)", .ival = 0},
+    {"--no-union", NULL, VM_OPT_FLAG, A(so.repair_opts.union_overlaps), NULL,
+     "no union of closed parts: overlapping ones are refused, one inside another is a cavity "
+     "(by default the repair replaces them by their union: an assembly's wing through its "
+     "fuselage, a part hidden inside)",
+     .ival = 0},
     {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections), NULL,
      "skip the self-intersection check of the repair", .ival = 0},
     {"--remesh", NULL, VM_OPT_CHOICE, A(so.remesh), NULL,
@@ -178,12 +183,13 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     printf(", \"repair\": {\"vertices\": %lld, \"faces\": %lld, \"merged_vertices\": %lld, "
            "\"removed_faces\": %lld, \"removed_degenerate\": %lld, \"removed_isolated\": %lld, "
            "\"reoriented\": %lld, \"stitched\": %lld, \"border_edges\": %lld, \"holes\": %lld, "
-           "\"components\": %lld, \"self_intersections\": %lld, \"volume\": ",
+           "\"components\": %lld, \"self_intersections\": %lld, \"united\": %lld, "
+           "\"union_pairs\": %lld, \"volume\": ",
            (long long)rr->nv, (long long)rr->nf, (long long)rr->merged_vertices,
            (long long)rr->removed_polygons, (long long)rr->removed_degenerate,
            (long long)rr->removed_isolated, (long long)rr->reoriented, (long long)rr->stitched,
            (long long)rr->border_edges, (long long)rr->holes, (long long)rr->components,
-           (long long)rr->self_intersections);
+           (long long)rr->self_intersections, (long long)rr->united, (long long)rr->union_pairs);
     vm_json_double(stdout, rr->volume);
     printf("}");
   }
@@ -310,11 +316,13 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
     st = vm_report_row(*report, "repair",
                        "merged %lld points, removed %lld invalid/duplicate and %lld "
                        "degenerate faces, reoriented %lld, stitched %lld edges; %s, %lld "
-                       "components, %lld self-intersections",
+                       "components, %lld self-intersections; %lld overlapping or nested "
+                       "components united",
                        (long long)rr->merged_vertices, (long long)rr->removed_polygons,
                        (long long)rr->removed_degenerate, (long long)rr->reoriented,
                        (long long)rr->stitched, rr->border_edges ? "open" : "closed",
-                       (long long)rr->components, (long long)rr->self_intersections);
+                       (long long)rr->components, (long long)rr->self_intersections,
+                       (long long)rr->united);
   if (st >= 0 && s->remeshed)
     st = vm_report_row(
         *report, "remeshed", "%s%s%.3g, %lld -> %lld vertices", sizes[s->size_used],

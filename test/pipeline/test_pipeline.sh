@@ -54,24 +54,29 @@ fi
 check '[ $(ran model) -eq 1 ] && [ $(ran surface) -eq 1 ] && [ $(ran exports) -eq $nexp ]' "each stage once: $(stages)"
 
 run "${base[@]}"
-check '[ $? -eq 0 ] && grep -q "Nothing to be done" "$dir/log" && [ -z "$(grep "^== " "$dir/log")" ]' "second run does nothing: $(cat "$dir/log")"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "Nothing to be done" "$dir/log" && [ -z "$(grep "^== " "$dir/log")" ]' "second run does nothing: $(cat "$dir/log")"
 "$make" -C "$examples" --no-print-directory -q VM_BIN="$bin" OUT="$dir/out" GEN_OPTS="--resolution 1" "${base[@]}" all
 check '[ $? -eq 0 ]' "make -q: everything is up to date"
 
 run "${base[@]}" CONVERT_OPTS="--binary"
-check '[ $? -eq 0 ] && [ "$(stages)" = " $nexp exports;" ]' "changing CONVERT_OPTS re-runs the exports only: $(stages)"
+rc=$?
+check '[ $rc -eq 0 ] && [ "$(stages)" = " $nexp exports;" ]' "changing CONVERT_OPTS re-runs the exports only: $(stages)"
 run "${base[@]}" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
-check '[ $? -eq 0 ] && [ "$(stages)" = " $nrep reports;" ]' "changing REPORT_OPTS re-runs the reports only: $(stages)"
+rc=$?
+check '[ $rc -eq 0 ] && [ "$(stages)" = " $nrep reports;" ]' "changing REPORT_OPTS re-runs the reports only: $(stages)"
 run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
+rc=$?
 want=" $nexp exports; $nrep reports; 1 surface;"
 [ $have_prism -eq 1 ] && want=" $nexp exports; 1 prism; $nrep reports; 1 surface;"
 [ $have_fill -eq 1 ] && want=" $nexp exports; 1 fill; 1 prism; $nrep reports; 1 surface;"
-check '[ $? -eq 0 ] && [ "$(stages)" = "$want" ]' "changing SURFACE_OPTS re-runs the surface and what depends on it, not the model: $(stages)"
+check '[ $rc -eq 0 ] && [ "$(stages)" = "$want" ]' "changing SURFACE_OPTS re-runs the surface and what depends on it, not the model: $(stages)"
 run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
 check '[ $? -eq 0 ] && grep -q "Nothing to be done" "$dir/log"' "and then nothing again"
 touch "$out/aircraft.stl"
 run SURFACE_OPTS="curvature -q --smooth 3" CONVERT_OPTS="--binary" REPORT_OPTS="--report-field mean_curvature"
-check '[ $? -eq 0 ] && [ "$(stages)" = "$want" ]' "a newer model re-runs everything after it: $(stages)"
+rc=$?
+check '[ $rc -eq 0 ] && [ "$(stages)" = "$want" ]' "a newer model re-runs everything after it: $(stages)"
 
 # a failing stage: vm-surface's usage error (exit 2)
 run SURFACE_OPTS="--no-such-option"
@@ -91,11 +96,13 @@ check '[ $? -eq 0 ] && [ -s "$out/aircraft-report-surface/index.html" ]' "back t
 # a model given by path, named after its file
 cp "$out/aircraft.stl" "$dir/wing.stl"
 run "${base[@]}" MODEL="$dir/wing.stl" surface
-check '[ $? -eq 0 ] && [ -s "$out/wing.surface.vmsh" ] && [ "$(stages)" = " 1 surface;" ]' "MODEL=path: the surface of wing.stl only: $(stages)"
+rc=$?
+check '[ $rc -eq 0 ] && [ -s "$out/wing.surface.vmsh" ] && [ "$(stages)" = " 1 surface;" ]' "MODEL=path: the surface of wing.stl only: $(stages)"
 if [ $have_prism -eq 0 ]; then
   run "${base[@]}" prism
   check '[ $? -ne 0 ] && grep -q "vm-prism is not built" "$dir/log"' "make prism says vm-prism is not built"
 fi
 run "${base[@]}" clean
-check '[ $? -eq 0 ] && [ -z "$(ls "$out" | grep aircraft)" ]' "clean removes the aircraft's files: $(ls "$out" | tr '\n' ' ')"
+rc=$?
+check '[ $rc -eq 0 ] && [ -z "$(ls "$out" | grep aircraft)" ]' "clean removes the aircraft's files: $(ls "$out" | tr '\n' ' ')"
 exit $fail

@@ -1,6 +1,6 @@
 /* test/surface/gen_shape.c: writes the generated test surfaces of varmesh/shapes.h
  * (and broken variants) to a file, for the vm-surface CLI tests.
- * usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle OUT */
+ * usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle|assembly OUT */
 #include <stdio.h>
 #include <string.h>
 
@@ -9,8 +9,9 @@
 
 int main(int argc, char **argv) {
   if (argc != 3) {
-    fprintf(stderr,
-            "usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle OUT\n");
+    fprintf(
+        stderr,
+        "usage: gen_shape lens|sphere|cube|open|fin|flipped|inward|needle|spindle|assembly OUT\n");
     return 2;
   }
   vm_ctx *ctx = NULL;
@@ -25,6 +26,27 @@ int main(int argc, char **argv) {
     st = vm_gen_lens(m, 1.0, 0.5, 0.1);
   } else if (!strcmp(k, "spindle")) {
     st = vm_gen_spindle(m, 48, 0.001);
+  } else if (!strcmp(k, "assembly")) {
+    /* parts as published models have them: a sphere (the fuselage), a bar
+     * through it (the wing) and a small box inside it, each closed, one
+     * file, not united */
+    st = vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
+    static const double box[2][2][3] = {{{-0.4, -0.2, -0.15}, {1.6, 0.2, 0.15}},
+                                        {{-0.5, 0.25, 0.25}, {-0.3, 0.45, 0.45}}};
+    static const int q[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+    for (int b = 0; b < 2 && !st; b++) {
+      int32_t v0 = (int32_t)m->nv;
+      for (int i = 0; i < 8 && !st; i++)
+        st = vm_mesh_add_vertex(m, box[b][i & 1 ? 1 : 0][0], box[b][i & 2 ? 1 : 0][1],
+                                box[b][i & 4 ? 1 : 0][2], NULL);
+      for (int f = 0; f < 6 && !st; f++) {
+        int32_t t1[3] = {v0 + q[f][0], v0 + q[f][1], v0 + q[f][2]},
+                t2[3] = {v0 + q[f][0], v0 + q[f][2], v0 + q[f][3]};
+        st = vm_mesh_add_element(m, VM_TRI, t1);
+        if (!st) st = vm_mesh_add_element(m, VM_TRI, t2);
+      }
+    }
   } else if (!strcmp(k, "cube") || !strcmp(k, "fin")) {
     st = vm_gen_cube(m, 3);
     if (!st && !strcmp(k, "fin")) { /* a third face on the edge of face 0 */

@@ -1,7 +1,9 @@
 /* test/surface/test_repair.c: the CGAL/OpenMesh side of the surface stage:
  * repair of good and bad surfaces (open, non-manifold, zero-area faces,
- * inconsistent orientation, self-intersections, empty), features,
+ * inconsistent orientation, self-intersections, empty), the union of
+ * overlapping and nested closed parts, features,
  * isotropic remeshing with protected features, the projector, Hausdorff. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -173,13 +175,21 @@ static void test_refusals(vm_ctx *ctx) {
               (pairs[2 * i - 2] == pairs[2 * i] && pairs[2 * i - 1] < pairs[2 * i + 1]);
   CHECK(sorted && pairs[0] < pairs[1], "pairs sorted");
   vm_free(ctx, pairs);
-  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "self-intersecting refused");
+  o.union_overlaps = 0;
+  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "self-intersecting refused without union");
   CHECK(strstr(vm_ctx_error(ctx), "self-intersecting") != NULL, "message: %s", vm_ctx_error(ctx));
   o.require_closed = 0;
   CHECK(vm_surface_repair(a, &o, &r) == 0 && r.self_intersections == count && r.components == 2,
         "accepted with a warning when not required closed: %lld pairs",
         (long long)r.self_intersections);
   o.require_closed = 1;
+  o.union_overlaps = 1;
+  /* by default: their union, one closed component, nothing intersecting */
+  CHECK(vm_surface_repair(a, &o, &r) == 0 && r.united == 2 && r.union_pairs == count &&
+            r.components == 1 && r.self_intersections == 0 && r.border_edges == 0 &&
+            consistently_closed(a),
+        "two overlapping spheres united: %lld components, %lld pairs left (%s)",
+        (long long)r.components, (long long)r.self_intersections, vm_ctx_error(ctx));
   vm_mesh_destroy(&a);
   vm_mesh_destroy(&b);
 
@@ -410,12 +420,95 @@ static void test_projector(vm_ctx *ctx) {
   vm_mesh_destroy(&b);
 }
 
+/* The box [lo, hi] (12 outward triangles) added to m. */
+static void add_box(vm_mesh *m, const double lo[3], const double hi[3]) {
+  int32_t b = (int32_t)m->nv;
+  for (int i = 0; i < 8; i++)
+    vm_mesh_add_vertex(m, i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2],
+                       NULL);
+  static const int q[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (int f = 0; f < 6; f++) {
+    int32_t t1[3] = {b + q[f][0], b + q[f][1], b + q[f][2]},
+            t2[3] = {b + q[f][0], b + q[f][2], b + q[f][3]};
+    vm_mesh_add_element(m, VM_TRI, t1);
+    vm_mesh_add_element(m, VM_TRI, t2);
+  }
+}
+
+/* Closed parts that overlap or nest: their union (known volumes); parts
+ * that do neither are left as they are, fields and all. */
+static void test_union(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_repair_report r;
+  vm_repair_opts o = vm_repair_opts_default();
+  const double u0[3] = {0, 0, 0}, u1[3] = {1, 1, 1};
+  /* a bar through the unit cube's face x = 1: 1 + 1/4 - 1/8 */
+  const double b0[3] = {0.5, 0.25, 0.25}, b1[3] = {1.5, 0.75, 0.75};
+  vm_mesh_create(ctx, &m);
+  add_box(m, u0, u1);
+  add_box(m, b0, b1);
+  CHECK(vm_surface_repair(m, &o, &r) == 0 && r.united == 2 && r.union_pairs > 0 &&
+            r.components == 1 && r.self_intersections == 0 && consistently_closed(m),
+        "overlapping boxes united: %lld united, %lld components (%s)", (long long)r.united,
+        (long long)r.components, vm_ctx_error(ctx));
+  CHECK(fabs(r.volume - 1.125) < 1e-12, "the union's volume %.17g (1.125)", r.volume);
+  int on = 1;
+  for (int64_t v = 0; v < m->nv; v++) {
+    const double *x = m->xyz + 3 * v;
+    int in_u = x[0] >= 0 && x[0] <= 1 && x[1] >= 0 && x[1] <= 1 && x[2] >= 0 && x[2] <= 1;
+    int in_b =
+        x[0] >= 0.5 && x[0] <= 1.5 && x[1] >= 0.25 && x[1] <= 0.75 && x[2] >= 0.25 && x[2] <= 0.75;
+    on &= in_u || in_b;
+  }
+  CHECK(on, "every vertex of the union in one of the boxes");
+  vm_mesh_destroy(&m);
+
+  /* a box inside the cube: the cube alone (its 8 vertices), volume 1 */
+  const double i0[3] = {0.4, 0.4, 0.4}, i1[3] = {0.6, 0.6, 0.6};
+  vm_mesh_create(ctx, &m);
+  add_box(m, u0, u1);
+  add_box(m, i0, i1);
+  CHECK(vm_surface_repair(m, &o, &r) == 0 && r.united == 2 && r.union_pairs == 0 &&
+            r.components == 1 && m->nv == 8 && m->ne == 12 && fabs(r.volume - 1) < 1e-15,
+        "nested box dropped: %lld components, %lld vertices, volume %g", (long long)r.components,
+        (long long)m->nv, r.volume);
+  vm_mesh_destroy(&m);
+
+  /* two boxes apart: not touched, their field kept */
+  const double d0[3] = {2, 0, 0}, d1[3] = {3, 1, 1};
+  vm_mesh_create(ctx, &m);
+  add_box(m, u0, u1);
+  add_box(m, d0, d1);
+  vm_field *f = NULL;
+  vm_mesh_add_field(m, "component", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &f);
+  for (int64_t e = 0; e < m->ne; e++) ((int32_t *)f->data)[e] = e < 12 ? 1 : 2;
+  CHECK(vm_surface_repair(m, &o, &r) == 0 && r.united == 0 && r.components == 2 &&
+            vm_mesh_find_field(m, "component", VM_FIELD_ELEMENT) != NULL &&
+            fabs(r.volume - 2) < 1e-15,
+        "boxes apart kept: %lld united, %lld components", (long long)r.united,
+        (long long)r.components);
+  vm_mesh_destroy(&m);
+
+  /* without the union: refused, the mesh as it was */
+  vm_mesh_create(ctx, &m);
+  add_box(m, u0, u1);
+  add_box(m, b0, b1);
+  o.union_overlaps = 0;
+  double x5 = m->xyz[15];
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && m->nv == 16 && m->ne == 24 &&
+            m->xyz[15] == x5 && strstr(vm_ctx_error(ctx), "self-intersecting surface"),
+        "refused with union_overlaps 0: %s", vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
   test_good_and_reoriented(ctx);
   test_soup_cleanup(ctx);
   test_refusals(ctx);
+  test_union(ctx);
   test_zero_area(ctx);
   test_features(ctx);
   test_remesh(ctx);

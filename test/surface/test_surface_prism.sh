@@ -6,7 +6,8 @@
 # (vm-gen wing: needles 1,500 times longer than wide). The spindle's tips
 # stay vertices, bit for bit, its row of needles goes, and the wing's
 # grading stays (no remeshing to one edge length); the same shapes through
-# --size graded and --size curvature.
+# --size graded and --size curvature; an assembly of overlapping parts,
+# united.
 set -u
 gen=$1 surf=$2 prism=$3 vmgen=$4 conv=$5
 dir=$(mktemp -d)
@@ -29,7 +30,8 @@ check 'grep -qx "0 0 1" "$dir/sp.off" && grep -qx "0 0 -1" "$dir/sp.off"' "spind
 amin=$(sed -n 's/.*"slivers": {[^}]*"min_angle": \([0-9.e+-]*\),.*/\1/p' "$dir/sp.json")
 check 'awk -v a="$amin" "BEGIN { exit !(a > 3) }"' "spindle: the row of 1.8-degree needles is gone (smallest angle $amin)"
 "$prism" -q --json -t 0.05 -n 5 "$dir/sp.vmsh" "$dir/spp.vmsh" >"$dir/spp.json" 2>"$dir/spp.err"
-check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/spp.json"' "spindle: vm-prism takes it ($(tail -n 1 "$dir/spp.err"))"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/spp.json"' "spindle: vm-prism takes it ($(tail -n 1 "$dir/spp.err"))"
 
 "$gen" inward "$dir/in.stl"
 "$surf" -q --json --iter 20 "$dir/in.stl" "$dir/in.vmsh" >"$dir/in.json" 2>&1
@@ -60,7 +62,8 @@ check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wp.json" && awk -v r="$re
 check '[ $? -eq 0 ] && grep -q "\"size\": \"input\", \"needles\": 0" "$dir/wi.json" && grep -q "\"faces\": 4564, \"repair\"" "$dir/wi.json"' \
   "graded wing, --size input: the input's vertices kept (4,564 triangles after the sliver removal)"
 "$prism" -q --json --keep-wall -t 0.05 -n 3 "$dir/wi.vmsh" "$dir/wip.vmsh" >"$dir/wip.json" 2>"$dir/wip.err"
-check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wip.json"' "graded wing, --size input: vm-prism --keep-wall takes it ($(tail -n 1 "$dir/wip.err"))"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/wip.json"' "graded wing, --size input: vm-prism --keep-wall takes it ($(tail -n 1 "$dir/wip.err"))"
 # vm-prism given the raw wing (needles) runs the surface stage itself: the
 # same layers, byte for byte, as vm-surface's defaults and then vm-prism
 "$surf" -q "$dir/w.stl" "$dir/wd.vmsh"
@@ -101,7 +104,30 @@ for size in graded curvature; do
   check '[ $rc -eq 0 ] && grep -q "\"remeshed\": true" "$dir/w$size.json" && grep -q "\"opposing\": 0," "$dir/w$size.json" && grep -q "\"self_intersections\": 0," "$dir/w$size.json"' \
     "graded wing, --size $size: remeshed, nothing turned over, no intersecting pair (got $rc: $(tail -n 1 "$dir/w$size.err"))"
   "$prism" -q --json -t 0.05 -n 3 "$dir/w$size.vmsh" "$dir/wp$size.vmsh" >"$dir/wp$size.json" 2>"$dir/wp$size.err"
-  check '[ $? -eq 0 ] && grep -q "\"valid\": true" "$dir/wp$size.json"' "graded wing, --size $size: vm-prism takes it ($(tail -n 1 "$dir/wp$size.err"))"
+  rc=$?
+  check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/wp$size.json"' "graded wing, --size $size: vm-prism takes it ($(tail -n 1 "$dir/wp$size.err"))"
 done
+
+# an assembly as published models are: a sphere, a bar through it, a box
+# inside it (three closed parts, one file): the repair unites them; without
+# the union it is refused, and vm-prism sends it through the surface stage
+"$gen" assembly "$dir/asm.stl"
+"$surf" -q --json "$dir/asm.stl" "$dir/asm.vmsh" >"$dir/asm.json" 2>"$dir/asm.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"components\": 1, \"self_intersections\": 0, \"united\": 3, \"union_pairs\": [1-9]" "$dir/asm.json"' \
+  "assembly: vm-surface unites its three parts into one ($(grep -o '"united[^,]*' "$dir/asm.json"))"
+check 'grep -q "warning: repair: 3 of the 3 closed components overlap" "$dir/asm.err"' "assembly: the union is said on stderr"
+"$surf" -q --no-union "$dir/asm.stl" "$dir/asm_no.vmsh" 2>"$dir/asm_no.err"
+rc=$?
+check '[ $rc -eq 1 ] && grep -q "error: .*self-intersecting surface: 26 pairs" "$dir/asm_no.err" && [ ! -e "$dir/asm_no.vmsh" ]' \
+  "assembly: --no-union refuses it, nothing written ($(cat "$dir/asm_no.err"))"
+"$prism" -q --json -t 0.05 -n 5 "$dir/asm.stl" "$dir/asmp.vmsh" >"$dir/asmp.json" 2>"$dir/asmp.err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/asmp.json" && grep -q "\"surface_stage\": true" "$dir/asmp.json"' \
+  "assembly: vm-prism takes the STL through the surface stage ($(tail -n 1 "$dir/asmp.err"))"
+"$prism" -q --keep-wall -t 0.05 -n 5 "$dir/asm.stl" "$dir/asmk.vmsh" 2>"$dir/asmk.err"
+rc=$?
+check '[ $rc -eq 1 ] && grep -q "error: .*the wall intersects itself: 26 pairs" "$dir/asmk.err" && [ ! -e "$dir/asmk.vmsh" ]' \
+  "assembly: with --keep-wall vm-prism refuses it ($(cat "$dir/asmk.err"))"
 
 exit $fail

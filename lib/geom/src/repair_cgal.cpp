@@ -4,6 +4,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/manifoldness.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
@@ -17,6 +18,7 @@
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
@@ -25,6 +27,7 @@
 #include <set>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -333,12 +336,176 @@ Point face_centroid(const SMesh &sm, face_descriptor f) {
   return Point(s[0] / n, s[1] / n, s[2] / n);
 }
 
+// Zero-area faces of sm removed (exactly, then to working precision) and
+// isolated vertices; refused if some stay, nothing is left, or the surface
+// has become non-manifold (stitching and collapses can make it so).
+int remove_degenerate(vm_ctx *ctx, SMesh &sm, vm_repair_report *r) {
+  {
+    std::vector<face_descriptor> deg;
+    PMP::degenerate_faces(sm, std::back_inserter(deg));
+    r->removed_degenerate += static_cast<int64_t>(deg.size());
+    if (!deg.empty() && !PMP::remove_degenerate_faces(sm))
+      return vm_error(ctx, VM_ERR_FORMAT, "repair: %zu zero-area faces could not all be removed",
+                      deg.size());
+    // faces of zero area to working precision (not exactly collinear after
+    // rounding): caps within 1e-6 rad of 180 degrees, needles of ratio 1e8
+    std::size_t ndeg = numerically_degenerate(sm);
+    if (ndeg > 0) {
+      r->removed_degenerate += static_cast<int64_t>(ndeg);
+      PMP::experimental::remove_almost_degenerate_faces(sm, -1.0 + 5e-13, 1e8, 0.0);
+      std::size_t left = numerically_degenerate(sm);
+      if (left > 0)
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "repair: %zu faces of zero area (to working precision) could not be "
+                        "removed",
+                        left);
+    }
+  }
+  r->removed_isolated += static_cast<int64_t>(PMP::remove_isolated_vertices(sm));
+  sm.collect_garbage();
+  if (sm.number_of_faces() == 0)
+    return vm_error(ctx, VM_ERR_FORMAT, "repair: no face left after removing degenerate ones");
+  std::vector<halfedge_descriptor> nmv;
+  PMP::non_manifold_vertices(sm, std::back_inserter(nmv));
+  if (!nmv.empty()) {
+    std::vector<std::size_t> ids;
+    for (halfedge_descriptor h : nmv) ids.push_back(sm.target(h).idx());
+    std::sort(ids.begin(), ids.end());
+    std::size_t nids = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
+    const Point &p = sm.point(vertex_descriptor(static_cast<SMesh::size_type>(ids.front())));
+    return vm_error(ctx, VM_ERR_FORMAT,
+                    "%zu non-manifold vertices after repair (faces meeting at a point); the "
+                    "first at (%g, %g, %g)",
+                    nids, p.x(), p.y(), p.z());
+  }
+  return VM_OK;
+}
+
+// Each component of sm (fcc, ncc of them) as a mesh of its own, oriented
+// to bound a positive volume (one pass: a vertex of a manifold surface is
+// in one component).
+std::vector<SMesh> component_meshes(const SMesh &sm,
+                                    const SMesh::Property_map<face_descriptor, std::size_t> &fcc,
+                                    std::size_t ncc) {
+  std::vector<SMesh> out(ncc);
+  std::vector<vertex_descriptor> to(sm.number_of_vertices() + sm.number_of_removed_vertices(),
+                                    SMesh::null_vertex());
+  for (face_descriptor f : sm.faces()) {
+    SMesh &o = out[fcc[f]];
+    std::array<vertex_descriptor, 3> t;
+    int a = 0;
+    for (vertex_descriptor v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+      if (to[v.idx()] == SMesh::null_vertex()) to[v.idx()] = o.add_vertex(sm.point(v));
+      t[static_cast<size_t>(a++)] = to[v.idx()];
+    }
+    o.add_face(t[0], t[1], t[2]);
+  }
+  for (SMesh &o : out)
+    if (PMP::volume(o) < 0) PMP::reverse_face_orientations(o);
+  return out;
+}
+
+// Append the triangles of b to a (a copy).
+void append_mesh(SMesh &a, const SMesh &b) {
+  std::vector<vertex_descriptor> to(b.number_of_vertices() + b.number_of_removed_vertices());
+  for (vertex_descriptor v : b.vertices()) to[v.idx()] = a.add_vertex(b.point(v));
+  for (face_descriptor f : b.faces()) {
+    std::array<vertex_descriptor, 3> t;
+    int k = 0;
+    for (vertex_descriptor v : CGAL::vertices_around_face(b.halfedge(f), b))
+      t[static_cast<size_t>(k++)] = to[v.idx()];
+    a.add_face(t[0], t[1], t[2]);
+  }
+}
+
+// The closed components of sm that overlap (a face of one intersects a
+// face of another: pairs) or nest (one inside another) replaced by their
+// union (CGAL corefinement, pairwise in rounds, the largest volumes
+// first); the others kept as they are. A component that intersects itself
+// cannot be united: refused. *united: the components the union took in
+// (0: none overlapped or nested, sm unchanged).
+int unite_components(vm_ctx *ctx, SMesh &sm,
+                     const std::vector<std::pair<face_descriptor, face_descriptor>> &pairs,
+                     const SMesh::Property_map<face_descriptor, std::size_t> &fcc, std::size_t ncc,
+                     int64_t *united) {
+  *united = 0;
+  for (const auto &p : pairs)
+    if (fcc[p.first] == fcc[p.second]) {
+      Point c = face_centroid(sm, p.first);
+      return vm_error(ctx, VM_ERR_FORMAT,
+                      "self-intersecting surface: %zu pairs of faces intersect, and a closed "
+                      "component intersects itself (it cannot be united with the others); e.g. "
+                      "near (%g, %g, %g)",
+                      pairs.size(), c.x(), c.y(), c.z());
+    }
+  if (ncc < 2) return VM_OK;
+  std::vector<char> in(ncc, 0);
+  for (const auto &p : pairs) in[fcc[p.first]] = in[fcc[p.second]] = 1;
+  std::vector<SMesh> comp = component_meshes(sm, fcc, ncc);
+  std::vector<CGAL::Bbox_3> box(ncc);
+  for (std::size_t c = 0; c < ncc; c++) box[c] = PMP::bbox(comp[c]);
+  // nesting: a vertex of i inside j (i's box within j's); i and j do not
+  // intersect, so one vertex tells for the whole of i. Up to 256
+  // components (each pair a box test; a point query only when nested boxes)
+  if (ncc <= 256) {
+    for (std::size_t j = 0; j < ncc; j++) {
+      std::unique_ptr<CGAL::Side_of_triangle_mesh<SMesh, K>> side;
+      for (std::size_t i = 0; i < ncc; i++) {
+        if (i == j || (in[i] && in[j])) continue;
+        const CGAL::Bbox_3 &a = box[i], &b = box[j];
+        if (!(a.xmin() >= b.xmin() && a.xmax() <= b.xmax() && a.ymin() >= b.ymin() &&
+              a.ymax() <= b.ymax() && a.zmin() >= b.zmin() && a.zmax() <= b.zmax()))
+          continue;
+        if (!side) side.reset(new CGAL::Side_of_triangle_mesh<SMesh, K>(comp[j]));
+        if ((*side)(comp[i].point(*comp[i].vertices().begin())) == CGAL::ON_BOUNDED_SIDE)
+          in[i] = in[j] = 1;
+      }
+    }
+  }
+  // the united ones, largest volume first, merged pairwise in rounds (each
+  // round copies every triangle once: N log k for k components, not N k)
+  std::vector<std::pair<double, std::size_t>> order;
+  for (std::size_t c = 0; c < ncc; c++)
+    if (in[c]) order.emplace_back(-PMP::volume(comp[c]), c);
+  *united = static_cast<int64_t>(order.size());
+  if (order.empty()) return VM_OK;
+  std::sort(order.begin(), order.end());
+  std::vector<SMesh> work;
+  for (const auto &oc : order) work.push_back(std::move(comp[oc.second]));
+  while (work.size() > 1) {
+    std::vector<SMesh> next;
+    for (std::size_t i = 0; i + 1 < work.size(); i += 2) {
+      SMesh out;
+      if (!PMP::corefine_and_compute_union(work[i], work[i + 1], out) || out.is_empty() ||
+          PMP::does_self_intersect(out)) {
+        Point p = work[i + 1].point(*work[i + 1].vertices().begin());
+        return vm_error(ctx, VM_ERR_FORMAT,
+                        "self-intersecting surface: %zu pairs of faces intersect, and the union "
+                        "of its overlapping closed components failed (not a manifold surface, "
+                        "or it intersects itself after rounding) at the component through (%g, "
+                        "%g, %g)",
+                        pairs.size(), p.x(), p.y(), p.z());
+      }
+      out.collect_garbage();
+      next.push_back(std::move(out));
+    }
+    if (work.size() % 2) next.push_back(std::move(work.back()));
+    work = std::move(next);
+  }
+  SMesh u = std::move(work.front());
+  for (std::size_t c = 0; c < ncc; c++)
+    if (!in[c]) append_mesh(u, comp[c]);
+  sm = std::move(u);
+  return VM_OK;
+}
+
 } // namespace
 
 extern "C" vm_repair_opts vm_repair_opts_default(void) {
   vm_repair_opts o;
   o.require_closed = 1;
   o.check_self_intersections = 1;
+  o.union_overlaps = 1;
   return o;
 }
 
@@ -412,49 +579,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
                       c.x(), c.y(), c.z());
     }
   }
-  {
-    std::vector<face_descriptor> deg;
-    PMP::degenerate_faces(sm, std::back_inserter(deg));
-    r.removed_degenerate = static_cast<int64_t>(deg.size());
-    if (!deg.empty() && !PMP::remove_degenerate_faces(sm))
-      return vm_error(ctx, VM_ERR_FORMAT, "repair: %zu zero-area faces could not all be removed",
-                      deg.size());
-    // faces of zero area to working precision (not exactly collinear after
-    // rounding): caps within 1e-6 rad of 180 degrees, needles of ratio 1e8
-    std::size_t ndeg = numerically_degenerate(sm);
-    if (ndeg > 0) {
-      r.removed_degenerate += static_cast<int64_t>(ndeg);
-      PMP::experimental::remove_almost_degenerate_faces(sm, -1.0 + 5e-13, 1e8, 0.0);
-      std::size_t left = numerically_degenerate(sm);
-      if (left > 0)
-        return vm_error(ctx, VM_ERR_FORMAT,
-                        "repair: %zu faces of zero area (to working precision) could not be "
-                        "removed",
-                        left);
-    }
-  }
-  r.removed_isolated += static_cast<int64_t>(PMP::remove_isolated_vertices(sm));
-  sm.collect_garbage();
-  if (sm.number_of_faces() == 0)
-    return vm_error(ctx, VM_ERR_FORMAT, "repair: no face left after removing degenerate ones");
-
-  // after stitching and collapses the surface may have become non-manifold
-  {
-    std::vector<halfedge_descriptor> nmv;
-    PMP::non_manifold_vertices(sm, std::back_inserter(nmv));
-    if (!nmv.empty()) {
-      std::vector<std::size_t> ids;
-      for (halfedge_descriptor h : nmv) ids.push_back(sm.target(h).idx());
-      std::sort(ids.begin(), ids.end());
-      std::size_t nids =
-          static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
-      const Point &p = sm.point(vertex_descriptor(static_cast<SMesh::size_type>(ids.front())));
-      return vm_error(ctx, VM_ERR_FORMAT,
-                      "%zu non-manifold vertices after repair (faces meeting at a point); the "
-                      "first at (%g, %g, %g)",
-                      nids, p.x(), p.y(), p.z());
-    }
-  }
+  int st = remove_degenerate(ctx, sm, &r);
+  if (st) return st;
 
   std::vector<halfedge_descriptor> cycles;
   PMP::extract_boundary_cycles(sm, std::back_inserter(cycles));
@@ -478,6 +604,40 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     std::vector<std::pair<face_descriptor, face_descriptor>> pairs;
     PMP::self_intersections(sm, std::back_inserter(pairs));
     r.self_intersections = static_cast<int64_t>(pairs.size());
+    if (o.union_overlaps && r.border_edges == 0 && r.components > 1) {
+      int64_t united = 0;
+      if ((st = unite_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),
+                                 &united)))
+        return st;
+      if (united) {
+        // sm is a new mesh: its component map is gone
+        r.united = united;
+        r.union_pairs = static_cast<int64_t>(pairs.size());
+        if ((st = remove_degenerate(ctx, sm, &r))) return st;
+        r.border_edges = 0;
+        for (halfedge_descriptor h : sm.halfedges())
+          if (sm.is_border(h)) r.border_edges++;
+        pairs.clear();
+        PMP::self_intersections(sm, std::back_inserter(pairs));
+        r.self_intersections = static_cast<int64_t>(pairs.size());
+        fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+        std::size_t left = PMP::connected_components(sm, fcc);
+        vm_log(ctx, VM_LOG_WARN,
+               "repair: %lld of the %lld closed components %s (%lld pairs of faces intersected): "
+               "replaced by their union, %lld triangles; %zu components left (--no-union: "
+               "not united)",
+               static_cast<long long>(united), static_cast<long long>(r.components),
+               r.union_pairs ? "overlap or lie inside one another" : "lie inside one another",
+               static_cast<long long>(r.union_pairs), static_cast<long long>(sm.number_of_faces()),
+               left);
+        r.components = static_cast<int64_t>(left);
+        if (r.border_edges > 0)
+          return vm_error(ctx, VM_ERR_FORMAT,
+                          "repair: the union of the overlapping components is open (%lld border "
+                          "edges)",
+                          static_cast<long long>(r.border_edges));
+      }
+    }
     if (!pairs.empty()) {
       std::sort(pairs.begin(), pairs.end());
       Point c = face_centroid(sm, pairs.front().first);
@@ -508,7 +668,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
 
   r.nv = static_cast<int64_t>(sm.number_of_vertices());
   r.nf = static_cast<int64_t>(sm.number_of_faces());
-  int st = replace_mesh(m, sm, true);
+  st = replace_mesh(m, sm, true);
   if (st) return st;
   if (rep) *rep = r;
   return VM_OK;

@@ -17,6 +17,12 @@ typedef struct vm_repair_opts {
   int require_closed;           /* refuse a surface that stays open (default 1) */
   int check_self_intersections; /* (default 1): found ones are an error if
                                    require_closed, else a warning */
+  int union_overlaps;           /* (default 1; with check_self_intersections, on a
+                                   closed surface) closed components that overlap
+                                   (faces of two intersect) or lie inside one
+                                   another are replaced by their union (CGAL
+                                   corefinement), with a VM_LOG_WARN; 0: such
+                                   a surface is refused as self-intersecting */
 } vm_repair_opts;
 
 vm_repair_opts vm_repair_opts_default(void);
@@ -34,7 +40,10 @@ typedef struct vm_repair_report {
   int64_t border_edges;       /* left after repair (0: closed) */
   int64_t holes;              /* border cycles */
   int64_t components;         /* connected components */
-  int64_t self_intersections; /* pairs of intersecting faces (if checked, else -1) */
+  int64_t self_intersections; /* pairs of intersecting faces left (if checked, else -1) */
+  int64_t united;             /* closed components replaced by their union (0: none) */
+  int64_t union_pairs;        /* the pairs of faces of different components that
+                                 intersected before the union */
   double volume;              /* enclosed volume (closed surfaces; else 0) */
 } vm_repair_report;
 
@@ -42,9 +51,10 @@ typedef struct vm_repair_report {
  * error): merge duplicate points, drop faces with a repeated vertex and
  * duplicate faces, orient consistently (CGAL orient_polygon_soup), stitch
  * coincident borders, remove degenerate (zero-area) faces, remove isolated
- * vertices, triangulate quads, check for self-intersections, and orient
- * every closed component outward (orient_to_bound_a_volume). The result is
- * a triangle mesh with new vertex numbering. Attributes are kept; fields,
+ * vertices, triangulate quads, check for self-intersections, replace the
+ * closed components that overlap or nest by their union (o->union_overlaps),
+ * and orient every closed component outward (orient_to_bound_a_volume). The
+ * result is a triangle mesh with new vertex numbering. Attributes are kept; fields,
  * vertex flags and slip surfaces are carried over where the items came
  * through: a kept vertex is one of m's at exactly its coordinates (merged
  * copies take the first one's values), a kept triangle one of m's
