@@ -64,6 +64,11 @@ static const vm_opt opts[] = {
      .hi = 1e6},
     {"--opt-rings", NULL, VM_OPT_INT, A(o.opt_rings), "N",
      "vertex rings from the envelope that the optimization moves (default 3)", .lo = 0, .hi = 1000},
+    {"--fv-sweeps", NULL, VM_OPT_INT, A(o.fv_sweeps), "N",
+     "sweeps of the finite-volume relief: the tets' vertices moved where OpenFOAM's "
+     "non-orthogonality, skewness, weights, volume ratios or determinants near their limits "
+     "(default 8; 0: off)",
+     .lo = 0, .hi = 100},
     {"--mesher", NULL, VM_OPT_CHOICE, A(algorithm), NULL, "Gmsh's 3D algorithm (default delaunay)",
      .choices = algos},
     VM_CLI_OPT_THREADS,
@@ -83,7 +88,9 @@ static const vm_cli_spec spec = {
     "vertices, bit-identical coordinates), so the merged mesh is conformal. LAYERS may\n"
     "also be a closed triangulated surface (it becomes the wall). The far field is\n"
     "named 'farfield'. Then the tets next to the layer are optimized by the\n"
-    "variational method (shape measure; the layer and the far field fixed).\n",
+    "variational method (shape measure; the layer and the far field fixed), and\n"
+    "where a face or tet is near the limits of OpenFOAM's checkMesh, its vertices\n"
+    "move (the finite-volume relief).\n",
     opts,
     "exit: 0 ok; 1 bad input (no envelope, quadrilaterals on it, a far field cutting the\n"
     "layer), Gmsh failing or not keeping the envelope, or I/O; 2 usage; 4 interrupted\n"
@@ -124,6 +131,26 @@ static void print_json(const args *a, const vm_fill_report *r) {
     printf(", \"vol_ratio_tets\": ");
     vm_json_double(stdout, q[i]->vol_ratio_tets);
     printf(", \"inverted\": %lld}", (long long)q[i]->inverted);
+  }
+  const vm_fill_fv_figures *f[2] = {&r->fv_before, &r->fv_after};
+  printf(", \"fv_moved\": %lld, \"time_fv\": %.3f", (long long)r->fv_moved, r->time_fv);
+  for (int i = 0; i < 2; i++) {
+    printf(", \"fv_%s\": {\"faces\": %lld, \"tets\": %lld, \"nonortho_over70\": %lld, "
+           "\"skew_over4\": %lld, \"weight_under005\": %lld, \"volratio_under001\": %lld, "
+           "\"det_under0001\": %lld, \"nonortho_max\": ",
+           nm[i], (long long)f[i]->faces, (long long)f[i]->tets, (long long)f[i]->nonortho_over70,
+           (long long)f[i]->skew_over4, (long long)f[i]->weight_under,
+           (long long)f[i]->volratio_under, (long long)f[i]->det_under);
+    vm_json_double(stdout, f[i]->nonortho_max);
+    printf(", \"skew_max\": ");
+    vm_json_double(stdout, f[i]->skew_max);
+    printf(", \"weight_min\": ");
+    vm_json_double(stdout, f[i]->weight_min);
+    printf(", \"volratio_min\": ");
+    vm_json_double(stdout, f[i]->volratio_min);
+    printf(", \"det_min\": ");
+    vm_json_double(stdout, f[i]->det_min);
+    printf("}");
   }
   printf("}\n");
 }
@@ -166,10 +193,10 @@ int main(int argc, char **argv) {
     fprintf(stderr,
             "vm-fill: %s: %lld layer cells + %lld tets (%lld new vertices), envelope %lld "
             "triangles kept exactly; far field %lld triangles at %g; Gmsh %.2f s, "
-            "optimization %.2f s\n",
+            "optimization %.2f s, finite-volume relief %.2f s\n",
             a.out, (long long)rep.layer_cells, (long long)rep.tets, (long long)rep.new_vertices,
             (long long)rep.env_faces, (long long)rep.far_faces, rep.far_distance, rep.time_mesh,
-            rep.time_opt);
+            rep.time_opt, rep.time_fv);
   if (a.json) print_json(&a, &rep);
 done:
   vm_mesh_destroy(&res);

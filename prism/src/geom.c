@@ -258,20 +258,7 @@ double pr_foam_skew(const double *x, int n, const double *cp, const double *cn) 
 
 double pr_foam_skew_of(const double *x, int n, const double *c, const double *s, const double *cp,
                        const double *cn) {
-  double d[3], e[3], sv[3];
-  for (int r = 0; r < 3; r++) {
-    d[r] = cn[r] - cp[r];
-    e[r] = c[r] - cp[r];
-  }
-  double sd = vm_dot3(s, d);
-  if (!(fabs(sd) > 0)) return INFINITY;
-  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
-  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
-  for (int i = 0; i < n && l > 0; i++) {
-    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
-    fd = a > fd ? a : fd;
-  }
-  return fd > 0 ? l / fd : INFINITY;
+  return vm_foam_skew(x, n, c, s, cp, cn);
 }
 
 /* OpenFOAM's skewness of boundary face x (n vertices) of the cell centred
@@ -303,24 +290,11 @@ double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double 
 }
 
 double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn) {
-  double d[3], e[3];
-  for (int r = 0; r < 3; r++) {
-    d[r] = cn[r] - cp[r];
-    e[r] = c[r] - cp[r];
-  }
-  double ls = vm_norm3(s), ld = vm_norm3(d);
-  if (!(ls > 0) || !(ld > 0)) return -1;
-  /* the face's orientation: away from cp (the face centre lies on cp's
-   * outer side of a valid cell) */
-  double sd = vm_dot3(s, d) / (ls * ld);
-  return vm_dot3(s, e) < 0 ? -sd : sd;
+  return vm_foam_ortho_cos(c, s, cp, cn);
 }
 
 double pr_foam_weight_of(const double *c, const double *s, const double *cp, const double *cn) {
-  double dp = fabs(s[0] * (c[0] - cp[0]) + s[1] * (c[1] - cp[1]) + s[2] * (c[2] - cp[2]));
-  double dn = fabs(s[0] * (cn[0] - c[0]) + s[1] * (cn[1] - c[1]) + s[2] * (cn[2] - c[2]));
-  double w = dp + dn > 0 ? dn / (dp + dn) : 0;
-  return w < 1 - w ? w : 1 - w;
+  return vm_foam_weight(c, s, cp, cn);
 }
 
 /* Signed volume (times 6) of tet (a, b, c, d). */

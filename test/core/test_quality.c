@@ -222,6 +222,40 @@ static void foam_cells(void) {
         "the twisted hex: 1 face pyramid wrong, volume %g > 0", v);
 }
 
+/* OpenFOAM's face measures and cell determinant (vm_foam_*), known
+ * answers: the face x = 1 of the unit square [1] x [0,1]^2 between centres
+ * (0.5, 0.5, 0.5) and (1.5, 0.5, 0.5) is orthogonal, unskewed, weight 0.5;
+ * with the neighbour's centre at (1.5, 1.5, 0.5) the angle is 45 degrees
+ * and the line meets the face 0.5 off its centre, its extent that way 0.5:
+ * skewness 1; a neighbour three times as far from the face: weight 1/4.
+ * A box a x b x c with every face internal: determinant (abc)^4 / ((bc +
+ * ca + ab)/3)^6, 1 for the cube. */
+static void foam_faces(void) {
+  const double y[12] = {1, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1};
+  const double cp[3] = {0.5, 0.5, 0.5}, cn[3] = {1.5, 0.5, 0.5}, cs[3] = {1.5, 1.5, 0.5},
+               cf[3] = {2.5, 0.5, 0.5};
+  double c[3], s[3];
+  vm_foam_face(y, 4, c, s);
+  CHECK_NEAR(vm_foam_ortho_cos(c, s, cp, cn), 1, 1e-14, "orthogonal face: cos 1");
+  CHECK_NEAR(vm_foam_ortho_cos(c, s, cn, cp), 1, 1e-14, "from the other side: cos 1");
+  CHECK_NEAR(vm_foam_skew(y, 4, c, s, cp, cn), 0, 1e-14, "orthogonal face: skewness 0");
+  CHECK_NEAR(vm_foam_weight(c, s, cp, cn), 0.5, 1e-14, "centred: weight 0.5");
+  CHECK_NEAR(vm_foam_ortho_cos(c, s, cp, cs), sqrt(0.5), 1e-14, "45 degrees");
+  CHECK_NEAR(vm_foam_skew(y, 4, c, s, cp, cs), 1, 1e-14, "skewness 1");
+  CHECK_NEAR(vm_foam_weight(c, s, cp, cf), 0.25, 1e-14, "weight 1/4");
+  const double dims[3][3] = {{1, 1, 1}, {1, 1, 0.1}, {2, 0.5, 0.01}};
+  for (int k = 0; k < 3; k++) {
+    double a = dims[k][0], b = dims[k][1], h = dims[k][2];
+    double S[6][3] = {{b * h, 0, 0},  {-b * h, 0, 0}, {0, a * h, 0},
+                      {0, -a * h, 0}, {0, 0, a * b},  {0, 0, -a * b}};
+    double avg = (b * h + a * h + a * b) / 3;
+    double want = pow(a * b * h, 4) / pow(avg, 6);
+    CHECK_NEAR(vm_foam_cell_determinant(6, (const double(*)[3])S) / want, 1, 1e-12,
+               "box determinant");
+  }
+  CHECK(vm_foam_cell_determinant(0, NULL) == 0, "no internal face: determinant 0");
+}
+
 /* A prism on an equilateral triangle whose top is the bottom turned by
  * theta about the axis and lifted by h: every corner tet has det 2 A h > 0
  * whatever theta (the top vertex adds only its height), but a tet of two
@@ -290,6 +324,7 @@ int main(void) {
   adjacency(ctx);
   units(ctx);
   foam_cells();
+  foam_faces();
   prism_splits(ctx);
   CHECK(vm_ctx_alloc_live(ctx) == live0, "leak: %ld blocks", vm_ctx_alloc_live(ctx) - live0);
   vm_ctx_destroy(&ctx);

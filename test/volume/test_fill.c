@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "varmesh/fill.h"
+#include "varmesh/rotcube.h"
 #include "varmesh/shapes.h"
 #include "varmesh/topology.h"
 #include "vmtest.h"
@@ -220,12 +221,108 @@ static void layer_case(vm_ctx *ctx) {
   vm_mesh_destroy(&s);
 }
 
+/* Signed volume of tet e of m. */
+static double tet_signed(const vm_mesh *m, int64_t e) {
+  const int32_t *c = m->conn + m->eoff[e];
+  const double *a = m->xyz + 3 * c[0], *b = m->xyz + 3 * c[1], *p = m->xyz + 3 * c[2],
+               *d = m->xyz + 3 * c[3];
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; k++) u[k] = b[k] - a[k], v[k] = p[k] - a[k], w[k] = d[k] - a[k];
+  return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+          u[2] * (v[0] * w[1] - v[1] * w[0])) /
+         6;
+}
+
+/* The finite-volume relief on a known case: the unit cube in 4^3 cubes of
+ * 6 Kuhn tets, its 27 inner vertices pulled off the lattice (a fixed
+ * pattern up to 0.065 of the 0.25 spacing, every tet still positive). The
+ * lattice is within every limit; the pulled mesh has faces beyond 70
+ * degrees (74.5 measured). The relief must bring every face within
+ * checkMesh's limits, move only inner vertices (the boundary's
+ * bit-identical), keep every tet positive, and give the same result twice.
+ * The 24 tets with two faces on the cube's boundary keep a determinant of
+ * 0, as in checkMesh (their two internal faces' area tensor has rank 2). */
+static void relief_case(vm_ctx *ctx) {
+  vm_rotcube_opts ro = vm_rotcube_opts_default();
+  ro.n = 4;
+  ro.alpha = 0;
+  ro.cells = VM_GEN_TETS;
+  vm_mesh *m = NULL, *m2 = NULL;
+  CHECK(vm_gen_rotated_cube(ctx, &ro, &m, NULL) == VM_OK, "relief: the tet cube");
+  if (!m) return;
+  double *x0 = malloc(3 * (size_t)m->nv * sizeof *x0);
+  int64_t k = 0;
+  for (int64_t v = 0; v < m->nv; v++) {
+    double *x = m->xyz + 3 * v;
+    int inner = fabs(x[0]) < 0.49 && fabs(x[1]) < 0.49 && fabs(x[2]) < 0.49;
+    if (inner) {
+      /* a fixed pattern, no rand() */
+      x[0] += 0.065 * sin(1.7 * (double)k + 0.3);
+      x[1] += 0.065 * cos(2.3 * (double)k + 1.1);
+      x[2] += 0.065 * sin(3.1 * (double)k + 2.0);
+      k++;
+    }
+  }
+  memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof *x0);
+  int64_t neg = 0;
+  for (int64_t e = 0; e < m->ne; e++) neg += tet_signed(m, e) <= 0;
+  CHECK(k == 27 && neg == 0, "relief: 27 inner vertices pulled (%lld), %lld tets not positive",
+        (long long)k, (long long)neg);
+  vm_mesh_clone(m, &m2);
+  vm_fill_fv_figures b, a, b2, a2;
+  int64_t moved = 0, moved2 = 0;
+  int st = vm_fill_fv_relief(ctx, m, 0, 0, 20, &b, &a, &moved);
+  CHECK(st == VM_OK, "relief: %s", vm_ctx_error(ctx));
+  CHECK(b.tets == m->ne && b.faces == (4 * m->ne - 6 * 16 * 2) / 2, /* 192 boundary triangles */
+        "relief: %lld tets, %lld internal faces", (long long)b.tets, (long long)b.faces);
+  CHECK(b.nonortho_over70 > 0 && b.det_under > 24,
+        "relief: before, %lld faces beyond 70 degrees (largest %.1f), %lld determinants",
+        (long long)b.nonortho_over70, b.nonortho_max, (long long)b.det_under);
+  CHECK(a.nonortho_over70 == 0 && a.skew_over4 == 0 && a.weight_under == 0 &&
+            a.volratio_under == 0 && a.det_under == 24,
+        "relief: after, beyond the limits: %lld faces > 70 deg, %lld skewed, %lld weights, %lld "
+        "volume ratios, %lld determinants",
+        (long long)a.nonortho_over70, (long long)a.skew_over4, (long long)a.weight_under,
+        (long long)a.volratio_under, (long long)a.det_under);
+  CHECK(a.nonortho_max < 70 && a.skew_max < 2,
+        "relief: non-orthogonality %.1f -> %.1f, skewness %.2f -> %.2f", b.nonortho_max,
+        a.nonortho_max, b.skew_max, a.skew_max);
+  int64_t bmoved = 0, imoved = 0;
+  for (int64_t v = 0; v < m->nv; v++) {
+    const double *x = x0 + 3 * v;
+    int inner = fabs(x[0]) < 0.49 && fabs(x[1]) < 0.49 && fabs(x[2]) < 0.49;
+    int same = !memcmp(x, m->xyz + 3 * v, 3 * sizeof *x);
+    bmoved += !inner && !same;
+    imoved += inner && !same;
+  }
+  CHECK(bmoved == 0 && imoved == moved && moved > 0,
+        "relief: %lld boundary vertices moved, %lld inner (reported %lld)", (long long)bmoved,
+        (long long)imoved, (long long)moved);
+  neg = 0;
+  for (int64_t e = 0; e < m->ne; e++) neg += tet_signed(m, e) <= 0;
+  CHECK(neg == 0, "relief: %lld tets not positive after", (long long)neg);
+  st = vm_fill_fv_relief(ctx, m2, 0, 0, 20, &b2, &a2, &moved2);
+  CHECK(st == VM_OK && !memcmp(m->xyz, m2->xyz, 3 * (size_t)m->nv * sizeof(double)),
+        "relief: the same result twice");
+  /* only vertices from `first` on move */
+  vm_mesh_destroy(&m2);
+  vm_mesh_clone(m, &m2);
+  memcpy(m2->xyz, x0, 3 * (size_t)m->nv * sizeof *x0);
+  st = vm_fill_fv_relief(ctx, m2, 0, m2->nv, 20, &b2, &a2, &moved2);
+  CHECK(st == VM_OK && moved2 == 0 && !memcmp(m2->xyz, x0, 3 * (size_t)m->nv * sizeof *x0),
+        "relief: nothing moves below `first`");
+  free(x0);
+  vm_mesh_destroy(&m2);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   vm_ctx_create(&ctx);
   sphere_case(ctx, VM_FAR_BOX);
   sphere_case(ctx, VM_FAR_SPHERE);
   layer_case(ctx);
+  relief_case(ctx);
   /* no envelope: an empty mesh */
   vm_mesh *e = NULL, *o = NULL;
   vm_mesh_create(ctx, &e);

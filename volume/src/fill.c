@@ -28,6 +28,7 @@ vm_fill_opts vm_fill_opts_default(void) {
   o.growth = 1.2;
   o.opt_iter = 30;
   o.opt_rings = 3;
+  o.fv_sweeps = 8;
   o.algorithm = 1;
   return o;
 }
@@ -1820,8 +1821,9 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   memset(&rep, 0, sizeof rep);
   *out = NULL;
   double t0 = now();
-  if (!(o.farfield > 0) || !(o.growth > 1) || o.opt_rings < 0 || o.opt_iter < 0)
-    return vm_error(ctx, VM_ERR_ARG, "fill: farfield > 0, growth > 1, rings >= 0 needed");
+  if (!(o.farfield > 0) || !(o.growth > 1) || o.opt_rings < 0 || o.opt_iter < 0 || o.fv_sweeps < 0)
+    return vm_error(ctx, VM_ERR_ARG,
+                    "fill: farfield > 0, growth > 1, rings, iterations and sweeps >= 0 needed");
   if (in->dim != 3) return vm_error(ctx, VM_ERR_ARG, "the fill needs a 3D mesh or surface");
   envelope E;
   far_surface F;
@@ -2123,6 +2125,26 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
            "between tets %.3g",
            (long long)rep.opt_free, o.opt_rings, rep.time_opt, rep.after.min_dihedral,
            rep.after.sj_min, rep.after.vol_ratio_env, rep.after.vol_ratio_tets);
+  }
+  if (o.fv_sweeps > 0) {
+    double t3 = now();
+    int64_t e0 = res->ne - F.nf - (int64_t)R.nt;
+    if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_before,
+                                &rep.fv_after, &rep.fv_moved)))
+      goto done;
+    rep.time_fv = now() - t3;
+    const vm_fill_fv_figures *a = &rep.fv_before, *b = &rep.fv_after;
+    vm_log(ctx, VM_LOG_INFO,
+           "fill: finite-volume relief moved %lld vertices in %.2f s; faces beyond 70 degrees "
+           "%lld -> %lld (largest %.1f -> %.1f), skewness > 4 %lld -> %lld (largest %.2f -> "
+           "%.2f), weights < 0.05 %lld -> %lld, volume ratios < 0.01 %lld -> %lld, "
+           "determinants < 0.001 %lld -> %lld",
+           (long long)rep.fv_moved, rep.time_fv, (long long)a->nonortho_over70,
+           (long long)b->nonortho_over70, a->nonortho_max, b->nonortho_max,
+           (long long)a->skew_over4, (long long)b->skew_over4, a->skew_max, b->skew_max,
+           (long long)a->weight_under, (long long)b->weight_under, (long long)a->volratio_under,
+           (long long)b->volratio_under, (long long)a->det_under, (long long)b->det_under);
+    if ((st = tet_quality_from(ctx, res, e0, &rep.after))) goto done;
   }
   rep.time_total = now() - t0;
   *out = res;

@@ -138,7 +138,7 @@ void vm_foam_face(const double *y, int n, double *c, double *s) {
 
 /* vm_cell_foam, and the least face pyramid's volume over the cell's
  * (-INFINITY for a cell of volume 0). */
-static int foam_cell(int type, const double *x, double *volume, double *margin) {
+static int foam_cell(int type, const double *x, double *volume, double *margin, double *centre) {
   int fv[6][4], nfv[6];
   if (type < VM_TET || type >= VM_NTYPES) return -1;
   int nf = vm_elem_faces(type, fv, nfv);
@@ -169,17 +169,74 @@ static int foam_cell(int type, const double *x, double *volume, double *margin) 
     if (!(v >= least)) least = v;
   }
   if (volume) *volume = v3 / 3;
+  if (centre) memcpy(centre, cc, sizeof cc);
   if (margin) *margin = fabs(v3) > 0 ? least / fabs(v3) : -INFINITY;
   return bad;
 }
 
 int vm_cell_foam(int type, const double *x, double *volume) {
-  return foam_cell(type, x, volume, NULL);
+  return foam_cell(type, x, volume, NULL, NULL);
+}
+
+int vm_cell_foam_centre(int type, const double *x, double *centre, double *volume) {
+  return foam_cell(type, x, volume, NULL, centre);
+}
+
+double vm_foam_skew(const double *x, int n, const double *c, const double *s, const double *cp,
+                    const double *cn) {
+  double d[3], e[3], sv[3];
+  vm_sub3(cn, cp, d);
+  vm_sub3(c, cp, e);
+  double sd = vm_dot3(s, d);
+  if (!(fabs(sd) > 0)) return INFINITY;
+  for (int r = 0; r < 3; r++) sv[r] = e[r] - vm_dot3(s, e) / sd * d[r];
+  double l = vm_norm3(sv), fd = 0.2 * vm_norm3(d);
+  for (int i = 0; i < n && l > 0; i++) {
+    double a = fabs(vm_dot3(sv, x + 3 * i) - vm_dot3(sv, c)) / l;
+    fd = a > fd ? a : fd;
+  }
+  return fd > 0 ? l / fd : INFINITY;
+}
+
+double vm_foam_ortho_cos(const double *c, const double *s, const double *cp, const double *cn) {
+  double d[3], e[3];
+  vm_sub3(cn, cp, d);
+  vm_sub3(c, cp, e);
+  double ls = vm_norm3(s), ld = vm_norm3(d);
+  if (!(ls > 0) || !(ld > 0)) return -1;
+  /* the face's orientation: away from cp (the face centre lies on cp's
+   * outer side of a valid cell) */
+  double sd = vm_dot3(s, d) / (ls * ld);
+  return vm_dot3(s, e) < 0 ? -sd : sd;
+}
+
+double vm_foam_weight(const double *c, const double *s, const double *cp, const double *cn) {
+  double dp = fabs(s[0] * (c[0] - cp[0]) + s[1] * (c[1] - cp[1]) + s[2] * (c[2] - cp[2]));
+  double dn = fabs(s[0] * (cn[0] - c[0]) + s[1] * (cn[1] - c[1]) + s[2] * (cn[2] - c[2]));
+  double w = dp + dn > 0 ? dn / (dp + dn) : 0;
+  return w < 1 - w ? w : 1 - w;
+}
+
+double vm_foam_cell_determinant(int nf, const double (*s)[3]) {
+  double avg = 0;
+  for (int f = 0; f < nf; f++) avg += vm_norm3(s[f]);
+  if (!nf || !(avg > 0)) return 0;
+  avg /= nf;
+  double t[6] = {0, 0, 0, 0, 0, 0}; /* xx xy xz yy yz zz */
+  for (int f = 0; f < nf; f++) {
+    double a[3] = {s[f][0] / avg, s[f][1] / avg, s[f][2] / avg};
+    t[0] += a[0] * a[0], t[1] += a[0] * a[1], t[2] += a[0] * a[2];
+    t[3] += a[1] * a[1], t[4] += a[1] * a[2], t[5] += a[2] * a[2];
+  }
+  double det = t[0] * (t[3] * t[5] - t[4] * t[4]) - t[1] * (t[1] * t[5] - t[4] * t[2]) +
+               t[2] * (t[1] * t[4] - t[3] * t[2]);
+  /* over 8, the cube's (eigenvalues 2, 2, 2): checkMesh's 0..1 */
+  return fabs(det) / 8;
 }
 
 double vm_cell_foam_margin(int type, const double *x) {
   double m;
-  return foam_cell(type, x, NULL, &m) < 0 ? NAN : m;
+  return foam_cell(type, x, NULL, &m, NULL) < 0 ? NAN : m;
 }
 
 static int cmp_double(const void *a, const void *b) {

@@ -33,6 +33,8 @@ typedef struct vm_fill_opts {
                           (shape measure, the layer and the far field fixed); 0: off;
                           default 30 */
   int opt_rings;       /* vertex rings from the envelope that move (default 3) */
+  int fv_sweeps;       /* sweeps of the finite-volume relief (OpenFOAM's measures of the
+                          tets and their faces; fill_fv.c); 0: off; default 8 */
   int algorithm;       /* Gmsh's Mesh.Algorithm3D: 1 Delaunay (default), 10 HXT */
   int threads;         /* Gmsh's General.NumThreads (0: the context's) */
 } vm_fill_opts;
@@ -51,6 +53,24 @@ typedef struct vm_fill_tet_quality {
   int64_t inverted;      /* tets with volume <= 0 */
 } vm_fill_tet_quality;
 
+/* OpenFOAM's checkMesh measures of the fill: over the internal faces with a
+ * tet of the fill on a side (a face between two of them once) and over
+ * the fill's tets (the determinant, over their internal faces); counts of
+ * faces or cells beyond checkMesh's limits. */
+typedef struct vm_fill_fv_figures {
+  int64_t faces, tets;
+  int64_t nonortho_over70; /* non-orthogonality > 70 degrees (a warning in checkMesh) */
+  double nonortho_max;     /* degrees */
+  int64_t skew_over4;      /* skewness > 4 */
+  double skew_max;
+  int64_t weight_under; /* interpolation weight < 0.05 */
+  double weight_min;
+  int64_t volratio_under; /* volume ratio of the two cells < 0.01 */
+  double volratio_min;
+  int64_t det_under; /* cell determinant < 0.001 */
+  double det_min;
+} vm_fill_fv_figures;
+
 typedef struct vm_fill_report {
   int64_t layer_cells;  /* 3D cells of the input */
   int64_t env_faces;    /* envelope triangles */
@@ -63,6 +83,9 @@ typedef struct vm_fill_report {
   int64_t flat_env_tets;             /* tets of four envelope vertices with a dihedral angle below
                                         5 degrees (no vertex of theirs may move) */
   vm_fill_tet_quality before, after; /* before and after the optimization */
+  vm_fill_fv_figures fv_before, fv_after; /* before and after the finite-volume relief */
+  int64_t fv_moved;                       /* vertices the relief moved */
+  double time_fv;
   double time_mesh, time_opt, time_total; /* seconds */
 } vm_fill_report;
 
@@ -80,6 +103,18 @@ typedef struct vm_fill_report {
  * messages go to the context's log (VM_LOG_DEBUG), never to stdout. */
 int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mesh **out,
                 vm_fill_report *report);
+
+/* The finite-volume relief (vm_fill_run's last step), on any mesh m whose
+ * tets e0.. are the ones to judge: the vertices from index `first` on
+ * that lie on no boundary face and have only tets around them move where
+ * those tets or their faces are near the limits of OpenFOAM's checkMesh
+ * (non-orthogonality beyond 60 degrees, skewness beyond 2, weights below
+ * 0.1, volume ratios below 0.05, determinants below 0.005); at most
+ * `sweeps` sweeps, every tet keeping its orientation. The figures before
+ * and after (over e0..'s tets and their internal faces); *moved the
+ * vertices moved. */
+int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                      vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved);
 
 /* The tet figures of report's vm_fill_tet_quality for any mesh (the
  * envelope ratio over faces shared by a tet and a non-tet cell). */

@@ -89,6 +89,28 @@ void vm_foam_face(const double *y, int n, double *c, double *s);
  * cell whose centre falls outside one of its faces' planes). *volume (may
  * be NULL) gets the cell volume. -1 for a type that is not 3D. */
 int vm_cell_foam(int type, const double *x, double *volume);
+/* The same, and the cell centre as OpenFOAM computes it (3 doubles). */
+int vm_cell_foam_centre(int type, const double *x, double *centre, double *volume);
+/* OpenFOAM's measures of an internal face with centre c and area vector s
+ * (vm_foam_face; x its n vertices) between the cells centred at cp and cn,
+ * as its checkMesh computes them. Skewness: the distance from the face
+ * centre to where the line joining the centres meets the face, over the
+ * face's extent that way (at least a fifth of the centres' distance; fails
+ * beyond 4). */
+double vm_foam_skew(const double *x, int n, const double *c, const double *s, const double *cp,
+                    const double *cn);
+/* Cosine of the non-orthogonality: of the angle between the area vector,
+ * turned to point from cp's side to cn's, and cn - cp (1: orthogonal; <= 0:
+ * the centres on the wrong sides; -1 for a degenerate face). */
+double vm_foam_ortho_cos(const double *c, const double *s, const double *cp, const double *cn);
+/* Interpolation weight: the lesser of the two shares of the centres'
+ * distances from the face along s (fails below 0.05). */
+double vm_foam_weight(const double *c, const double *s, const double *cp, const double *cn);
+/* OpenFOAM's cell determinant from the area vectors s of a cell's nf
+ * internal faces: |det| of the sum of s s^T over the squared mean face
+ * area, over 8 (1 for a cube with every face internal; checkMesh, as
+ * Debian's OpenFOAM computes it, fails a cell below 0.001). */
+double vm_foam_cell_determinant(int nf, const double (*s)[3]);
 /* The least of those face pyramid volumes over the cell volume (scale-free;
  * > 0 when none is wrong; -INFINITY for a cell of volume 0, NAN for a type
  * that is not 3D). */
