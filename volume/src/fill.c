@@ -2126,7 +2126,8 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
            (long long)rep.opt_free, o.opt_rings, rep.time_opt, rep.after.min_dihedral,
            rep.after.sj_min, rep.after.vol_ratio_env, rep.after.vol_ratio_tets);
   }
-  if (o.fv_sweeps > 0) {
+  {
+    /* with no sweep, the figures alone (before = after) */
     double t3 = now();
     int64_t e0 = res->ne - F.nf - (int64_t)R.nt;
     if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_before,

@@ -34,7 +34,8 @@ typedef struct vm_fill_opts {
                           default 30 */
   int opt_rings;       /* vertex rings from the envelope that move (default 3) */
   int fv_sweeps;       /* sweeps of the finite-volume relief (OpenFOAM's measures of the
-                          tets and their faces; fill_fv.c); 0: off; default 8 */
+                          tets and their faces; fill_fv.c); 0: off (its figures are still
+                          measured); default 8 */
   int algorithm;       /* Gmsh's Mesh.Algorithm3D: 1 Delaunay (default), 10 HXT */
   int threads;         /* Gmsh's General.NumThreads (0: the context's) */
 } vm_fill_opts;
