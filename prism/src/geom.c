@@ -253,11 +253,6 @@ void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*f
 double pr_foam_skew(const double *x, int n, const double *cp, const double *cn) {
   double c[3], s[3];
   vm_foam_face(x, n, c, s);
-  return pr_foam_skew_of(x, n, c, s, cp, cn);
-}
-
-double pr_foam_skew_of(const double *x, int n, const double *c, const double *s, const double *cp,
-                       const double *cn) {
   return vm_foam_skew(x, n, c, s, cp, cn);
 }
 
@@ -286,15 +281,7 @@ double pr_foam_boundary_skew(const double *x, int n, const double *cp) {
 double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn) {
   double c[3], s[3];
   vm_foam_face(x, n, c, s);
-  return pr_foam_ortho_cos_of(c, s, cp, cn);
-}
-
-double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn) {
   return vm_foam_ortho_cos(c, s, cp, cn);
-}
-
-double pr_foam_weight_of(const double *c, const double *s, const double *cp, const double *cn) {
-  return vm_foam_weight(c, s, cp, cn);
 }
 
 /* Signed volume (times 6) of tet (a, b, c, d). */

@@ -78,9 +78,8 @@ void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*f
  * meets the face, over the face's extent that way (at least a fifth of
  * the centres' distance). */
 double pr_foam_skew(const double *x, int n, const double *cp, const double *cn);
-/* The same of a face whose centre c and area vector s are known. */
-double pr_foam_skew_of(const double *x, int n, const double *c, const double *s, const double *cp,
-                       const double *cn);
+/* (Of a face whose centre and area vector are known: vm_foam_skew,
+ * vm_foam_ortho_cos, vm_foam_weight in varmesh/quality.h.) */
 /* Skewness of boundary face x (n vertices) of the cell centred at cp. */
 double pr_foam_boundary_skew(const double *x, int n, const double *cp);
 /* Cosine of the non-orthogonality of face x (n vertices) between the cells
@@ -88,16 +87,10 @@ double pr_foam_boundary_skew(const double *x, int n, const double *cp);
  * point from cp's side to cn's, and cn - cp (1: orthogonal; <= 0: the
  * centres on the wrong sides, -1 for a degenerate face). */
 double pr_foam_ortho_cos(const double *x, int n, const double *cp, const double *cn);
-/* The same of a face whose centre c and area vector s are known. */
-double pr_foam_ortho_cos_of(const double *c, const double *s, const double *cp, const double *cn);
 /* Is the prism with cell centre cc and faces fc, fs (pr_foam_cell_faces)
  * concave as OpenFOAM's checkMesh sees it: another face's centre on or
  * beyond the plane of a face (within a cosine of 1e-6)? */
 int pr_foam_cell_concave(const double (*fc)[3], const double (*fs)[3], const double *cc);
-/* Interpolation weight of a face (centre c, area vector s) between the
- * cells centred at cp and cn: the lesser of the two shares of the centres'
- * distances from the face along s (checkMesh fails below 0.05). */
-double pr_foam_weight_of(const double *c, const double *s, const double *cp, const double *cn);
 /* Does face x (n vertices, centre c, area vector s) decompose into positive
  * tets with both cell centres, from one of its vertices as the base point
  * (OpenFOAM's face-tet check, which a solver's particle tracking and

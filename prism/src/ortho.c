@@ -208,13 +208,13 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
         continue;
       }
       const double *cn = h->nb[c][f] >= 0 ? cc[h->nb[c][f]] : h->cn[c][f];
-      double cs = pr_foam_ortho_cos_of(fc[c][f], fs[c][f], cc[c], cn);
+      double cs = vm_foam_ortho_cos(fc[c][f], fs[c][f], cc[c], cn);
       if (full) {
         double y[12];
         int n = face_of(x[c], f, y);
-        double s = pr_foam_skew_of(y, n, fc[c][f], fs[c][f], cc[c], cn);
+        double s = vm_foam_skew(y, n, fc[c][f], fs[c][f], cc[c], cn);
         a->skew = s > a->skew ? s : a->skew;
-        double w = pr_foam_weight_of(fc[c][f], fs[c][f], cc[c], cn);
+        double w = vm_foam_weight(fc[c][f], fs[c][f], cc[c], cn);
         a->wmin = w < a->wmin ? w : a->wmin;
         a->badtets += !pr_foam_face_tets_ok(y, n, fc[c][f], fs[c][f], cc[c], cn);
       }

@@ -13,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "fill_private.h"
 #include "varmesh/topology.h"
 #include "varmesh/volume.h"
 #include "vec3.h"
@@ -41,11 +42,6 @@ static double now(void) {
 
 /* ---------- triangular faces shared by cells ---------- */
 
-typedef struct {
-  int32_t v[3];
-  int32_t cell;
-} tface;
-
 static int cmp_tface(const void *a, const void *b) {
   const tface *x = a, *y = b;
   for (int i = 0; i < 3; i++)
@@ -60,8 +56,7 @@ static void sort3(int32_t v[3]) {
   if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
 }
 
-/* Every triangular face of the 3D cells, sorted by its vertex set. */
-static int tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
+int fill_tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
   int64_t cap = 0;
   for (int64_t e = 0; e < m->ne; e++) {
     int t = m->etype[e];
@@ -79,6 +74,7 @@ static int tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
       if (nfv[j] != 3) continue;
       for (int i = 0; i < 3; i++) f[k].v[i] = c[fl[j][i]];
       sort3(f[k].v);
+      f[k].face = j;
       f[k++].cell = (int32_t)e;
     }
   }
@@ -88,7 +84,7 @@ static int tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
   return VM_OK;
 }
 
-static int same_face(const tface *a, const tface *b) {
+int fill_same_face(const tface *a, const tface *b) {
   return a->v[0] == b->v[0] && a->v[1] == b->v[1] && a->v[2] == b->v[2];
 }
 
@@ -107,7 +103,7 @@ static int64_t find_face(const tface *f, int64_t n, const int32_t *tri) {
     else
       hi = mid;
   }
-  return lo < n && same_face(&f[lo], &key) ? lo : -1;
+  return lo < n && fill_same_face(&f[lo], &key) ? lo : -1;
 }
 
 /* ---------- cell volumes and tet angles ---------- */
@@ -205,10 +201,10 @@ static int tet_quality_from(vm_ctx *ctx, const vm_mesh *m, int64_t e0, vm_fill_t
   }
   tface *f;
   int64_t nf;
-  int st = tri_faces(ctx, m, &f, &nf);
+  int st = fill_tri_faces(ctx, m, &f, &nf);
   if (st) return st;
   for (int64_t i = 0; i + 1 < nf; i++) {
-    if (!same_face(&f[i], &f[i + 1])) continue;
+    if (!fill_same_face(&f[i], &f[i + 1])) continue;
     int32_t a = f[i].cell, b = f[i + 1].cell;
     int ta = m->etype[a] == VM_TET && a >= e0, tb = m->etype[b] == VM_TET && b >= e0;
     if (!ta && !tb) continue;
@@ -595,7 +591,7 @@ static int check_closed(vm_ctx *ctx, const envelope *E) {
   int64_t bad = 0, first = -1;
   for (int64_t i = 0; i < ne;) {
     int64_t j = i + 1;
-    while (j < ne && same_face(&ed[i], &ed[j])) j++;
+    while (j < ne && fill_same_face(&ed[i], &ed[j])) j++;
     if (j - i != 2) {
       if (first < 0) first = i;
       bad++;
@@ -1687,7 +1683,7 @@ static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_sur
   int64_t bad = 0, first = -1;
   for (int64_t i = 0; i < nf;) {
     int64_t j = i + 1;
-    while (j < nf && same_face(&tf[i], &tf[j])) j++;
+    while (j < nf && fill_same_face(&tf[i], &tf[j])) j++;
     int tets = 0, bnd = 0;
     for (int64_t q = i; q < j; q++) tets += tf[q].cell == 0, bnd += tf[q].cell == 1;
     /* interior: 2 tets; boundary: 1 tet and the triangle */
@@ -2107,7 +2103,8 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
              (long long)nflat, worst, at[0], at[1], at[2]);
   }
   rep.new_vertices = res->nv - in->nv;
-  if ((st = tet_quality_from(ctx, res, res->ne - F.nf - (int64_t)R.nt, &rep.before))) goto done;
+  int64_t e0 = res->ne - F.nf - (int64_t)R.nt; /* the fill's first tet */
+  if ((st = tet_quality_from(ctx, res, e0, &rep.before))) goto done;
   vm_log(ctx, VM_LOG_INFO,
          "fill: %lld tets, %lld new vertices in %.2f s; tets: min dihedral %.2f deg, min "
          "scaled Jacobian %.3f; volume ratio across the envelope %.3g, between tets %.3g",
@@ -2118,7 +2115,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     double t2 = now();
     if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, F.nv, &o, &rep.opt_free))) goto done;
     rep.time_opt = now() - t2;
-    if ((st = tet_quality_from(ctx, res, res->ne - F.nf - (int64_t)R.nt, &rep.after))) goto done;
+    if ((st = tet_quality_from(ctx, res, e0, &rep.after))) goto done;
     vm_log(ctx, VM_LOG_INFO,
            "fill: optimized %lld vertices within %d rings of the envelope in %.2f s: min "
            "dihedral %.2f deg, min scaled Jacobian %.3f; volume ratio across the envelope %.3g, "
@@ -2129,7 +2126,6 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   {
     /* with no sweep, the figures alone (before = after) */
     double t3 = now();
-    int64_t e0 = res->ne - F.nf - (int64_t)R.nt;
     if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_before,
                                 &rep.fv_after, &rep.fv_moved)))
       goto done;

@@ -31,6 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fill_private.h"
 #include "varmesh/quality.h"
 #include "varmesh/topology.h"
 #include "vec3.h"
@@ -50,22 +51,11 @@
 #define FV_HALVINGS 10
 
 typedef struct {
-  int32_t v[3];
-  int32_t cell, face;
-} fv_face;
-
-static int cmp_fv_face(const void *a, const void *b) {
-  const fv_face *x = a, *y = b;
-  for (int i = 0; i < 3; i++)
-    if (x->v[i] != y->v[i]) return x->v[i] < y->v[i] ? -1 : 1;
-  return (x->cell > y->cell) - (x->cell < y->cell);
-}
-
-typedef struct {
   vm_mesh *m;
   int64_t e0;    /* first tet of the fill */
   int64_t first; /* first vertex that may move */
-  int32_t *nbr;  /* per cell, per face (6): the cell across, -1 none; -2 a quad */
+  int32_t *nbr;  /* per cell, per face (6): the cell across a triangle, -1 none */
+  int tf[6][4];  /* a tet's faces (vm_elem_faces) */
   double *cc;    /* cell centres */
   double *vol;   /* cell volumes */
   int64_t *rp;   /* vertex -> cells */
@@ -85,14 +75,12 @@ static void cell_update(fv_state *S, int64_t e) {
   vm_cell_foam_centre(S->m->etype[e], x, S->cc + 3 * e, S->vol + e);
 }
 
-/* Face j of cell e: its n vertices into y, its centre and area vector. */
-static int cell_face(const fv_state *S, int64_t e, int j, double *y, double *c, double *s) {
-  int fl[6][4], nfv[6];
-  vm_elem_faces(S->m->etype[e], fl, nfv);
+/* Face j of tet e: its 3 vertices into y, its centre and area vector. */
+static void tet_face(const fv_state *S, int64_t e, int j, double *y, double *c, double *s) {
   const int32_t *q = S->m->conn + S->m->eoff[e];
-  for (int i = 0; i < nfv[j]; i++) memcpy(y + 3 * i, S->m->xyz + 3 * (int64_t)q[fl[j][i]], 24);
-  vm_foam_face(y, nfv[j], c, s);
-  return nfv[j];
+  for (int i = 0; i < 3; i++)
+    memcpy(y + 3 * i, S->m->xyz + 3 * (int64_t)q[S->tf[j][i]], 3 * sizeof *y);
+  vm_foam_face(y, 3, c, s);
 }
 
 /* OpenFOAM's determinant of tet e over its internal faces. */
@@ -101,23 +89,23 @@ static double tet_det(const fv_state *S, int64_t e) {
   int k = 0;
   for (int j = 0; j < 4; j++) {
     if (S->nbr[6 * e + j] < 0) continue;
-    cell_face(S, e, j, y, c, s[k]);
+    tet_face(S, e, j, y, c, s[k]);
     k++;
   }
   return vm_foam_cell_determinant(k, (const double(*)[3])s);
 }
 
-/* The measures of face j of cell e (an internal face): non-orthogonality
+/* The measures of face j of tet e (an internal face): non-orthogonality
  * in degrees, skewness, weight, volume ratio. */
 static void face_measures(const fv_state *S, int64_t e, int j, double *deg, double *skew, double *w,
                           double *vr) {
   int64_t b = S->nbr[6 * e + j];
   double y[12], c[3], s[3];
-  int n = cell_face(S, e, j, y, c, s);
+  tet_face(S, e, j, y, c, s);
   const double *cp = S->cc + 3 * e, *cn = S->cc + 3 * b;
   double cs = vm_foam_ortho_cos(c, s, cp, cn);
   *deg = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / FV_PI;
-  *skew = vm_foam_skew(y, n, c, s, cp, cn);
+  *skew = vm_foam_skew(y, 3, c, s, cp, cn);
   *w = vm_foam_weight(c, s, cp, cn);
   double va = fabs(S->vol[e]), vb = fabs(S->vol[b]);
   *vr = va < vb ? (vb > 0 ? va / vb : 0) : (va > 0 ? vb / va : 0);
@@ -221,13 +209,15 @@ static void move_to(fv_state *S, int64_t v, const double *x) {
   for (int64_t k = S->rp[v]; k < S->rp[v + 1]; k++) cell_update(S, S->ve[k]);
 }
 
-/* Up to FV_STEPS descent steps for vertex v; the penalty lowered by. */
-static double relieve_vertex(fv_state *S, int64_t v, const int8_t *sign, double q0) {
+/* Up to FV_STEPS descent steps for vertex v; the penalty lowered by (*p0
+ * the penalty before). */
+static double relieve_vertex(fv_state *S, int64_t v, const int8_t *sign, double q0, double *p0out) {
   double *x = S->m->xyz + 3 * v, x0[3], best[3];
   memcpy(x0, x, sizeof x0);
   memcpy(best, x, sizeof best);
   fv_worst W0, W1;
   double p0 = local_penalty(S, v, &W0), p = p0;
+  *p0out = p0;
   if (!(p > 0)) return 0;
   double lmin = INFINITY;
   for (int64_t k = S->rp[v]; k < S->rp[v + 1]; k++) {
@@ -321,58 +311,38 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
   S.e0 = e0;
   S.first = first;
   *moved = 0;
-  fv_face *T = NULL;
+  tface *T = NULL;
+  int64_t nt = 0;
   int8_t *sign = NULL;
   uint8_t *act = NULL, *mv = NULL;
-  int64_t cap = 0;
-  for (int64_t e = 0; e < m->ne; e++)
-    if (vm_elem_dim(m->etype[e]) == 3) cap += 6;
   S.nbr = vm_alloc_array(ctx, (size_t)m->ne * 6 + 1, sizeof *S.nbr);
   S.cc = vm_alloc_array(ctx, (size_t)m->ne * 3 + 1, sizeof *S.cc);
   S.vol = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *S.vol);
   S.fixed = vm_calloc(ctx, (size_t)m->nv + 1, 1);
-  T = vm_alloc_array(ctx, (size_t)cap + 1, sizeof *T);
   sign = vm_calloc(ctx, (size_t)m->ne + 1, 1);
   act = vm_calloc(ctx, (size_t)m->nv + 1, 1);
   mv = vm_calloc(ctx, (size_t)m->nv + 1, 1);
-  if (!S.nbr || !S.cc || !S.vol || !S.fixed || !T || !sign || !act || !mv) {
+  if (!S.nbr || !S.cc || !S.vol || !S.fixed || !sign || !act || !mv) {
     st = VM_ERR_NOMEM;
     goto done;
   }
   if ((st = vm_mesh_vertex_elements(m, &S.rp, &S.ve))) goto done;
-  /* faces: pair the triangles; quads have no fill tet beside them */
-  int64_t nt = 0;
+  int nfv[6];
+  vm_elem_faces(VM_TET, S.tf, nfv);
   for (int64_t e = 0; e < m->ne; e++) {
     for (int j = 0; j < 6; j++) S.nbr[6 * e + j] = -1;
-    if (vm_elem_dim(m->etype[e]) != 3) continue;
-    cell_update(&S, e);
-    int fl[6][4], nfv[6];
-    int nf = vm_elem_faces(m->etype[e], fl, nfv);
-    const int32_t *c = m->conn + m->eoff[e];
-    for (int j = 0; j < nf; j++) {
-      if (nfv[j] != 3) {
-        S.nbr[6 * e + j] = -2;
-        continue;
-      }
-      fv_face *f = T + nt++;
-      for (int i = 0; i < 3; i++) f->v[i] = c[fl[j][i]];
-      int32_t t;
-      if (f->v[0] > f->v[1]) t = f->v[0], f->v[0] = f->v[1], f->v[1] = t;
-      if (f->v[1] > f->v[2]) t = f->v[1], f->v[1] = f->v[2], f->v[2] = t;
-      if (f->v[0] > f->v[1]) t = f->v[0], f->v[0] = f->v[1], f->v[1] = t;
-      f->cell = (int32_t)e;
-      f->face = j;
-    }
+    if (vm_elem_dim(m->etype[e]) == 3) cell_update(&S, e);
   }
-  qsort(T, (size_t)nt, sizeof *T, cmp_fv_face);
+  /* the two cells of each interior triangle; a boundary face's vertices
+   * stay (quads have no fill tet beside them) */
+  if ((st = fill_tri_faces(ctx, m, &T, &nt))) goto done;
   for (int64_t i = 0; i < nt;) {
     int64_t k = i + 1;
-    while (k < nt && !memcmp(T[k].v, T[i].v, sizeof T[i].v)) k++;
+    while (k < nt && fill_same_face(&T[k], &T[i])) k++;
     if (k - i == 2) {
       S.nbr[6 * (int64_t)T[i].cell + T[i].face] = T[i + 1].cell;
       S.nbr[6 * (int64_t)T[i + 1].cell + T[i + 1].face] = T[i].cell;
     } else if (k - i == 1) {
-      /* a boundary face: its vertices stay */
       for (int r = 0; r < 3; r++) S.fixed[T[i].v[r]] = 1;
     }
     i = k;
@@ -419,9 +389,7 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
     int64_t nmoved = 0;
     for (int64_t v = first; v < m->nv; v++) {
       if (!act[v]) continue;
-      double q0 = local_quality(&S, v, sign);
-      double p = local_penalty(&S, v, NULL);
-      double g = relieve_vertex(&S, v, sign, q0);
+      double p, g = relieve_vertex(&S, v, sign, local_quality(&S, v, sign), &p);
       sum += p;
       gain += g;
       if (g > 0) {
