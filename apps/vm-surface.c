@@ -120,6 +120,11 @@ static const vm_opt opts[] = {
      "implicit minimizer instead of the explicit one", .ival = 1},
     {"--time-limit", NULL, VM_OPT_DOUBLE, A(so.adapt.time_limit), "S", "seconds for the adaptation",
      .lo = 0, .hi = 1e300},
+    {"--ortho-sweeps", NULL, VM_OPT_INT, A(so.ortho.sweeps), "N",
+     "step all, last: sweeps of the wall's finite-volume orthogonality relief (vertices "
+     "slide on the surface where the line joining two triangles' centroids leans from their "
+     "edge's normal, as a prism layer's side faces inherit it; default 8; 0: measured only)",
+     .lo = 0, .hi = 1000},
     VM_CLI_OPT_THREADS,
     {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format", .fn = vm_cli_opt_format},
     {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
@@ -138,7 +143,8 @@ static const vm_opt opts[] = {
 static const vm_cli_spec spec = {
     "usage: vm-surface [STEP] [options] IN OUT\n"
     "The surface stage. STEP is one of\n"
-    "  all        (default) repair -> remesh (if needed) -> curvature -> adapt\n"
+    "  all        (default) repair -> remesh (if needed) -> curvature -> adapt ->\n"
+    "             orthogonality relief of the wall\n"
     "  repair     repair only\n"
     "  remesh     repair -> slivers removed (--size uniform: isotropic remeshing first)\n"
     "  curvature  mean curvature fields only\n"
@@ -278,6 +284,25 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     printf(", \"held_back_vertices\": %lld", (long long)s->angle_restored);
     printf(", \"time\": ");
     vm_json_double(stdout, ar->elapsed);
+    printf("}");
+  }
+  if (s->ortho_ran) {
+    const vm_ortho2d_result *o = &s->ortho;
+    int u = s->ortho_undone;
+    printf(", \"ortho\": {\"edges\": %lld, \"over70_before\": %lld, \"over70_after\": %lld, "
+           "\"over60_before\": %lld, \"over60_after\": %lld, \"max_before\": ",
+           (long long)o->edges, (long long)o->over70_before,
+           (long long)(u ? o->over70_before : o->over70_after), (long long)o->over60_before,
+           (long long)(u ? o->over60_before : o->over60_after));
+    vm_json_double(stdout, o->max_before);
+    printf(", \"max_after\": ");
+    vm_json_double(stdout, u ? o->max_before : o->max_after);
+    printf(", \"steps\": %lld, \"sweeps\": %d, \"moved\": %lld, \"undone\": %s, "
+           "\"max_shift\": ",
+           (long long)o->moves, o->sweeps, (long long)(u ? 0 : o->moved), u ? "true" : "false");
+    vm_json_double(stdout, u ? 0 : o->max_shift);
+    printf(", \"time\": ");
+    vm_json_double(stdout, o->elapsed);
     printf("}");
   }
   printf(", \"opposing\": %lld, \"remesh_lost_corners\": %lld, \"remesh_opposing\": %lld",

@@ -1240,9 +1240,11 @@ int vm_prism_march(vm_prism *p) {
     pr_ortho_summary os;
     if ((st = pr_ortho_relief(p, &os)) < 0) goto done;
     vm_log(ctx, VM_LOG_INFO,
-           "prism: non-orthogonality relief: %lld steps in %d sweeps; faces beyond 70 degrees "
-           "%lld -> %lld, largest non-orthogonality %.1f -> %.1f degrees",
-           (long long)os.moves, os.sweeps, (long long)os.over70_before, (long long)os.over70_after,
+           "prism: non-orthogonality relief: %lld steps in %d sweeps (%lld of the outer surface, "
+           "%d of its batches taken again); faces beyond 70 degrees %lld -> %lld, largest "
+           "non-orthogonality %.1f -> %.1f degrees",
+           (long long)os.moves, os.sweeps, (long long)os.outer_moves, os.outer_batches_undone,
+           (long long)os.over70_before, (long long)os.over70_after,
            acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI);
     if (os.split_before)
       vm_log(ctx, VM_LOG_INFO,

@@ -7,10 +7,12 @@
  * junction, the upper layers over a wing root) or lean (tips, tails) the
  * lateral faces of neighbouring stacks reach 85 degrees.
  *
- * The relief moves the vertices of levels 1..nlev-2 (never the wall, never
- * the outer surface, so the layer's intersection checks stay true) one at
- * a time (level by level, in vertex order), across their column (a move along the column would
- * change the layer heights): a few steps of gradient descent on
+ * The relief moves the vertices of levels 1..nlev-2 (never the wall) one at
+ * a time (level by level, in vertex order), across their column (a move
+ * along the column would change the layer heights), and then those of the
+ * outer surface at full thickness in its tangent plane, as one batch whose
+ * crossings are queried after it (outer_pass): a few steps of gradient
+ * descent on
  *
  *   E(x) = sum over the faces of the cells around x of max(0, c0 - cos)^2,
  *
@@ -22,7 +24,10 @@
  * it was), its worst face gets no worse (or stays within
  * k.ortho_relief_active_deg), no more of its faces fail OpenFOAM's
  * face-tet decomposition and no more of its cells are concave or fail a
- * 3-tet split (vm_prism_split_check), their
+ * 3-tet split (vm_prism_split_check) and none that fails one fails it by
+ * more (the sum of its split tets' squared negative det ratios: a cell
+ * the relief twisted further was one the split repair could no longer
+ * untwist, on plane.stl), their
  * smallest interpolation weight stays above k.ortho_relief_wmin (or where
  * it was), the ratios of the column's successive heights stay within
  * [G / b, b G] (G the growth ratio, b k.ortho_relief_growth_band; or where
@@ -140,6 +145,7 @@ typedef struct around {
   double wmin;                /* their smallest interpolation weight */
   int badtets;                /* those failing the face-tet decomposition */
   int splitbad;               /* cells not positive in every 3-tet split */
+  double splitpen;            /* the sum of q^2 over the cells' split tets with q < 0 */
   int n70;                    /* faces beyond 70 degrees (counted twice
                                  between two cells around) */
   int concave;                /* cells concave as checkMesh sees them */
@@ -176,6 +182,7 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   a->badtets = 0;
   a->concave = 0;
   a->splitbad = 0;
+  a->splitpen = 0;
   a->n70 = 0;
   const double c70 = cos(70 * PR_PI / 180);
   for (int c = 0; c < h->n; c++) {
@@ -188,6 +195,12 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
       a->q[c] = q;
       if (!(q >= qfloor[c])) return 0;
       a->splitbad += vm_prism_split_check(x[c], NULL) > 0;
+      {
+        double q[6];
+        vm_prism_split_check(x[c], q);
+        for (int j = 0; j < 6; j++)
+          if (q[j] < 0) a->splitpen += q[j] * q[j];
+      }
     }
     if (split) a->e += split_penalty(p, x[c]);
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
@@ -277,7 +290,7 @@ static void face_totals(const vm_prism *p, const facemap *fm, int64_t *n70, doub
   *cmin = worst;
 }
 
-/* The vertices (v, k), k in 1..nl-1, of the two cells on every face beyond
+/* The vertices (v, k), k in 1..nl, of the two cells on every face beyond
  * the active angle, marked in act (nw per level). */
 static void activate(const vm_prism *p, const int32_t *nbt, const facemap *fm, uint8_t *act) {
   int64_t nt = p->nt, nw = p->nw;
@@ -296,7 +309,7 @@ static void activate(const vm_prism *p, const int32_t *nbt, const facemap *fm, u
       for (int s = 0; s < 2; s++)
         for (int i = 0; i < 3; i++)
           for (int l = (int)cells[s][1]; l <= cells[s][1] + 1; l++)
-            if (l >= 1 && l < nl) act[(size_t)l * nw + p->tri[3 * cells[s][0] + i]] = 1;
+            if (l >= 1 && l <= nl) act[(size_t)l * nw + p->tri[3 * cells[s][0] + i]] = 1;
     }
   }
 }
@@ -352,14 +365,36 @@ static void growth_around(const vm_prism *p, int64_t v, int k, double *lo, doubl
   }
 }
 
+/* The smallest angle (degrees) of the outer triangles around column v. */
+static double outer_min_angle(const vm_prism *p, int64_t v) {
+  const double *L = p->lev + (size_t)(p->nlev - 1) * 3 * p->nw;
+  double mn = 180;
+  for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++) {
+    const int32_t *c = p->tri + 3 * (int64_t)p->vt[m];
+    for (int i = 0; i < 3; i++) {
+      const double *a = L + 3 * (int64_t)c[i], *b = L + 3 * (int64_t)c[(i + 1) % 3],
+                   *d = L + 3 * (int64_t)c[(i + 2) % 3];
+      double u[3], w[3];
+      vm_sub3(b, a, u);
+      vm_sub3(d, a, w);
+      double lu = vm_norm3(u), lw = vm_norm3(w);
+      if (!(lu > 0) || !(lw > 0)) return 0;
+      double cs = vm_dot3(u, w) / (lu * lw);
+      double ang = acos(cs > 1 ? 1 : cs < -1 ? -1 : cs) * 180 / PR_PI;
+      mn = ang < mn ? ang : mn;
+    }
+  }
+  return mn;
+}
+
 /* One relief step at level k of column v; 1 if it moved. With `split`
  * the step lowers the split penalty of the cells around instead of their
- * faces' (split_repair), under the same guards; with split == 2 an outer
+ * faces' (split_repair), under the same guards; without `query` an outer
  * vertex's step is kept without querying the single layer's crossings
  * (the caller queries once for a batch of them, and undoes the batch if
  * it crosses). */
 static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit, int64_t v,
-                   int k, double c0, double cact, int split) {
+                   int k, double c0, double cact, int split, int query) {
   const pr_params *kp = &p->k;
   size_t lsz = (size_t)(3 * p->nw);
   int nl = p->nlev - 1, top = k == nl; /* top: an outer vertex (the split repair) */
@@ -453,6 +488,13 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     double a = vm_dist3(x0, below), b = vm_dist3(above, x0), f = a + b > 0 ? a / (a + b) : 0.5;
     for (int r = 0; r < 3; r++) kink[r] = x0[r] - (below[r] + f * (above[r] - below[r]));
   }
+  /* the relief keeps the outer triangles' angles (the fill's tets grow
+   * from them) */
+  double afloor = -1;
+  if (top && !split) {
+    double a0 = outer_min_angle(p, v);
+    afloor = a0 < kp->ortho_relief_outer_angle ? a0 : kp->ortho_relief_outer_angle;
+  }
   int nb = split ? 2 * kp->ortho_relief_backtracks : kp->ortho_relief_backtracks;
   for (int b = 0; b < (split && !top ? 2 * nb : nb); b++, step *= 0.5) {
     if (b == nb) step = 1;
@@ -461,7 +503,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     if (!eval_around(p, &h, c0, qfloor, split, &a1)) continue;
     if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
         a1.concave > a0.concave || a1.wmin < wfloor || a1.splitbad > a0.splitbad ||
-        (split && a1.n70 > a0.n70))
+        (!split && a1.splitpen > a0.splitpen) || (split && a1.n70 > a0.n70))
       continue;
     /* the split repair lowers no cell's scaled Jacobian below the stack's
      * least before the relief (or below its own, where lower) */
@@ -473,6 +515,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     double lo, hi;
     growth_around(p, v, k, &lo, &hi);
     if (lo < glo || hi > ghi) continue;
+    if (afloor >= 0 && outer_min_angle(p, v) < afloor) continue;
     if (top) {
       /* a column at full thickness stays there */
       double full = (1 - p->o.full_tol) * p->tv[v];
@@ -484,7 +527,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
       int64_t np;
       memcpy(keep, lv, sizeof keep);
       memcpy(lv, xv, sizeof keep);
-      if (split != 2 && (pr_layer_intersections(p, NULL, &np) < 0 || np > p->rep.intersections)) {
+      if (query && (pr_layer_intersections(p, NULL, &np) < 0 || np > p->rep.intersections)) {
         memcpy(lv, keep, sizeof keep);
         continue;
       }
@@ -616,7 +659,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
         int k = (int)(vl[i] / nw);
         int64_t v = vl[i] % nw;
         if (i == top0) nml0 = nml;
-        if (relieve(p, nbt, fm, qinit, v, k, c0, cact, pass == 0 && k == nl ? 2 : 1)) {
+        if (relieve(p, nbt, fm, qinit, v, k, c0, cact, 1, pass || k < nl)) {
           moved[vl[i]] = 1;
           ml[nml++] = vl[i];
         } else {
@@ -702,6 +745,74 @@ done:
   return st;
 }
 
+/* The relief's steps at the outer vertices marked in act (level nl), in
+ * vertex order, in the outer surface's tangent plane (relieve): the outer
+ * surface is the layer's envelope, from which the far field's tets grow,
+ * and its triangulation is the top layer's, so its faces lean as the
+ * envelope's triangles are stretched. The steps go as one batch, the
+ * single layer's crossings queried once after it; if the batch crosses
+ * something new it is undone (every outer vertex exactly where it was)
+ * and taken again without the steps of the columns that carry a crossing
+ * face and their neighbours, at most k.ortho_relief_outer_tries times
+ * (then not at all). Moved vertices are marked in moved; their count is
+ * added to *nmoved. x0 and list are work arrays of 3 nw and nw; frozen
+ * (nw) keeps the vertices held back, for the later sweeps too. */
+static int outer_pass(vm_prism *p, const int32_t *nbt, facemap *fm, const double *qinit, double c0,
+                      double cact, const uint8_t *act, uint8_t *moved, uint8_t *frozen, double *x0,
+                      int64_t *list, uint8_t *mark, int64_t *nmoved, pr_ortho_summary *s) {
+  int nl = p->nlev - 1;
+  int64_t nw = p->nw;
+  size_t lsz = (size_t)(3 * nw);
+  for (int tries = 0; tries < p->k.ortho_relief_outer_tries; tries++) {
+    int64_t n = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (!act[(size_t)nl * nw + v] || frozen[v]) continue;
+      /* only columns at full thickness: a shorter one ends at a contact
+       * (or where restoring stopped), where the envelope faces another
+       * part of itself across a gap the fill's tets must bridge */
+      const double *xt = p->lev + nl * lsz + 3 * v;
+      if (vm_dist3(xt, p->wall + 3 * v) < (1 - p->o.full_tol) * p->tv[v]) continue;
+      memcpy(x0 + 3 * v, xt, 3 * sizeof *x0);
+      if (relieve(p, nbt, fm, qinit, v, nl, c0, cact, 0, 0)) list[n++] = v;
+    }
+    if (!n) return VM_OK;
+    int64_t np;
+    int st = pr_layer_intersections(p, mark, &np);
+    if (st < 0) return st;
+    if (np <= p->rep.intersections) {
+      for (int64_t i = 0; i < n; i++) moved[(size_t)nl * nw + list[i]] = 1;
+      *nmoved += n;
+      s->outer_moves += n;
+      return VM_OK;
+    }
+    /* undone in reverse order: each vertex moved once, so every one is
+     * back where the batch found it, and so is every cell centre */
+    s->outer_batches_undone++;
+    for (int64_t i = n; i-- > 0;) put_outer(p, fm, list[i], x0 + 3 * list[i]);
+    /* held back: the moved columns that carry a crossing face or are next
+     * to one (a moved vertex's top triangles are its neighbours' too) */
+    int64_t held = 0;
+    for (int64_t i = 0; i < n; i++) {
+      int64_t v = list[i];
+      int near = mark[v];
+      for (int64_t m = p->vv_off[v]; m < p->vv_off[v + 1] && !near; m++) near = mark[p->vv[m]];
+      if (near) {
+        frozen[v] = 1;
+        held++;
+      }
+    }
+    if (!held || tries + 1 == p->k.ortho_relief_outer_tries) {
+      /* the crossing is not near a moved column (or the tries are spent):
+       * the outer surface stays as it is */
+      for (int64_t i = 0; i < n; i++) frozen[list[i]] = 1;
+      /* the query's incremental state follows the undone batch */
+      if ((st = pr_layer_intersections(p, NULL, &np)) < 0) return st;
+      return VM_OK;
+    }
+  }
+  return VM_OK;
+}
+
 int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
   memset(s, 0, sizeof *s);
   s->cmin_before = s->cmin_after = 1;
@@ -715,6 +826,10 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
   double *qinit = vm_alloc_array(ctx, (size_t)nc, sizeof *qinit);
   uint8_t *act = vm_alloc_array(ctx, nv, sizeof *act);
   uint8_t *moved = vm_alloc_array(ctx, nv, sizeof *moved);
+  /* the outer pass's work arrays */
+  uint8_t *frozen = vm_calloc(ctx, (size_t)nw, 1), *omark = vm_alloc_array(ctx, (size_t)nw, 1);
+  double *ox0 = vm_alloc_array(ctx, 3 * (size_t)nw, sizeof *ox0);
+  int64_t *olist = vm_alloc_array(ctx, (size_t)nw, sizeof *olist);
   facemap fm = {vm_alloc_array(ctx, (size_t)(3 * nc), sizeof *fm.cc),
                 vm_alloc_array(ctx, (size_t)nc, 1),
                 vm_alloc_array(ctx, (size_t)nc, 1),
@@ -722,7 +837,8 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
                 vm_alloc_array(ctx, (size_t)nc, 1),
                 INFINITY};
   int st = VM_OK;
-  if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.mark) {
+  if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.mark ||
+      !frozen || !omark || !ox0 || !olist) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -755,12 +871,17 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
       for (int i = 0; i < nk; i++) {
         int k = 1 + r + i * PR_ORTHO_STRIDE;
         for (int64_t v = 0; v < nw; v++)
-          if (act[(size_t)k * nw + v] && relieve(p, nbt, &fm, qinit, v, k, c0, cact, 0)) {
+          if (act[(size_t)k * nw + v] && relieve(p, nbt, &fm, qinit, v, k, c0, cact, 0, 1)) {
             moved[(size_t)k * nw + v] = 1;
             nmoved++;
           }
       }
     }
+    /* then the outer surface (serial: one batch, one query) */
+    if (kp->ortho_relief_outer_tries > 0 &&
+        (st = outer_pass(p, nbt, &fm, qinit, c0, cact, act, moved, frozen, ox0, olist, omark,
+                         &nmoved, s)) < 0)
+      goto done;
     refresh(p, nbt, cact, &fm, moved);
     double cm;
     face_totals(p, &fm, &n70, &cm);
@@ -788,6 +909,10 @@ done:
   vm_free(ctx, fm.o70);
   vm_free(ctx, fm.cw);
   vm_free(ctx, fm.mark);
+  vm_free(ctx, frozen);
+  vm_free(ctx, omark);
+  vm_free(ctx, ox0);
+  vm_free(ctx, olist);
   return st;
 }
 

@@ -245,6 +245,18 @@ typedef struct pr_params {
                                  growth ratio (issue 24's band) */
   double ortho_relief_wmin;        /* 0.1: nor lowers a face's interpolation weight
                                       below this (checkMesh fails at 0.05) */
+  double ortho_relief_outer_angle; /* 20: an outer vertex's step keeps the smallest
+                                      angle of its outer triangles at least
+                                      min(this, what it was): the far field's tets
+                                      grow from them (without it, on an M6 wing,
+                                      the fill's tets on the envelope with a small
+                                      determinant went from 109 to 216) */
+  int ortho_relief_outer_tries;    /* 8: the outer vertices' steps of a sweep go as
+                                      one batch, the layer's crossings queried
+                                      after it; a batch that crosses something new
+                                      is undone and taken again without the steps
+                                      near the crossing, at most this often (0: the
+                                      outer surface does not move) */
   double split_margin;             /* 0.02: the split repair (ortho.c) lowers the
                                       sum of max(0, 0.02 - q)^2 over the tets of
                                       two bottom and two top vertices, q their
@@ -392,6 +404,8 @@ static inline pr_params pr_params_default(void) {
       .ortho_relief_qshare = 0.5,
       .ortho_relief_growth_band = 1.5,
       .ortho_relief_wmin = 0.1,
+      .ortho_relief_outer_angle = 20,
+      .ortho_relief_outer_tries = 8,
       .ortho_relief_fd = 1e-6,
       .split_margin = 0.02,
       .split_rounds = 200,

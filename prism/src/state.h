@@ -229,6 +229,9 @@ typedef struct pr_ortho_summary {
                                           before and after the split repair */
   int64_t split_moves;                 /* the repair's vertex steps kept */
   int split_rounds;                    /* its rounds */
+  int64_t outer_moves;                 /* the relief's steps at outer vertices kept */
+  int outer_batches_undone;            /* outer batches that crossed something and
+                                          were taken again without the steps near it */
   int split_batches_undone;            /* rounds whose outer-vertex batch crossed
                                           something and was taken again step by step */
   double split_sj;                     /* the least scaled Jacobian when it started
@@ -236,9 +239,10 @@ typedef struct pr_ortho_summary {
   double split_time;                   /* its seconds */
 } pr_ortho_summary;
 
-/* Levels 1..nlev-2 moved across their columns where the faces of their
- * cells are far from orthogonal (OpenFOAM's measure), every prism kept
- * valid and shaped (ortho.c says how). */
+/* Levels 1..nlev-2 moved across their columns, and the outer surface at
+ * full thickness in its tangent plane, where the faces of their cells are
+ * far from orthogonal (OpenFOAM's measure), every prism kept valid and
+ * shaped and the layer free of new crossings (ortho.c says how). */
 int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s);
 /* OpenFOAM's measures of the layer's faces at levels L (nlev levels of nw
  * vertices): internal faces beyond 70 degrees of non-orthogonality, the

@@ -25,6 +25,7 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.repair_opts = vm_repair_opts_default();
   o.remesh_opts = vm_remesh_opts_default();
   o.adapt = vm_adapt_opts_default();
+  o.ortho = vm_ortho2d_opts_default();
   return o;
 }
 
@@ -820,6 +821,73 @@ static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *rest
   return VM_OK;
 }
 
+/* The wall's finite-volume orthogonality relief (step all, last), its
+ * vertices kept on ref (the surface before the adaptation) and its feature
+ * lines; undone if the result intersects itself where the surface before
+ * it did not. The curvature fields are measured again where it moved
+ * vertices. */
+static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_opts *o,
+                 vm_surface_summary *s) {
+  vm_ortho2d_opts oo = o->ortho;
+  oo.feature_angle = o->adapt.feature_angle;
+  oo.corner_angle = o->adapt.corner_angle;
+  oo.cone_angle = o->adapt.cone_angle;
+  vm_surface_features fin;
+  memset(&fin, 0, sizeof fin);
+  vm_surface_projector *proj = NULL;
+  double *keep = vm_alloc_array(ctx, 3 * (size_t)(m->nv > 0 ? m->nv : 1), sizeof *keep);
+  if (!keep) return VM_ERR_NOMEM;
+  memcpy(keep, m->xyz, 3 * (size_t)m->nv * sizeof *keep);
+  int st = vm_surface_detect_features_cones(ref, oo.feature_angle, oo.corner_angle, oo.cone_angle,
+                                            &fin, NULL);
+  if (!st) st = vm_surface_projector_create(ctx, ref, &fin, &proj);
+  if (!st) st = vm_surface_ortho_relief(m, proj, &oo, &s->ortho);
+  vm_surface_projector_destroy(&proj);
+  vm_surface_features_free(ctx, &fin);
+  if (st < 0 && st != VM_ERR_INTERRUPTED) {
+    vm_free(ctx, keep);
+    return st;
+  }
+  s->ortho_ran = 1;
+  const vm_ortho2d_result *r = &s->ortho;
+  if (r->moved > 0) {
+    int64_t n = 0;
+    int b = count_pairs(m, &n, NULL, NULL);
+    if (b < 0) {
+      vm_free(ctx, keep);
+      return b;
+    }
+    if (n > (s->self_intersections > 0 ? s->self_intersections : 0)) {
+      memcpy(m->xyz, keep, 3 * (size_t)m->nv * sizeof *keep);
+      s->ortho_undone = 1;
+      vm_log(ctx, VM_LOG_WARN,
+             "ortho: the relieved surface intersects itself (%lld triangle pairs): the relief "
+             "is undone",
+             (long long)n);
+    }
+  }
+  vm_free(ctx, keep);
+  if (r->moved > 0 && !s->ortho_undone && (s->adapted || s->curvature)) {
+    vm_curvature_filter f = o->adapt.filter;
+    f.threshold = s->adapted ? s->adapt.threshold : s->threshold;
+    f.cap = s->adapted ? s->adapt.cap : s->cap;
+    int b = vm_surface_curvature(m, &f, NULL);
+    if (b < 0) return b;
+  }
+  vm_log(ctx, VM_LOG_INFO,
+         "ortho: wall edges beyond 70 degrees %lld -> %lld (beyond 60: %lld -> %lld) of %lld, "
+         "largest %.1f -> %.1f deg; %lld steps in %d sweeps, %lld vertices moved (at most "
+         "%.3g)%s; %.2f s",
+         (long long)r->over70_before,
+         (long long)(s->ortho_undone ? r->over70_before : r->over70_after),
+         (long long)r->over60_before,
+         (long long)(s->ortho_undone ? r->over60_before : r->over60_after), (long long)r->edges,
+         r->max_before, s->ortho_undone ? r->max_before : r->max_after, (long long)r->moves,
+         r->sweeps, (long long)r->moved, r->max_shift, s->ortho_undone ? " (undone)" : "",
+         r->elapsed);
+  return st;
+}
+
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    vm_surface_summary *summary) {
   vm_surface_summary local;
@@ -923,6 +991,19 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
              "adapt: none of the %lld elements the adaptation flipped is left reversed, and no "
              "triangles intersect (checked exactly)",
              (long long)flipped0);
+  }
+  /* the wall made fit for a finite-volume layer: the last step of all,
+   * its vertices on the surface before the adaptation */
+  if (st >= 0 && o.step == VM_SURFACE_ALL && all_triangles(m)) {
+    vm_mesh *tmp = NULL;
+    int b = VM_OK;
+    if (!input && x0) {
+      b = vm_mesh_clone(m, &tmp);
+      if (!b) memcpy(tmp->xyz, x0, 3 * (size_t)m->nv * sizeof *x0);
+    }
+    if (!b) b = ortho(ctx, m, input ? input : tmp ? tmp : m, &o, s);
+    vm_mesh_destroy(&tmp);
+    if (b < 0) st = b;
   }
   /* and, independently, against the repaired input's normals */
   if (st >= 0 && all_triangles(m) && (input || x0)) {

@@ -127,6 +127,7 @@ static int edge_cmp(const void *p, const void *q) {
 /* Bounds on what check_layer measures. */
 typedef struct {
   int64_t between, lateral; /* faces beyond 70 degrees */
+  int64_t top;              /* lateral faces of the last layer beyond 70 degrees */
   double growth;            /* largest ratio of successive heights */
   int64_t dev_over5;        /* smooth columns tilted beyond 5 degrees */
   int64_t split;            /* prisms not positive in every 3-tet split */
@@ -162,7 +163,7 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
     cell_centre((const double(*)[3])x, cc[e]);
   }
   /* faces between layers */
-  int64_t between = 0, lateral = 0, lateral_wall = 0, wall_bad = 0;
+  int64_t between = 0, lateral = 0, lateral_wall = 0, wall_bad = 0, top = 0;
   double between_max = 0, skew_max = 0;
   for (int64_t k = 0; k + 1 < nl; k++)
     for (int64_t t = 0; t < nt; t++) {
@@ -220,6 +221,7 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
       double ang = non_ortho((const double(*)[3])x, 4, cc[k * nt + t1], cc[k * nt + t2]);
       double q = skewness((const double(*)[3])x, 4, cc[k * nt + t1], cc[k * nt + t2]);
       skew_max = q > skew_max ? q : skew_max;
+      top += ang > 70 && k == nl - 1;
       if (ang > 70) {
         if (wall_angle <= 65)
           lateral++;
@@ -231,10 +233,10 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
   fprintf(stderr,
           "%s: faces between layers beyond 70 degrees %lld (max %.1f); lateral "
           "faces beyond 70 degrees %lld over wall edges within 65, %lld over the %lld wall "
-          "edges beyond 70; max skewness %.2f; max growth %.2f; full %.3f; min SJ %.4f; smooth "
-          "columns beyond 5 degrees %lld\n",
+          "edges beyond 70 (%lld in the last layer); max skewness %.2f; max growth %.2f; full "
+          "%.3f; min SJ %.4f; smooth columns beyond 5 degrees %lld\n",
           name, (long long)between, between_max, (long long)lateral, (long long)lateral_wall,
-          (long long)wall_bad, skew_max, r.growth_max, r.full_fraction, r.sj_min,
+          (long long)wall_bad, (long long)top, skew_max, r.growth_max, r.full_fraction, r.sj_min,
           (long long)r.normal_dev_over5);
   /* the stage's own report measures the same faces the same way (its
    * code, not this file's) */
@@ -247,6 +249,8 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
         (long long)between);
   CHECK(lateral <= lim.lateral, "%s: %lld lateral faces beyond 70 degrees over fair wall edges",
         name, (long long)lateral);
+  CHECK(top <= lim.top, "%s: %lld lateral faces of the last layer beyond 70 degrees", name,
+        (long long)top);
   CHECK(skew_max < 4, "%s: max skewness %.2f (checkMesh fails at 4)", name, skew_max);
   CHECK(r.growth_max <= lim.growth, "%s: max growth %.2f", name, r.growth_max);
   {
@@ -325,8 +329,9 @@ int main(void) {
   if (!w) return vmtest_end("prism_foam");
   /* from its STL: 690 faces between layers and 765 lateral ones beyond 70
    * degrees, growth 19.4, before the stack smoothing and the columns put
-   * back on the schedule */
-  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 10, 0, 0});
+   * back on the schedule; lateral faces of the last layer beyond 70
+   * degrees: 14 before the relief moved the outer surface, 1 since */
+  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 5, 10, 0, 0});
   /* the same wall through the surface stage's defaults, as the pipeline
    * runs it: its remeshing and adaptation leave the trailing edges'
    * triangles about twice as wide across the edge, and OpenFOAM's
@@ -343,10 +348,15 @@ int main(void) {
    * first heights are raised to the wall's edges / 30 (session 41, every
    * column here, to T/20): 63, 55, 1.8, 0, and 3 prisms failing a 3-tet
    * split (first-layer cells at the wing tip's trailing edge, 0.03 high on
-   * a 0.47 edge, twisted where the columns fan out; 0 with --max-aspect 0) */
+   * a 0.47 edge, twisted where the columns fan out; 0 with --max-aspect 0);
+   * since the surface stage relieves the wall's own non-orthogonality
+   * (session 44: wall edges beyond 70 degrees 153 -> 115): 56, 92, 2.7,
+   * and 2 split failures; lateral faces of the last layer beyond 70
+   * degrees 46 before the prism stage's relief moved the outer surface,
+   * 23 since */
   if (st == 0)
     check_layer(ctx, ws, ao.length, "coarse aircraft after vm-surface",
-                (layer_limits){160, 130, 15, 10, 3});
+                (layer_limits){160, 130, 30, 15, 10, 3});
   vm_mesh_destroy(&ws);
   vm_mesh_destroy(&w);
   CHECK(vm_ctx_alloc_live(ctx) == 0, "leaked %ld allocations", vm_ctx_alloc_live(ctx));

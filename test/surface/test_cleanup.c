@@ -31,41 +31,8 @@
 static int32_t vid[N + 1][N + 1][N + 1];
 
 static vm_mesh *cube(vm_ctx *ctx) {
-  vm_mesh *m = NULL;
-  CHECK(vm_mesh_create(ctx, &m) == 0, "mesh");
-  int64_t nv = 0;
-  for (int i = 0; i <= N; i++)
-    for (int j = 0; j <= N; j++)
-      for (int k = 0; k <= N; k++) {
-        int surf = i == 0 || j == 0 || k == 0 || i == N || j == N || k == N;
-        vid[i][j][k] = surf ? (int32_t)nv++ : -1;
-      }
-  vm_mesh_set_vertices(m, nv);
-  for (int i = 0; i <= N; i++)
-    for (int j = 0; j <= N; j++)
-      for (int k = 0; k <= N; k++)
-        if (vid[i][j][k] >= 0) {
-          double *p = m->xyz + 3 * (int64_t)vid[i][j][k];
-          p[0] = (double)i / N, p[1] = (double)j / N, p[2] = (double)k / N;
-        }
-  /* origin, u, v with u x v the outward normal */
-  static const int fo[6][3] = {{0, 0, 0}, {0, 0, N}, {0, 0, 0}, {0, N, 0}, {0, 0, 0}, {N, 0, 0}};
-  static const int fu[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}};
-  static const int fv[6][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (int s = 0; s < 6; s++)
-    for (int a = 0; a < N; a++)
-      for (int b = 0; b < N; b++) {
-        int32_t q[4];
-        for (int c = 0; c < 4; c++) {
-          int da = c == 1 || c == 2, db = c >= 2;
-          int p[3];
-          for (int r = 0; r < 3; r++) p[r] = fo[s][r] + (a + da) * fu[s][r] + (b + db) * fv[s][r];
-          q[c] = vid[p[0]][p[1]][p[2]];
-        }
-        int32_t t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-        vm_mesh_add_element(m, VM_TRI, t0);
-        vm_mesh_add_element(m, VM_TRI, t1);
-      }
+  vm_mesh *m = chk_grid_cube(ctx, N, 1, &vid[0][0][0]);
+  CHECK(m != NULL, "mesh");
   return m;
 }
 

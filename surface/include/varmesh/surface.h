@@ -12,6 +12,7 @@
 #include "varmesh/mesh.h"
 #include "varmesh/cleanup.h"
 #include "varmesh/graded.h"
+#include "varmesh/ortho2d.h"
 #include "varmesh/repair.h"
 
 #ifdef __cplusplus
@@ -19,7 +20,7 @@ extern "C" {
 #endif
 
 typedef enum {
-  VM_SURFACE_ALL = 0,   /* repair -> remesh (if needed) -> curvature -> adapt */
+  VM_SURFACE_ALL = 0,   /* repair -> remesh (if needed) -> curvature -> adapt -> ortho relief */
   VM_SURFACE_REPAIR,    /* repair only */
   VM_SURFACE_REMESH,    /* repair -> slivers removed (size UNIFORM: isotropic remeshing first) */
   VM_SURFACE_CURVATURE, /* the mean curvature fields only */
@@ -69,6 +70,9 @@ typedef struct vm_surface_opts {
                                  edge length of the (repaired) input */
   vm_adapt_opts adapt;        /* also the feature angles of the remeshing and the
                                  curvature filter of the step curvature */
+  vm_ortho2d_opts ortho;      /* step all, last: the wall's finite-volume
+                                 orthogonality relief (varmesh/ortho2d.h; its feature
+                                 angles are adapt's; sweeps 0: measured only) */
 } vm_surface_opts;
 
 vm_surface_opts vm_surface_opts_default(void);
@@ -98,6 +102,9 @@ typedef struct vm_surface_summary {
   vm_curvature_stats curvature_stats;
   double threshold, cap; /* step curvature: the filter used */
   int adapted;
+  int ortho_ran;           /* the orthogonality relief ran (step all) */
+  vm_ortho2d_result ortho; /* its figures */
+  int ortho_undone;        /* 1: its result intersected itself and was undone */
   vm_adapt_result adapt;
   int open; /* refused: an open surface that nothing repaired
                and opts did not accept (see the error text) */
