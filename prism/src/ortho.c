@@ -194,13 +194,11 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
       q = inv || !(qn > 0) ? -1 : q < qn ? q : qn;
       a->q[c] = q;
       if (!(q >= qfloor[c])) return 0;
-      a->splitbad += vm_prism_split_check(x[c], NULL) > 0;
-      {
-        double q[6];
-        vm_prism_split_check(x[c], q);
-        for (int j = 0; j < 6; j++)
-          if (q[j] < 0) a->splitpen += q[j] * q[j];
-      }
+      /* one split check: the count of failing cells and how far they fail */
+      double qs[6];
+      a->splitbad += vm_prism_split_check(x[c], qs) > 0;
+      for (int j = 0; j < 6; j++)
+        if (qs[j] < 0) a->splitpen += qs[j] * qs[j];
     }
     if (split) a->e += split_penalty(p, x[c]);
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);

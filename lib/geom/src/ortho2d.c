@@ -201,6 +201,7 @@ int vm_surface_ortho_relief(vm_mesh *m, vm_surface_projector *ref, const vm_orth
       int64_t b = hm_get(&hm, dkey(tv[3 * t + i], tv[3 * t + (i + 1) % 3]));
       g.nbr[3 * t + i] = a >= 0 && b >= 0 ? (int32_t)(a / 3) : -1;
     }
+  hm_free(ctx, &hm); /* the neighbours are all it was for */
   /* the triangles of each vertex, their normals and angles */
   for (int64_t t = 0; t < 3 * nt; t++) g.vt_off[tv[t] + 1]++;
   for (int64_t v = 0; v < nv; v++) g.vt_off[v + 1] += g.vt_off[v];
