@@ -370,6 +370,18 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        "max distance to the input %g; %.2f s",
                        ar->iterations, ar->rounds, ar->stop, ar->F_initial, ar->F, ar->c,
                        (long long)ar->flipped, ar->max_distance, ar->elapsed);
+  if (st >= 0 && s->ortho_ran) {
+    const vm_ortho2d_result *o = &s->ortho;
+    int u = s->ortho_undone;
+    st = vm_report_row(
+        *report, "wall orthogonality relief",
+        "edges beyond 70 deg %lld -> %lld (beyond 60: %lld -> %lld) of %lld, "
+        "largest %.1f -> %.1f deg; %lld vertices moved%s",
+        (long long)o->over70_before, (long long)(u ? o->over70_before : o->over70_after),
+        (long long)o->over60_before, (long long)(u ? o->over60_before : o->over60_after),
+        (long long)o->edges, o->max_before, u ? o->max_before : o->max_after,
+        (long long)(u ? 0 : o->moved), u ? " (undone: it intersected)" : "");
+  }
   if (st >= 0)
     st = vm_report_row(*report, "exact check of the result",
                        "%lld intersecting triangle pairs%s; remeshing given up: %s; folds of "
