@@ -288,19 +288,17 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
   }
   if (s->ortho_ran) {
     const vm_ortho2d_result *o = &s->ortho;
-    int u = s->ortho_undone;
     printf(", \"ortho\": {\"edges\": %lld, \"over70_before\": %lld, \"over70_after\": %lld, "
            "\"over60_before\": %lld, \"over60_after\": %lld, \"max_before\": ",
-           (long long)o->edges, (long long)o->over70_before,
-           (long long)(u ? o->over70_before : o->over70_after), (long long)o->over60_before,
-           (long long)(u ? o->over60_before : o->over60_after));
+           (long long)o->edges, (long long)o->over70_before, (long long)o->over70_after,
+           (long long)o->over60_before, (long long)o->over60_after);
     vm_json_double(stdout, o->max_before);
     printf(", \"max_after\": ");
-    vm_json_double(stdout, u ? o->max_before : o->max_after);
+    vm_json_double(stdout, o->max_after);
     printf(", \"steps\": %lld, \"sweeps\": %d, \"moved\": %lld, \"undone\": %s, "
            "\"max_shift\": ",
-           (long long)o->moves, o->sweeps, (long long)(u ? 0 : o->moved), u ? "true" : "false");
-    vm_json_double(stdout, u ? 0 : o->max_shift);
+           (long long)o->moves, o->sweeps, (long long)o->moved, s->ortho_undone ? "true" : "false");
+    vm_json_double(stdout, o->max_shift);
     printf(", \"time\": ");
     vm_json_double(stdout, o->elapsed);
     printf("}");
@@ -372,15 +370,13 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        (long long)ar->flipped, ar->max_distance, ar->elapsed);
   if (st >= 0 && s->ortho_ran) {
     const vm_ortho2d_result *o = &s->ortho;
-    int u = s->ortho_undone;
-    st = vm_report_row(
-        *report, "wall orthogonality relief",
-        "edges beyond 70 deg %lld -> %lld (beyond 60: %lld -> %lld) of %lld, "
-        "largest %.1f -> %.1f deg; %lld vertices moved%s",
-        (long long)o->over70_before, (long long)(u ? o->over70_before : o->over70_after),
-        (long long)o->over60_before, (long long)(u ? o->over60_before : o->over60_after),
-        (long long)o->edges, o->max_before, u ? o->max_before : o->max_after,
-        (long long)(u ? 0 : o->moved), u ? " (undone: it intersected)" : "");
+    st = vm_report_row(*report, "wall orthogonality relief",
+                       "edges beyond 70 deg %lld -> %lld (beyond 60: %lld -> %lld) of %lld, "
+                       "largest %.1f -> %.1f deg; %lld vertices moved%s",
+                       (long long)o->over70_before, (long long)o->over70_after,
+                       (long long)o->over60_before, (long long)o->over60_after, (long long)o->edges,
+                       o->max_before, o->max_after, (long long)o->moved,
+                       s->ortho_undone ? " (undone: it intersected)" : "");
   }
   if (st >= 0)
     st = vm_report_row(*report, "exact check of the result",

@@ -363,6 +363,11 @@ static void growth_around(const vm_prism *p, int64_t v, int k, double *lo, doubl
   }
 }
 
+/* Is column v, its outer vertex at x, at full thickness? */
+static int at_full(const vm_prism *p, int64_t v, const double *x) {
+  return vm_dist3(x, p->wall + 3 * v) >= (1 - p->o.full_tol) * p->tv[v];
+}
+
 /* The smallest angle (degrees) of the outer triangles around column v. */
 static double outer_min_angle(const vm_prism *p, int64_t v) {
   const double *L = p->lev + (size_t)(p->nlev - 1) * 3 * p->nw;
@@ -516,8 +521,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     if (afloor >= 0 && outer_min_angle(p, v) < afloor) continue;
     if (top) {
       /* a column at full thickness stays there */
-      double full = (1 - p->o.full_tol) * p->tv[v];
-      if (vm_dist3(x0, p->wall + 3 * v) >= full && vm_dist3(xv, p->wall + 3 * v) < full) continue;
+      if (at_full(p, v, x0) && !at_full(p, v, xv)) continue;
       /* the outer surface may cross nothing it did not cross before: the
        * single layer's faces (its top is the outer level) queried again
        * around the move */
@@ -769,7 +773,7 @@ static int outer_pass(vm_prism *p, const int32_t *nbt, facemap *fm, const double
        * (or where restoring stopped), where the envelope faces another
        * part of itself across a gap the fill's tets must bridge */
       const double *xt = p->lev + nl * lsz + 3 * v;
-      if (vm_dist3(xt, p->wall + 3 * v) < (1 - p->o.full_tol) * p->tv[v]) continue;
+      if (!at_full(p, v, xt)) continue;
       memcpy(x0 + 3 * v, xt, 3 * sizeof *x0);
       if (relieve(p, nbt, fm, qinit, v, nl, c0, cact, 0, 0)) list[n++] = v;
     }

@@ -545,6 +545,22 @@ static int curvature(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surfa
   return VM_OK;
 }
 
+/* The projector onto ref and its features by o->adapt's angles (copied
+ * by the projector): the surface the adaptation and the orthogonality
+ * relief keep the vertices on. The input's corners and cone points stay
+ * fixed wherever they are vertices (vm_surface_projector_assign), also
+ * where the sliver removal left one smooth on the mesh. */
+static int ref_projector(vm_ctx *ctx, const vm_mesh *ref, const vm_surface_opts *o,
+                         vm_surface_projector **proj) {
+  vm_surface_features f;
+  memset(&f, 0, sizeof f);
+  int st = vm_surface_detect_features_cones(ref, o->adapt.feature_angle, o->adapt.corner_angle,
+                                            o->adapt.cone_angle, &f, NULL);
+  if (!st) st = vm_surface_projector_create(ctx, ref, &f, proj);
+  vm_surface_features_free(ctx, &f);
+  return st;
+}
+
 /* Adapt m to the curvature, its vertices kept on ref (and its feature
  * lines). */
 static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_opts *o,
@@ -560,18 +576,10 @@ static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
                     "open surface: e.g. the border edge (%g, %g, %g)-(%g, %g, %g)", p[0], p[1],
                     p[2], q[0], q[1], q[2]);
   }
-  vm_surface_features fin;
-  memset(&fin, 0, sizeof fin);
   vm_surface_projector *proj = NULL;
-  /* the input's corners and cone points stay fixed wherever they are
-   * vertices (vm_surface_projector_assign), also where the sliver removal
-   * left one smooth on m */
-  int st = vm_surface_detect_features_cones(ref, o->adapt.feature_angle, o->adapt.corner_angle,
-                                            o->adapt.cone_angle, &fin, NULL);
-  if (!st) st = vm_surface_projector_create(ctx, ref, &fin, &proj);
+  int st = ref_projector(ctx, ref, o, &proj);
   if (st >= 0) st = vm_surface_adapt(m, proj, &o->adapt, &s->adapt);
   vm_surface_projector_destroy(&proj);
-  vm_surface_features_free(ctx, &fin);
   if (st < 0 && st != VM_ERR_INTERRUPTED) return st;
   s->adapted = 1;
   const vm_adapt_result *ar = &s->adapt;
@@ -832,18 +840,13 @@ static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
   oo.feature_angle = o->adapt.feature_angle;
   oo.corner_angle = o->adapt.corner_angle;
   oo.cone_angle = o->adapt.cone_angle;
-  vm_surface_features fin;
-  memset(&fin, 0, sizeof fin);
   vm_surface_projector *proj = NULL;
   double *keep = vm_alloc_array(ctx, 3 * (size_t)(m->nv > 0 ? m->nv : 1), sizeof *keep);
   if (!keep) return VM_ERR_NOMEM;
   memcpy(keep, m->xyz, 3 * (size_t)m->nv * sizeof *keep);
-  int st = vm_surface_detect_features_cones(ref, oo.feature_angle, oo.corner_angle, oo.cone_angle,
-                                            &fin, NULL);
-  if (!st) st = vm_surface_projector_create(ctx, ref, &fin, &proj);
+  int st = ref_projector(ctx, ref, o, &proj);
   if (!st) st = vm_surface_ortho_relief(m, proj, &oo, &s->ortho);
   vm_surface_projector_destroy(&proj);
-  vm_surface_features_free(ctx, &fin);
   if (st < 0 && st != VM_ERR_INTERRUPTED) {
     vm_free(ctx, keep);
     return st;
@@ -860,6 +863,12 @@ static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
     if (n > (s->self_intersections > 0 ? s->self_intersections : 0)) {
       memcpy(m->xyz, keep, 3 * (size_t)m->nv * sizeof *keep);
       s->ortho_undone = 1;
+      /* the figures say what the surface is: as before the relief */
+      s->ortho.over70_after = s->ortho.over70_before;
+      s->ortho.over60_after = s->ortho.over60_before;
+      s->ortho.max_after = s->ortho.max_before;
+      s->ortho.moved = 0;
+      s->ortho.max_shift = 0;
       vm_log(ctx, VM_LOG_WARN,
              "ortho: the relieved surface intersects itself (%lld triangle pairs): the relief "
              "is undone",
@@ -867,7 +876,7 @@ static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
     }
   }
   vm_free(ctx, keep);
-  if (r->moved > 0 && !s->ortho_undone && (s->adapted || s->curvature)) {
+  if (r->moved > 0 && (s->adapted || s->curvature)) {
     vm_curvature_filter f = o->adapt.filter;
     f.threshold = s->adapted ? s->adapt.threshold : s->threshold;
     f.cap = s->adapted ? s->adapt.cap : s->cap;
@@ -878,13 +887,10 @@ static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
          "ortho: wall edges beyond 70 degrees %lld -> %lld (beyond 60: %lld -> %lld) of %lld, "
          "largest %.1f -> %.1f deg; %lld steps in %d sweeps, %lld vertices moved (at most "
          "%.3g)%s; %.2f s",
-         (long long)r->over70_before,
-         (long long)(s->ortho_undone ? r->over70_before : r->over70_after),
-         (long long)r->over60_before,
-         (long long)(s->ortho_undone ? r->over60_before : r->over60_after), (long long)r->edges,
-         r->max_before, s->ortho_undone ? r->max_before : r->max_after, (long long)r->moves,
-         r->sweeps, (long long)r->moved, r->max_shift, s->ortho_undone ? " (undone)" : "",
-         r->elapsed);
+         (long long)r->over70_before, (long long)r->over70_after, (long long)r->over60_before,
+         (long long)r->over60_after, (long long)r->edges, r->max_before, r->max_after,
+         (long long)r->moves, r->sweeps, (long long)r->moved, r->max_shift,
+         s->ortho_undone ? " (undone)" : "", r->elapsed);
   return st;
 }
 

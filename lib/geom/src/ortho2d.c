@@ -12,6 +12,7 @@
 
 #include "trimesh_private.h"
 #include "varmesh/cleanup.h"
+#include "varmesh/topology.h"
 
 vm_ortho2d_opts vm_ortho2d_opts_default(void) {
   vm_ortho2d_opts o;
@@ -169,25 +170,22 @@ int vm_surface_ortho_relief(vm_mesh *m, vm_surface_projector *ref, const vm_orth
   vm_surface_projector *own = NULL;
   hmap hm;
   memset(&hm, 0, sizeof hm);
-  int32_t *tv = vm_alloc_array(ctx, 3 * (size_t)nt, sizeof *tv);
+  /* triangles only: element t's vertices are conn[3 t ..] */
+  const int32_t *tv = m->conn;
+  g.tv = tv;
   g.nbr = vm_alloc_array(ctx, 3 * (size_t)nt, sizeof *g.nbr);
-  g.vt_off = vm_calloc(ctx, (size_t)nv + 1, sizeof *g.vt_off);
-  g.vt = vm_alloc_array(ctx, 3 * (size_t)nt, sizeof *g.vt);
   g.n0 = vm_alloc_array(ctx, 3 * (size_t)nt, sizeof *g.n0);
   int32_t *vs = vm_alloc_array(ctx, (size_t)nv + 1, sizeof *vs);
   double *xs = vm_alloc_array(ctx, 3 * (size_t)nv + 1, sizeof *xs);
   double *h0 = vm_alloc_array(ctx, (size_t)nv + 1, sizeof *h0);
   uint8_t *act = vm_calloc(ctx, (size_t)nv + 1, 1);
   int st = VM_OK;
-  if (!tv || !g.nbr || !g.vt_off || !g.vt || !g.n0 || !vs || !xs || !h0 || !act ||
-      (st = hm_init(ctx, &hm, 3 * (size_t)nt))) {
+  if (!g.nbr || !g.n0 || !vs || !xs || !h0 || !act || (st = hm_init(ctx, &hm, 3 * (size_t)nt)) ||
+      (st = vm_mesh_vertex_elements(m, &g.vt_off, &g.vt))) {
     st = st ? st : VM_ERR_NOMEM;
     goto done;
   }
-  g.tv = tv;
   memcpy(xs, m->xyz, 3 * (size_t)nv * sizeof *xs);
-  for (int64_t t = 0; t < nt; t++)
-    for (int i = 0; i < 3; i++) tv[3 * t + i] = m->conn[m->eoff[t] + i];
   /* neighbours across each edge (a non-manifold edge: none) */
   for (int64_t t = 0; t < nt; t++)
     for (int i = 0; i < 3; i++) {
@@ -202,20 +200,7 @@ int vm_surface_ortho_relief(vm_mesh *m, vm_surface_projector *ref, const vm_orth
       g.nbr[3 * t + i] = a >= 0 && b >= 0 ? (int32_t)(a / 3) : -1;
     }
   hm_free(ctx, &hm); /* the neighbours are all it was for */
-  /* the triangles of each vertex, their normals and angles */
-  for (int64_t t = 0; t < 3 * nt; t++) g.vt_off[tv[t] + 1]++;
-  for (int64_t v = 0; v < nv; v++) g.vt_off[v + 1] += g.vt_off[v];
-  {
-    int64_t *fill = vm_alloc_array(ctx, (size_t)nv + 1, sizeof *fill);
-    if (!fill) {
-      st = VM_ERR_NOMEM;
-      goto done;
-    }
-    memcpy(fill, g.vt_off, (size_t)nv * sizeof *fill);
-    for (int64_t t = 0; t < nt; t++)
-      for (int i = 0; i < 3; i++) g.vt[fill[tv[3 * t + i]]++] = (int32_t)t;
-    vm_free(ctx, fill);
-  }
+  /* the triangles' normals before the relief */
   for (int64_t t = 0; t < nt; t++) {
     const int32_t *c = tv + 3 * t;
     double n[3];
@@ -228,7 +213,6 @@ int vm_surface_ortho_relief(vm_mesh *m, vm_surface_projector *ref, const vm_orth
   double hsum = 0;
   int64_t hn = 0;
   memset(h0, 0, (size_t)nv * sizeof *h0);
-  memset(act, 0, (size_t)nv);
   for (int64_t t = 0; t < nt; t++)
     for (int i = 0; i < 3; i++) {
       int32_t a = tv[3 * t + i], b = tv[3 * t + (i + 1) % 3];
@@ -359,7 +343,6 @@ done:
   hm_free(ctx, &hm);
   vm_surface_projector_destroy(&own);
   vm_surface_features_free(ctx, &f);
-  vm_free(ctx, tv);
   vm_free(ctx, g.nbr);
   vm_free(ctx, g.vt_off);
   vm_free(ctx, g.vt);

@@ -104,7 +104,8 @@ typedef struct vm_surface_summary {
   int adapted;
   int ortho_ran;           /* the orthogonality relief ran (step all) */
   vm_ortho2d_result ortho; /* its figures */
-  int ortho_undone;        /* 1: its result intersected itself and was undone */
+  int ortho_undone;        /* 1: its result intersected itself and was undone (the
+                              figures after are then those before, nothing moved) */
   vm_adapt_result adapt;
   int open; /* refused: an open surface that nothing repaired
                and opts did not accept (see the error text) */
