@@ -66,8 +66,9 @@ static const char *const rules[] = {"corner", "geometric", NULL};
 static const char *const repairs[] = {"geometric", "coefficients", "nodes", NULL};
 static const vm_opt opts[] = {
     {"--untangle", NULL, VM_OPT_CHOICE, A(method), NULL,
-     "untangling method: (35), its one-way variant, contraction (39), adaptive (default: (35) "
-     "with a bounded eps decay), foldover (eps from the decrease of F, Garanzha et al. 2021)",
+     "untangling method: (35), its one-way variant, contraction (39), adaptive ((35) with a "
+     "bounded eps decay; the fallback), foldover (default: eps from the decrease of F, "
+     "Garanzha et al. 2021)",
      .choices = methods},
     {"--solver", NULL, VM_OPT_CHOICE, A(o.solver), "implicit|explicit|newton",
      "global solver (default implicit; newton: full coupled Hessian, projected to PSD per node, "
@@ -78,17 +79,19 @@ static const vm_opt opts[] = {
     {"--theta", NULL, VM_OPT_DOUBLE, A(o.theta), "T",
      "volumetric weight of the balanced measure (default 0.8)", .lo = 0, .hi = 0.999},
     {"--theta-untangle", NULL, VM_OPT_DOUBLE, A(o.theta_untangle), "T",
-     "theta of the penalty in global untangling (default: --theta)", .lo = 0, .hi = 0.999},
+     "theta of the penalty in global untangling (default 0.999; the adaptive fallback: "
+     "--theta)",
+     .lo = 0, .hi = 0.999},
     {"--eps-inner", NULL, VM_OPT_INT, A(o.eps_inner), "N",
-     "foldover: iterations per eps (default 10)", .lo = 1, .hi = 1e8},
+     "foldover: iterations per eps (default 3)", .lo = 1, .hi = 1e8},
     {"--staged", NULL, VM_OPT_FLAG, A(o.staged), NULL,
      "hexahedra: untangle their 6-tet split first, then the rule's nodes with the split held "
-     "valid (for twisted meshes; implies --untangle foldover --eps-inner 3 --theta-untangle "
-     "0.999 unless those are given)",
+     "valid (the default on meshes with hexahedra)",
      .ival = 1},
     {"--direct", NULL, VM_OPT_FLAG, A(direct), NULL,
      "the direct schedule even on hexahedra (default: staged when the mesh has hexahedra, "
-     "direct otherwise, and the other one if the first stalls)",
+     "direct otherwise; if the first stalls, the direct one after staged, the adaptive "
+     "penalty after direct)",
      .ival = 1},
     {"--rule", NULL, VM_OPT_CHOICE, A(o.rule), NULL,
      "quadrature (default corner; geometric: 64 per hex)", .choices = rules},
@@ -679,12 +682,18 @@ static int check_result(vm_cli *cli, const args *a, const stage *s, outcome *r) 
   return VM_EXIT_OK;
 }
 
-/* The options of one schedule: staged (hexahedra) or direct; `fallback`:
- * the one tried when the first stalls. What the user gave stays. */
-static vm_volume_opts schedule_opts(const args *a, int staged, int fallback) {
-  /* staged, and any fallback: the staged schedule's untangling settings */
-  int twisted = staged || fallback;
-  vm_volume_opts d = twisted ? vm_volume_opts_staged() : vm_volume_opts_default(), o = a->o;
+/* The options of one schedule: staged (hexahedra) or direct, both by
+ * foldover (eps_inner 3, theta_untangle 0.999); `adaptive`: the adaptive
+ * penalty instead, the fallback after a direct foldover run that stalled
+ * (the 6-tet split of the n = 32 cube turned by pi about (0,1,1) is
+ * certified by foldover after 21 s, while the adaptive penalty still had
+ * 70,000 tets inverted after 200 s; docs/volume.md). What the user gave
+ * stays. */
+static vm_volume_opts schedule_opts(const args *a, int staged, int adaptive) {
+  vm_volume_opts d = staged     ? vm_volume_opts_staged()
+                     : adaptive ? vm_volume_opts_default()
+                                : vm_volume_opts_direct(),
+                 o = a->o;
   o.staged = staged;
   o.method = a->method >= 0 ? (vm_untangle_method)a->method : d.method;
   o.eps_inner = a->o.eps_inner ? a->o.eps_inner : d.eps_inner;
@@ -841,10 +850,9 @@ int main(int argc, char **argv) {
   vm_volume_opts o = schedule_opts(&a, r.staged, 0);
   a.o.method = o.method;
   /* the first schedule chosen for the user gets a quarter of the iterations,
-   * so that a stall (local rounds churning: the direct adaptive schedule on
-   * the n = 8 pi/2 cube's 6-tet split spent all 20,000 and left 4 inverted,
-   * which the foldover fallback untangles in 125) leaves the rest to the
-   * fallback */
+   * so that a stall (local rounds churning: the adaptive penalty on the
+   * n = 8 pi/2 cube's 6-tet split spent all 20,000 and left 4 inverted,
+   * which foldover untangles in 125) leaves the rest to the fallback */
   if (a.auto_schedule && o.max_iter >= 4) o.max_iter /= 4;
   progress_state ps = {&cli, a.every, NULL, s.hist};
   o.progress = progress;
@@ -853,7 +861,8 @@ int main(int argc, char **argv) {
   vm_surface_ops sops;
   if (s.slip) sops = vm_volume_slip_ops(s.slip);
   r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &o, &r.rep);
-  vm_volume_opts f = schedule_opts(&a, 0, 1);
+  /* after staged, direct; after direct, the adaptive penalty */
+  vm_volume_opts f = schedule_opts(&a, 0, !r.staged);
   int differs = r.staged || f.method != o.method || f.eps_inner != o.eps_inner ||
                 f.theta_untangle != o.theta_untangle;
   if (r.st == VM_WARN_INVERTED && r.rep.M_final > 0 && a.auto_schedule && differs &&
@@ -864,8 +873,9 @@ int main(int argc, char **argv) {
     if (!cli.quiet)
       fprintf(stderr,
               "vm-volume: the %s schedule stalled with %lld inverted nodes left; going on "
-              "from its best state with the direct schedule (foldover)\n",
-              r.staged ? "staged" : "direct", (long long)r.rep.M_final);
+              "from its best state with the direct schedule (%s)\n",
+              r.staged ? "staged" : "direct", (long long)r.rep.M_final,
+              vm_untangle_method_name(f.method));
     vm_volume_report first = r.rep;
     f.progress = progress;
     f.user = &ps;

@@ -86,7 +86,7 @@ int main(int argc, char **argv) {
   int direct = 0;
   for (int i = 1; i < argc; i++)
     direct |= !strcmp(argv[i], "--direct") || !strcmp(argv[i], "--tets");
-  vm_volume_opts o = direct ? vm_volume_opts_default() : vm_volume_opts_staged();
+  vm_volume_opts o = direct ? vm_volume_opts_direct() : vm_volume_opts_staged();
   o.time_limit = 60;
   prog g = {0, getenv("VM_EVERY") ? atoi(getenv("VM_EVERY")) : 50};
   for (int i = 1; i < argc; i++) {

@@ -26,6 +26,28 @@ check 'grep -q "verify: every quadrature simplex (corner rule) positively orient
 check '[ $? -eq 0 ]' "the output is valid by vm-quality"
 check '[ ! -e "$dir/out.vtk.tmp"* ] 2>/dev/null; true' "no temporary files left"
 
+# a mesh without hexahedra: the direct schedule by foldover by default (the
+# 6-tet split of the n = 12 cube turned 3pi/4, inner 0.3: certified after 27
+# untangling + 187 local iterations, where the adaptive penalty, the default
+# before, stalled at its 5,000 and needed the foldover fallback: 26 + 5,190);
+# when it stalls (here forced: --max-iter 8 leaves it 2 iterations) the
+# adaptive penalty goes on
+"$gen" rotcube --n 12 --angle 3pi/4 --inner 0.3 --tets "$dir/tets.vmsh"
+"$vol" --json "$dir/tets.vmsh" "$dir/tets-out.vmsh" >"$dir/tets.json" 2>"$dir/tets.err"
+rc=$?
+check '[ $rc -eq 0 ]' "vm-volume exits 0 on the 6-tet split, 3pi/4 (got $rc)"
+check 'grep -q "\"method\": \"foldover\"" "$dir/tets.json" && grep -q "\"staged\": false" "$dir/tets.json" &&
+  grep -q "\"fallback\": false" "$dir/tets.json" && grep -q "\"valid\": true" "$dir/tets.json"' \
+  "JSON: direct, foldover, no fallback, valid"
+iters=$(python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print(d["iter_untangle"] + d["iter_local"])' "$dir/tets.json")
+check '[ "$iters" -le 400 ]' "untangled within 400 iterations (got $iters)"
+"$vol" --max-iter 8 --json "$dir/tets.vmsh" "$dir/tets-fb.vmsh" >"$dir/fb.json" 2>"$dir/fb.err"
+rc=$?
+check '[ $rc -eq 3 ]' "a run out of iterations exits 3 (got $rc)"
+check 'grep -q "the direct schedule stalled with [0-9]* inverted nodes left; going on from its best state with the direct schedule (adaptive)" "$dir/fb.err" &&
+  grep -q "\"fallback\": true" "$dir/fb.json" && grep -q "\"method\": \"adaptive\"" "$dir/fb.json"' \
+  "a stalled direct run falls back to the adaptive penalty and says so"
+
 # --staged on the pi-rotated cube (n = 16: two free layers between the fixed
 # boundary and the fixed inner cube), which the default schedule leaves
 # tangled: the 6-tet split, then the corners with the split held valid

@@ -43,12 +43,17 @@ vm_volume_opts vm_volume_opts_default(void) {
   return o;
 }
 
-vm_volume_opts vm_volume_opts_staged(void) {
+vm_volume_opts vm_volume_opts_direct(void) {
   vm_volume_opts o = vm_volume_opts_default();
-  o.staged = 1;
   o.method = VM_UNTANGLE_FOLDOVER;
   o.eps_inner = 3;
   o.theta_untangle = 0.999;
+  return o;
+}
+
+vm_volume_opts vm_volume_opts_staged(void) {
+  vm_volume_opts o = vm_volume_opts_direct();
+  o.staged = 1;
   return o;
 }
 

@@ -111,10 +111,14 @@ typedef struct vm_volume_opts {
 } vm_volume_opts;
 
 vm_volume_opts vm_volume_opts_default(void);
+/* The direct schedule's settings, vm-volume's default on meshes without
+ * hexahedra: the defaults with the foldover untangling measured on the
+ * rotated cube and its 6-tet split (eps_inner 3, theta_untangle 0.999;
+ * docs/volume.md). The defaults' adaptive penalty is vm-volume's fallback
+ * when this stalls. */
+vm_volume_opts vm_volume_opts_direct(void);
 /* The staged schedule's settings, vm-volume's default on meshes with
- * hexahedra: the defaults with staged = 1 and the foldover untangling
- * measured on the rotated cube and its 6-tet split (eps_inner 3,
- * theta_untangle 0.999; docs/volume.md). */
+ * hexahedra: vm_volume_opts_direct() with staged = 1. */
 vm_volume_opts vm_volume_opts_staged(void);
 
 typedef struct vm_volume_report {
