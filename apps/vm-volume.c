@@ -707,12 +707,17 @@ static int has_type(const vm_mesh *m, int type) {
   return 0;
 }
 
-/* Volume elements certified inverted whose vertices are all fixed: nothing
- * the stage may move can repair them. Their number; the first in *first. */
-static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
+/* Volume elements not certified valid whose vertices are all fixed:
+ * certified inverted, or degenerate (det J = 0 somewhere in it: not
+ * certified either way, like Mesquite's hybrid_3quad_1tri_tangled.vtk,
+ * whose three inner vertices coincide on the boundary). Nothing the stage
+ * may move can make them valid. Their number; the first in *first, its
+ * verdict in *verdict. */
+static int64_t impossible_elements(const vm_mesh *m, int64_t *first, int *verdict) {
   int64_t n = 0, counts[VM_NTYPES];
   int tdim = vm_mesh_count_types(m, counts);
   *first = -1;
+  *verdict = VM_JAC_VALID;
   for (int64_t e = 0; e < m->ne; e++) {
     int t = m->etype[e], nv = (int)(m->eoff[e + 1] - m->eoff[e]), fixed = 1;
     if (vm_elem_dim(t) != tdim) continue;
@@ -722,8 +727,26 @@ static int64_t impossible_elements(const vm_mesh *m, int64_t *first) {
       fixed &= m->vflag[v] == VM_VERTEX_FIXED;
       memcpy(x + 3 * k, m->xyz + 3 * (int64_t)v, sizeof(double) * 3);
     }
-    if (!fixed || vm_jacobian_certify(t, x, 0, NULL) != VM_JAC_INVALID) continue;
-    if (!n++) *first = e;
+    if (!fixed) continue;
+    int vd = vm_jacobian_certify(t, x, 0, NULL);
+    if (vd == VM_JAC_VALID) continue;
+    if (vd != VM_JAC_INVALID) {
+      /* not a degenerate element where the input is bad: a vertex at two
+       * corners, or coordinates whose determinants overflow (the stage
+       * says what those are) */
+      double ext = 0;
+      int repeated = 0;
+      for (int i = 0; i < nv; i++)
+        for (int j = i + 1; j < nv; j++) {
+          repeated |= m->conn[m->eoff[e] + i] == m->conn[m->eoff[e] + j];
+          for (int r = 0; r < 3; r++) ext = fmax(ext, fabs(x[3 * i + r] - x[3 * j + r]));
+        }
+      if (repeated || !isfinite(ext * ext * ext)) continue;
+    }
+    if (!n++) {
+      *first = e;
+      *verdict = vd;
+    }
   }
   return n;
 }
@@ -808,14 +831,18 @@ int main(int argc, char **argv) {
     goto done;
   }
   {
-    int64_t first, nimp = impossible_elements(s.m, &first);
+    int vd;
+    int64_t first, nimp = impossible_elements(s.m, &first, &vd);
     if (nimp > 0) {
       /* fixed vertices force the fold: say so at once, the input written */
       vm_cli_error(&cli,
-                   "%s: element %lld (%s) is inverted and all its vertices are fixed (%lld "
+                   "%s: element %lld (%s) is %s and all its vertices are fixed (%lld "
                    "such elements): no motion of the others can untangle it; %s; %s written "
                    "unchanged",
-                   a.in, (long long)first, vm_elem_name(s.m->etype[first]), (long long)nimp,
+                   a.in, (long long)first, vm_elem_name(s.m->etype[first]),
+                   vd == VM_JAC_INVALID ? "inverted"
+                                        : "degenerate (det J = 0 in it: it cannot be certified)",
+                   (long long)nimp,
                    s.planar ? "--free-boundary lets boundary vertices move"
                             : "--slip-boundary lets boundary vertices slide (--free-boundary move)",
                    a.out);

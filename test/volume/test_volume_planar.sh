@@ -168,6 +168,34 @@ check 'grep -q "is inverted and all its vertices are fixed.*--free-boundary" "$d
 check 'compare "$dir/all.vtk" "$dir/all_out.vtk" boundary && ! compare "$dir/all.vtk" "$dir/all_out.vtk" moved' \
   "all fixed: the input written unchanged"
 
+# 7b. a degenerate element of fixed vertices (not inverted, never certifiable):
+# a triangle whose three vertices lie on one line, all on the boundary, the
+# boundary fixed: at once, exit 3, "degenerate", --free-boundary named
+cat >"$dir/flat.vtk" <<'VTK'
+# vtk DataFile Version 3.0
+flat
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 4 double
+0 0 0
+1 0 0
+2 0 0
+1 1 0
+CELLS 2 8
+3 0 1 2
+3 0 2 3
+CELL_TYPES 2
+5
+5
+VTK
+start=$(date +%s)
+"$vol" "$dir/flat.vtk" "$dir/flat_out.vtk" 2>"$dir/flat.err"
+rc=$?
+took=$(($(date +%s) - start))
+check '[ $rc -eq 3 ] && [ $took -le 2 ]' "degenerate, all fixed: exit 3 at once (got $rc after $took s)"
+check 'grep -q "element 0 (tri) is degenerate (det J = 0 in it: it cannot be certified) and all its vertices are fixed (1 such elements).*--free-boundary" "$dir/flat.err"' \
+  "degenerate, all fixed: says so and names --free-boundary"
+
 # 8. --slip-boundary takes volume meshes
 "$vol" --slip-boundary "$dir/z5.vtk" "$dir/slip_out.vtk" 2>"$dir/slip.err"
 rc=$?
