@@ -44,8 +44,9 @@ typedef struct {
 
 typedef struct {
   coord_system sys[3];
-  double *L;      /* per vertex 9: the projector (slip vertices only filled) */
-  uint8_t *ident; /* per vertex: L acts as identity on the solved coordinates */
+  int64_t jacobi_steps; /* steps whose AMG setup failed, taken with Jacobi */
+  double *L;            /* per vertex 9: the projector (slip vertices only filled) */
+  uint8_t *ident;       /* per vertex: L acts as identity on the solved coordinates */
   double *b, *y;
 } implicit_state;
 
@@ -53,6 +54,9 @@ static void implicit_end(vm_minimizer *m) {
   implicit_state *S = m->impl;
   if (!S) return;
   vm_ctx *ctx = m->ctx;
+  if (S->jacobi_steps > 1)
+    vm_log(ctx, VM_LOG_INFO, "implicit: %lld steps of this phase used Jacobi in all",
+           (long long)S->jacobi_steps);
   for (int c = 0; c < 3; c++) {
     coord_system *cs = &S->sys[c];
     vm_free(ctx, cs->vidx);
@@ -281,7 +285,10 @@ static int implicit_direction(vm_minimizer *m, int iter, const double *g, const 
        * measure near folds, tiny eps) can lose its positive diagonal: this
        * step is preconditioned by Jacobi (the fine diagonal is positive,
        * fill_values) and the next one builds a new hierarchy */
-      vm_log(ctx, VM_LOG_INFO, "implicit: %s; this step uses Jacobi", vm_ctx_error(ctx));
+      /* said once a phase; the others with -v, and their count at its end */
+      S->jacobi_steps++;
+      vm_log(ctx, S->jacobi_steps == 1 ? VM_LOG_INFO : VM_LOG_DEBUG,
+             "implicit: %s; this step uses Jacobi", vm_ctx_error(ctx));
       if (!cs->fallback && (st = vm_precond_create(ctx, VM_PRECOND_JACOBI, NULL, &cs->fallback)))
         return st;
       if ((st = vm_precond_setup(cs->fallback, A))) return st;
