@@ -735,13 +735,10 @@ static int64_t impossible_elements(const vm_mesh *m, int64_t *first, int *verdic
        * corners, or coordinates whose determinants overflow (the stage
        * says what those are) */
       double ext = 0;
-      int repeated = 0;
       for (int i = 0; i < nv; i++)
-        for (int j = i + 1; j < nv; j++) {
-          repeated |= m->conn[m->eoff[e] + i] == m->conn[m->eoff[e] + j];
+        for (int j = i + 1; j < nv; j++)
           for (int r = 0; r < 3; r++) ext = fmax(ext, fabs(x[3 * i + r] - x[3 * j + r]));
-        }
-      if (repeated || !isfinite(ext * ext * ext)) continue;
+      if (vm_mesh_repeated_vertex(m, e) >= 0 || !isfinite(ext * ext * ext)) continue;
     }
     if (!n++) {
       *first = e;

@@ -274,6 +274,15 @@ int vm_mesh_first_duplicate(vm_ctx *ctx, const vm_mesh *m, int fields, int *dup)
   return VM_OK;
 }
 
+int32_t vm_mesh_repeated_vertex(const vm_mesh *m, int64_t e) {
+  const int32_t *cv = m->conn + m->eoff[e];
+  int64_t k = m->eoff[e + 1] - m->eoff[e];
+  for (int64_t a = 0; a < k; a++)
+    for (int64_t b = 0; b < a; b++)
+      if (cv[a] == cv[b]) return cv[a];
+  return -1;
+}
+
 int vm_mesh_check(const vm_mesh *m) {
   vm_ctx *ctx = m->ctx;
   if (m->dim != 2 && m->dim != 3)

@@ -835,14 +835,14 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
         st = vm_error(ctx, VM_ERR_ARG, "element %lld: vertex %d out of range", (long long)e, cv[a]);
         goto fail;
       }
-      for (int b = 0; b < a; b++)
-        if (cv[a] == cv[b]) {
-          st = vm_error(ctx, VM_ERR_ARG,
-                        "element %lld (%s) uses vertex %d at two of its corners: a collapsed "
-                        "element, which has no valid shape to optimize towards",
-                        (long long)e, vm_elem_name(t), cv[a]);
-          goto fail;
-        }
+    }
+    int32_t rv = vm_mesh_repeated_vertex(m, e);
+    if (rv >= 0) {
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "element %lld (%s) uses vertex %d at two of its corners: a collapsed "
+                    "element, which has no valid shape to optimize towards",
+                    (long long)e, vm_elem_name(t), rv);
+      goto fail;
     }
     p->ael[n] = (int32_t)e;
     p->wel[n] = 1.0;

@@ -118,6 +118,10 @@ int vm_mesh_add_element(vm_mesh *m, int type, const int32_t *verts);
 /* Append one vertex; returns its index in *index (may be NULL). */
 int vm_mesh_add_vertex(vm_mesh *m, double x, double y, double z, int64_t *index);
 
+/* The first vertex element e uses at two of its corners (a collapsed
+ * element), or -1. */
+int32_t vm_mesh_repeated_vertex(const vm_mesh *m, int64_t e);
+
 /* Verify the invariants above; on failure records a one-line message naming
  * the first offending vertex/element and returns VM_ERR_FORMAT. */
 int vm_mesh_check(const vm_mesh *m);
