@@ -98,18 +98,20 @@ typedef struct {
   double F_before; /* adaptive: F before and after the last step (same eps) */
   double F_after;
   int have_step;
-  int done;           /* adaptive: det >= eps everywhere: untangled with margin */
-  double pressure;    /* adaptive: multiplier of (35), halved on stalls */
-  int block_iter;     /* foldover: iterations at the current eps */
-  double F_block0;    /* foldover: F before the first of them */
-  double eps_restart; /* foldover: least eps after a stalled local round */
-  int keep_certified; /* optimization: every step keeps every cell certified */
-  int no_local;       /* untangling without local rounds */
-  int keep_guards;    /* every step keeps every guarded node positive */
-  int64_t foam_max;   /* >= 0: every step keeps the face pyramids OpenFOAM
-                         calls incorrectly oriented at most this many */
-  int stop_certified; /* untangling ends once every cell is certified */
-  int local_scale;    /* local_threshold counts this many times the nodes */
+  int done;            /* adaptive: det >= eps everywhere: untangled with margin */
+  double pressure;     /* adaptive: multiplier of (35), halved on stalls */
+  int block_iter;      /* foldover: iterations at the current eps */
+  double F_block0;     /* foldover: F before the first of them */
+  double eps_restart;  /* foldover: least eps after a stalled local round */
+  int keep_certified;  /* optimization: every step keeps every cell certified */
+  int no_local;        /* untangling without local rounds */
+  int keep_guards;     /* every step keeps every guarded node positive */
+  int64_t foam_max;    /* >= 0: every step keeps the face pyramids OpenFOAM
+                          calls incorrectly oriented at most this many */
+  int stop_certified;  /* untangling ends once every cell is certified */
+  int check_certified; /* a local round of the geometric phase ends once
+                          every cell of its region is certified */
+  int local_scale;     /* local_threshold counts this many times the nodes */
   int reached_certified;
   /* the Bernstein repair: per element of m a weight (hexes of the region),
    * per coefficient penalized (1) or walled (0) and its eps, and the scale
@@ -362,7 +364,7 @@ static int before_untangle(void *user, int iter, const double *x) {
   if (s->M == 0 && (!adaptive || s->done)) return 1;
   /* the geometric phase: certified is what it is for, every node of (24)
    * positive only the way there */
-  if (s->stop_certified && (iter == 1 || iter % 5 == 0)) {
+  if ((s->stop_certified || s->check_certified) && (iter == 1 || iter % 5 == 0)) {
     if ((st = reach_certified(s, x)) != 0) return st;
   }
   if (s->go_local && s->M > 0 && s->M < local_threshold(s)) return 1;
@@ -703,8 +705,14 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
     vm_minimize_result res = {0};
     int chunk = *budget < 200 ? *budget : 200;
     st = sub_begin(s, s->rule, k, prm, emask, vmark, &ss, &sm);
-    /* a local region's cells certified are not the mesh's (and its eps
-     * falls at the usual pace, update_eps) */
+    /* its eps falls at the usual pace (update_eps), and in the geometric
+     * phase the round ends once its region's cells are all certified: every
+     * cell with a node of (24) not positive is in the region, and every
+     * other cell has all 64 positive, so then the mesh's are too (checked
+     * below on the whole mesh, which decides). Run to its own M = 0 the
+     * round kept going after that: n = 32, 7pi/8 308 -> 259 repair
+     * iterations, pi 294 -> 275 (certified 4-8 s sooner). */
+    ss.check_certified = s->stop_certified;
     ss.stop_certified = 0;
     if (st >= 0) st = stats(&ss, ss.m->xyz);
     if (st >= 0) {
