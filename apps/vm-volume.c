@@ -762,6 +762,14 @@ static int write_unchanged(vm_cli *cli, const args *a, stage *s) {
   return rc == VM_EXIT_OK ? VM_EXIT_CHECK : rc;
 }
 
+/* Whether a fallback run that did not end valid ended worse than the
+ * first: more cells not certified, or as many and more inverted nodes. */
+static int worse_than(const vm_volume_report *fb, const vm_volume_report *first) {
+  int64_t b = fb->cert_invalid + fb->cert_undecided,
+          b0 = first->cert_invalid + first->cert_undecided;
+  return b > b0 || (b == b0 && fb->M_final > first->M_final);
+}
+
 /* Merge the report of a fallback run into the first one's. */
 static void merge_reports(vm_volume_report *r, const vm_volume_report *first) {
   r->M_init = first->M_init;
@@ -901,16 +909,52 @@ int main(int argc, char **argv) {
               r.staged ? "staged" : "direct", (long long)r.rep.M_final,
               vm_untangle_method_name(f.method));
     vm_volume_report first = r.rep;
+    int first_st = r.st;
+    /* the first run's state, kept if the fallback ends worse (the
+     * staged run of vm-gen rotcube --n 32 --angle 3pi/4 --axis 1,2,3
+     * --inner 0.3 left 2 cells not certified and 6 inverted corner tets;
+     * the direct run from there ended with 20 cells) */
+    size_t nx = (size_t)s.m->nv * 3;
+    double *keep = vm_alloc_array(cli.ctx, nx ? nx : 1, sizeof *keep);
+    if (!keep) {
+      rc = vm_cli_input_error(&cli, a.in);
+      goto done;
+    }
+    memcpy(keep, s.m->xyz, nx * sizeof *keep);
     f.progress = progress;
     f.user = &ps;
     if (o.time_limit > 0) f.time_limit = fmax(o.time_limit - first.time_total, 1e-3);
     f.max_iter = a.o.max_iter - first.iter_untangle - first.iter_local - first.iter_repair;
     if (f.max_iter < 1) f.max_iter = 1;
     r.st = vm_volume_run(cli.ctx, s.m, s.slip ? &sops : NULL, &f, &r.rep);
-    merge_reports(&r.rep, &first);
-    r.staged = 0;
     r.fell_back = 1;
-    a.o.method = f.method;
+    if (r.st == VM_WARN_INVERTED && worse_than(&r.rep, &first)) {
+      if (!cli.quiet)
+        fprintf(stderr,
+                "vm-volume: the fallback ended with %lld cells not certified and %lld inverted "
+                "nodes, the %s schedule with %lld and %lld: its state is kept\n",
+                (long long)(r.rep.cert_invalid + r.rep.cert_undecided), (long long)r.rep.M_final,
+                r.staged ? "staged" : "direct",
+                (long long)(first.cert_invalid + first.cert_undecided), (long long)first.M_final);
+      memcpy(s.m->xyz, keep, nx * sizeof *keep);
+      vm_volume_report fb = r.rep;
+      r.rep = first;
+      r.st = first_st;
+      /* the counts of both runs, the final figures of the kept state */
+      r.rep.iter_untangle += fb.iter_untangle;
+      r.rep.iter_local += fb.iter_local;
+      r.rep.iter_opt += fb.iter_opt;
+      r.rep.iter_repair += fb.iter_repair;
+      if (fb.M_max > r.rep.M_max) r.rep.M_max = fb.M_max;
+      r.rep.time_untangle += fb.time_total;
+      r.rep.time_total += fb.time_total;
+      r.rep.timed_out = fb.timed_out;
+    } else {
+      merge_reports(&r.rep, &first);
+      r.staged = 0;
+      a.o.method = f.method;
+    }
+    vm_free(cli.ctx, keep);
   }
   if (r.st < 0 && r.st != VM_ERR_INTERRUPTED) {
     rc = vm_cli_input_error(&cli, a.in);
