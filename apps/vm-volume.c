@@ -770,17 +770,24 @@ static int worse_than(const vm_volume_report *fb, const vm_volume_report *first)
   return b > b0 || (b == b0 && fb->M_final > first->M_final);
 }
 
+/* Add the other run's iterations, largest M and seconds to the report of
+ * the run whose state is kept (a fallback run, or the first one when the
+ * fallback ended worse). */
+static void add_run(vm_volume_report *r, const vm_volume_report *other) {
+  if (other->M_max > r->M_max) r->M_max = other->M_max;
+  r->iter_untangle += other->iter_untangle;
+  r->iter_local += other->iter_local;
+  r->iter_opt += other->iter_opt;
+  r->iter_repair += other->iter_repair;
+  r->time_untangle += other->time_total;
+  r->time_total += other->time_total;
+}
+
 /* Merge the report of a fallback run into the first one's. */
 static void merge_reports(vm_volume_report *r, const vm_volume_report *first) {
   r->M_init = first->M_init;
-  if (first->M_max > r->M_max) r->M_max = first->M_max;
-  r->iter_untangle += first->iter_untangle;
-  r->iter_local += first->iter_local;
-  r->iter_opt += first->iter_opt;
-  r->iter_repair += first->iter_repair;
-  r->time_untangle += first->time_total;
+  add_run(r, first);
   r->time_certified += first->time_total;
-  r->time_total += first->time_total;
 }
 
 int main(int argc, char **argv) {
@@ -917,7 +924,7 @@ int main(int argc, char **argv) {
     size_t nx = (size_t)s.m->nv * 3;
     double *keep = vm_alloc_array(cli.ctx, nx ? nx : 1, sizeof *keep);
     if (!keep) {
-      rc = vm_cli_input_error(&cli, a.in);
+      rc = vm_cli_input_error(&cli, NULL); /* out of memory, not the input's fault */
       goto done;
     }
     memcpy(keep, s.m->xyz, nx * sizeof *keep);
@@ -937,17 +944,11 @@ int main(int argc, char **argv) {
                 r.staged ? "staged" : "direct",
                 (long long)(first.cert_invalid + first.cert_undecided), (long long)first.M_final);
       memcpy(s.m->xyz, keep, nx * sizeof *keep);
+      /* the counts of both runs, the final figures of the kept state */
       vm_volume_report fb = r.rep;
       r.rep = first;
       r.st = first_st;
-      /* the counts of both runs, the final figures of the kept state */
-      r.rep.iter_untangle += fb.iter_untangle;
-      r.rep.iter_local += fb.iter_local;
-      r.rep.iter_opt += fb.iter_opt;
-      r.rep.iter_repair += fb.iter_repair;
-      if (fb.M_max > r.rep.M_max) r.rep.M_max = fb.M_max;
-      r.rep.time_untangle += fb.time_total;
-      r.rep.time_total += fb.time_total;
+      add_run(&r.rep, &fb);
       r.rep.timed_out = fb.timed_out;
     } else {
       merge_reports(&r.rep, &first);
