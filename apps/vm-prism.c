@@ -740,6 +740,7 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.nonortho_max);
   printf(", \"skewness_max\": ");
   vm_json_double(stdout, r.skew_max);
+  printf(", \"det_small\": %lld", (long long)r.det_small);
   printf(", \"medial\": {\"room\": ");
   vm_json_double(stdout, r.medial_room);
   printf(", \"reach\": ");
@@ -840,10 +841,11 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         "max %.3f, p99 %.3f; %.2f %% of the columns within [1/1.5, 1.5] x %g",
                         r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.growth);
   if (st2 >= 0)
-    st2 =
-        vm_report_row(report, "faces as OpenFOAM measures them",
-                      "max non-orthogonality %.1f deg, %lld faces beyond 70 deg, max skewness %.2f",
-                      r.nonortho_max, (long long)r.nonortho_over70, r.skew_max);
+    st2 = vm_report_row(report, "faces as OpenFOAM measures them",
+                        "max non-orthogonality %.1f deg, %lld faces beyond 70 deg, max skewness "
+                        "%.2f, %lld prisms with a cell determinant below 0.001",
+                        r.nonortho_max, (long long)r.nonortho_over70, r.skew_max,
+                        (long long)r.det_small);
   if (st2 >= 0)
     st2 = vm_report_row(report,
                         "room for T (exterior medial radius >= 1.05 T): columns, of those at "

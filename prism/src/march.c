@@ -1242,10 +1242,12 @@ int vm_prism_march(vm_prism *p) {
     vm_log(ctx, VM_LOG_INFO,
            "prism: non-orthogonality relief: %lld steps in %d sweeps (%lld of the outer surface, "
            "%d of its batches taken again); faces beyond 70 degrees %lld -> %lld, largest "
-           "non-orthogonality %.1f -> %.1f degrees",
+           "non-orthogonality %.1f -> %.1f degrees, cells with a determinant below 0.001 %lld "
+           "-> %lld",
            (long long)os.moves, os.sweeps, (long long)os.outer_moves, os.outer_batches_undone,
            (long long)os.over70_before, (long long)os.over70_after,
-           acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI);
+           acos(os.cmin_before) * 180 / PR_PI, acos(os.cmin_after) * 180 / PR_PI,
+           (long long)os.det_before, (long long)os.det_after);
     if (os.split_before)
       vm_log(ctx, VM_LOG_INFO,
              "prism: split repair: %lld steps in %d rounds (%d outer batches taken again "

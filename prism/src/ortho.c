@@ -14,10 +14,16 @@
  * crossings are queried after it (outer_pass): a few steps of gradient
  * descent on
  *
- *   E(x) = sum over the faces of the cells around x of max(0, c0 - cos)^2,
+ *   E(x) = sum over the faces of the cells around x of max(0, c0 - cos)^2
+ *        + sum over those cells of max(0, log10(d0 / det))^2,
  *
  * cos the face's non-orthogonality cosine and c0 that of
- * k.ortho_relief_deg, so faces within it weigh nothing. A step is kept only
+ * k.ortho_relief_deg, so faces within it weigh nothing; det the cell's
+ * OpenFOAM determinant over its faces inside the hybrid mesh (checkMesh
+ * -allGeometry fails a cell below 0.001: a thin cell sheared over a
+ * stretched triangle, the first layers where a trailing edge's columns
+ * fan out, the squeezed stacks of a concave junction) and d0
+ * k.det_relief_limit, a margin above it. A step is kept only
  * if every prism around the vertex keeps its corner tets positive and its
  * quality above min(k.ortho_qmin, k.ortho_relief_qshare of its quality
  * before), no face around it becomes more skewed than k.skew_limit (or than
@@ -31,11 +37,13 @@
  * smallest interpolation weight stays above k.ortho_relief_wmin (or where
  * it was), the ratios of the column's successive heights stay within
  * [G / b, b G] (G the growth ratio, b k.ortho_relief_growth_band; or where
- * they were), and a smooth column's first side edge stays within
- * k.tilt_limit_deg of its normal (or its tilt before). Vertices are
- * visited where a face of their cells is beyond
- * k.ortho_relief_active_deg; sweeps repeat while one lowers the count of
- * faces beyond 70 degrees by more than k.ortho_relief_gain of it. Each
+ * they were), a smooth column's first side edge stays within
+ * k.tilt_limit_deg of its normal (or its tilt before), and no more of
+ * its cells have a determinant below 0.001 and their least stays above
+ * it (or where it was). Vertices are visited where a face of their cells is beyond
+ * k.ortho_relief_active_deg or a cell's determinant below d0; sweeps
+ * repeat while one lowers the count of faces beyond 70 degrees and cells
+ * below 0.001 by more than k.ortho_relief_gain of it. Each
  * level is visited in vertex order; levels five apart, which share
  * nothing, run on separate threads, so the result is the same on every run
  * and thread count. */
@@ -78,6 +86,30 @@ static int face_of(const double *x, int f, double *y) {
   return n;
 }
 
+/* checkMesh fails a cell whose determinant is below this. */
+#define PR_FOAM_DET_MIN 1e-3
+
+/* OpenFOAM's determinant of a prism from its faces' area vectors fs
+ * (pr_foam_cell_faces), over those inside the hybrid mesh (internal[f]):
+ * checkMesh leaves out the boundary's, the wall under layer 0 and a side
+ * over an open edge; the top of the last layer is inside once the fill's
+ * tets stand on it. */
+static double cell_det(const double (*fs)[3], const int *internal) {
+  double s[5][3];
+  int n = 0;
+  for (int f = 0; f < 5; f++)
+    if (internal[f]) memcpy(s[n++], fs[f], sizeof s[0]);
+  return vm_foam_cell_determinant(n, (const double(*)[3])s);
+}
+
+/* The relief's penalty of a cell of determinant d below the limit dl:
+ * (log10(dl / d))^2 (a degenerate cell: that of 1e-12). */
+static double det_penalty(double d, double dl) {
+  if (d >= dl) return 0;
+  double r = log10(dl / (d > 1e-12 ? d : 1e-12));
+  return r * r;
+}
+
 /* Each wall triangle's neighbour over each of its edges (-1: open). */
 static void edge_neighbours(const vm_prism *p, int32_t *nbt) {
   for (int64_t t = 0; t < p->nt; t++)
@@ -94,11 +126,22 @@ typedef struct facemap {
   uint8_t *bad;
   uint8_t *o70;
   double *cw;
+  double *det;   /* nt nl: each cell's OpenFOAM determinant (cell_det) */
   uint8_t *mark; /* nt nl scratch: cells to update */
   double qworst; /* the least scaled Jacobian of the stack when the split
                     repair starts: the repair lowers no cell below it (the
                     figure the report gives) */
 } facemap;
+
+/* Cell c = (t, k)'s centre and determinant into the facemap. */
+static void cell_update(const vm_prism *p, const int32_t *nbt, facemap *fm, int64_t t, int k) {
+  int64_t c = t * (p->nlev - 1) + k;
+  double x[18], fc[5][3], fs[5][3];
+  pr_prism_at(p, p->lev, t, k, x);
+  pr_foam_cell_faces(x, fm->cc + 3 * c, fc, fs);
+  int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
+  fm->det[c] = cell_det((const double(*)[3])fs, in);
+}
 
 /* The cells around level k of column v (layers k - 1 and k of v's
  * triangles) and, for each of their faces, the cell across: another cell
@@ -153,6 +196,8 @@ typedef struct around {
                                 Jacobian and its quadrature quality (-1 if
                                 either is not positive) */
   double sj[2 * PR_RING_MAX]; /* each cell's scaled Jacobian (corner tets) */
+  int ndet;                   /* cells with a determinant below checkMesh's limit */
+  double detmin;              /* the least determinant of the cells */
 } around;
 
 /* The split penalty of prism x: the sum over its tets of two bottom and
@@ -184,6 +229,8 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   a->splitbad = 0;
   a->splitpen = 0;
   a->n70 = 0;
+  a->ndet = 0;
+  a->detmin = INFINITY;
   const double c70 = cos(70 * PR_PI / 180);
   for (int c = 0; c < h->n; c++) {
     pr_prism_at(p, p->lev, h->t[c], h->j[c], x[c]);
@@ -202,6 +249,14 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
     }
     if (split) a->e += split_penalty(p, x[c]);
     pr_foam_cell_faces(x[c], cc[c], fc[c], fs[c]);
+    /* the cell's determinant: its faces inside the hybrid mesh (every
+     * face but a boundary one below or beside it) */
+    int in[5];
+    for (int f = 0; f < 5; f++) in[f] = f == 1 || h->nb[c][f] != -1;
+    double d = cell_det((const double(*)[3])fs[c], in);
+    a->ndet += d < PR_FOAM_DET_MIN;
+    a->detmin = d < a->detmin ? d : a->detmin;
+    if (!split) a->e += det_penalty(d, p->k.det_relief_limit);
     if (full)
       a->concave +=
           pr_foam_cell_concave((const double(*)[3])fc[c], (const double(*)[3])fs[c], cc[c]);
@@ -246,9 +301,7 @@ static void update_faces(const vm_prism *p, const int32_t *nbt, double cact, fac
 #pragma omp parallel for schedule(static)
   for (int64_t c = 0; c < nt * nl; c++) {
     if (mark && !(mark[c] & 1)) continue;
-    double x[18];
-    pr_prism_at(p, p->lev, c / nl, (int)(c % nl), x);
-    pr_foam_cell(x, fm->cc + 3 * c);
+    cell_update(p, nbt, fm, c / nl, (int)(c % nl));
   }
 #pragma omp parallel for schedule(static)
   for (int64_t c = 0; c < nt * nl; c++) {
@@ -275,17 +328,21 @@ static void update_faces(const vm_prism *p, const int32_t *nbt, double cact, fac
   }
 }
 
-/* Faces beyond 70 degrees in *n70, the worst cosine in *cmin. */
-static void face_totals(const vm_prism *p, const facemap *fm, int64_t *n70, double *cmin) {
-  int64_t n = p->nt * (p->nlev - 1), over = 0;
+/* Faces beyond 70 degrees in *n70, the worst cosine in *cmin, cells
+ * with a determinant below checkMesh's limit in *ndet. */
+static void face_totals(const vm_prism *p, const facemap *fm, int64_t *n70, double *cmin,
+                        int64_t *ndet) {
+  int64_t n = p->nt * (p->nlev - 1), over = 0, nd = 0;
   double worst = 1;
-#pragma omp parallel for schedule(static) reduction(+ : over) reduction(min : worst)
+#pragma omp parallel for schedule(static) reduction(+ : over, nd) reduction(min : worst)
   for (int64_t c = 0; c < n; c++) {
     over += fm->o70[c];
+    nd += fm->det[c] < PR_FOAM_DET_MIN;
     worst = fm->cw[c] < worst ? fm->cw[c] : worst;
   }
   *n70 = over;
   *cmin = worst;
+  *ndet = nd;
 }
 
 /* The vertices (v, k), k in 1..nl, of the two cells on every face beyond
@@ -295,9 +352,13 @@ static void activate(const vm_prism *p, const int32_t *nbt, const facemap *fm, u
   int nl = p->nlev - 1;
   memset(act, 0, (size_t)(nw * (nl + 1)));
   for (int64_t c = 0; c < nt * nl; c++) {
-    if (!fm->bad[c]) continue;
     int64_t t = c / nl;
     int k = (int)(c % nl);
+    if (fm->det[c] < p->k.det_relief_limit)
+      for (int i = 0; i < 3; i++)
+        for (int l = k; l <= k + 1; l++)
+          if (l >= 1) act[(size_t)l * nw + p->tri[3 * t + i]] = 1;
+    if (!fm->bad[c]) continue;
     for (int f = 1; f < 5; f++) {
       if (!(fm->bad[c] >> f & 1)) continue;
       int64_t u;
@@ -506,6 +567,7 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     if (!eval_around(p, &h, c0, qfloor, split, &a1)) continue;
     if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
         a1.concave > a0.concave || a1.wmin < wfloor || a1.splitbad > a0.splitbad ||
+        a1.ndet > a0.ndet || a1.detmin < fmin(a0.detmin, PR_FOAM_DET_MIN) ||
         (!split && a1.splitpen > a0.splitpen) || (split && a1.n70 > a0.n70))
       continue;
     /* the split repair lowers no cell's scaled Jacobian below the stack's
@@ -534,12 +596,9 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
         continue;
       }
     }
-    /* the cells around keep their centres current for the next hoods */
-    for (int c = 0; c < h.n; c++) {
-      double x[18];
-      pr_prism_at(p, p->lev, h.t[c], h.j[c], x);
-      pr_foam_cell(x, fm->cc + 3 * (h.t[c] * (p->nlev - 1) + h.j[c]));
-    }
+    /* the cells around keep their centres and determinants current for the
+     * next hoods */
+    for (int c = 0; c < h.n; c++) cell_update(p, nbt, fm, h.t[c], h.j[c]);
     return 1;
   }
   memcpy(xv, x0, sizeof x0);
@@ -547,17 +606,13 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
 }
 
 /* Outer vertex v (level nl) back at x: in the levels, in the single
- * layer, and the centres of its top-layer cells. */
-static void put_outer(vm_prism *p, facemap *fm, int64_t v, const double *x) {
+ * layer, and the centres and determinants of its top-layer cells. */
+static void put_outer(vm_prism *p, const int32_t *nbt, facemap *fm, int64_t v, const double *x) {
   int nl = p->nlev - 1;
   memcpy(p->lev + (size_t)nl * 3 * p->nw + 3 * v, x, 3 * sizeof *x);
   memcpy(p->layer->xyz + 3 * (p->nw + v), x, 3 * sizeof *x);
-  for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++) {
-    double y[18];
-    int64_t t = p->vt[m];
-    pr_prism_at(p, p->lev, t, nl - 1, y);
-    pr_foam_cell(y, fm->cc + 3 * (t * nl + nl - 1));
-  }
+  for (int64_t m = p->vt_off[v]; m < p->vt_off[v + 1]; m++)
+    cell_update(p, nbt, fm, p->vt[m], nl - 1);
 }
 
 static int cmp_i64(const void *a, const void *b) {
@@ -673,7 +728,7 @@ static int split_repair(vm_prism *p, const int32_t *nbt, facemap *fm, const doub
       if ((st = pr_layer_intersections(p, NULL, &np)) < 0) goto done;
       if (np <= p->rep.intersections) break;
       s->split_batches_undone++;
-      for (int64_t i = nml; i-- > nml0;) put_outer(p, fm, ml[i] % nw, x0 + 3 * (ml[i] % nw));
+      for (int64_t i = nml; i-- > nml0;) put_outer(p, nbt, fm, ml[i] % nw, x0 + 3 * (ml[i] % nw));
       for (int64_t i = top0; i < nvl; i++) stuck[vl[i]] = 0;
       nml = nml0;
     }
@@ -790,7 +845,7 @@ static int outer_pass(vm_prism *p, const int32_t *nbt, facemap *fm, const double
     /* undone in reverse order: each vertex moved once, so every one is
      * back where the batch found it, and so is every cell centre */
     s->outer_batches_undone++;
-    for (int64_t i = n; i-- > 0;) put_outer(p, fm, list[i], x0 + 3 * list[i]);
+    for (int64_t i = n; i-- > 0;) put_outer(p, nbt, fm, list[i], x0 + 3 * list[i]);
     /* held back: the moved columns that carry a crossing face or are next
      * to one (a moved vertex's top triangles are its neighbours' too) */
     int64_t held = 0;
@@ -836,11 +891,12 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
                 vm_alloc_array(ctx, (size_t)nc, 1),
                 vm_alloc_array(ctx, (size_t)nc, 1),
                 vm_alloc_array(ctx, (size_t)nc, sizeof *fm.cw),
+                vm_alloc_array(ctx, (size_t)nc, sizeof *fm.det),
                 vm_alloc_array(ctx, (size_t)nc, 1),
                 INFINITY};
   int st = VM_OK;
-  if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.mark ||
-      !frozen || !omark || !ox0 || !olist) {
+  if (!nbt || !qinit || !act || !moved || !fm.cc || !fm.bad || !fm.o70 || !fm.cw || !fm.det ||
+      !fm.mark || !frozen || !omark || !ox0 || !olist) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -856,8 +912,10 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
   const double c0 = cos(kp->ortho_relief_deg * PR_PI / 180);
   const double cact = cos(kp->ortho_relief_active_deg * PR_PI / 180);
   update_faces(p, nbt, cact, &fm, NULL);
-  face_totals(p, &fm, &s->over70_before, &s->cmin_before);
-  int64_t n70 = s->over70_before, last = n70;
+  face_totals(p, &fm, &s->over70_before, &s->cmin_before, &s->det_before);
+  /* the sweeps go on while they lower the faces beyond 70 degrees and the
+   * cells below the determinant's limit */
+  int64_t n70 = s->over70_before, ndet = s->det_before, last = n70 + ndet;
   for (int sweep = 0; sweep < kp->ortho_relief_sweeps && pr_time_left(p) > 0; sweep++) {
     int64_t nmoved = 0;
     activate(p, nbt, &fm, act);
@@ -886,21 +944,22 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s) {
       goto done;
     refresh(p, nbt, cact, &fm, moved);
     double cm;
-    face_totals(p, &fm, &n70, &cm);
+    face_totals(p, &fm, &n70, &cm, &ndet);
     s->moves += nmoved;
     s->sweeps = sweep + 1;
     vm_log(ctx, VM_LOG_DEBUG,
-           "prism: non-orthogonality relief sweep %d: %lld steps, %lld faces beyond 70 degrees",
-           sweep + 1, (long long)nmoved, (long long)n70);
+           "prism: non-orthogonality relief sweep %d: %lld steps, %lld faces beyond 70 degrees, "
+           "%lld cells below the determinant's limit",
+           sweep + 1, (long long)nmoved, (long long)n70, (long long)ndet);
     /* done when a sweep gains less than k.ortho_relief_gain of the faces
      * beyond 70 degrees it started with */
-    if (!nmoved || (double)(last - n70) <= kp->ortho_relief_gain * (double)last) break;
-    last = n70;
+    if (!nmoved || (double)(last - n70 - ndet) <= kp->ortho_relief_gain * (double)last) break;
+    last = n70 + ndet;
   }
   double t0 = omp_get_wtime();
   if ((st = split_repair(p, nbt, &fm, qinit, c0, cact, act, moved, s)) < 0) goto done;
   s->split_time = omp_get_wtime() - t0;
-  face_totals(p, &fm, &s->over70_after, &s->cmin_after);
+  face_totals(p, &fm, &s->over70_after, &s->cmin_after, &s->det_after);
 done:
   vm_free(ctx, nbt);
   vm_free(ctx, qinit);
@@ -910,6 +969,7 @@ done:
   vm_free(ctx, fm.bad);
   vm_free(ctx, fm.o70);
   vm_free(ctx, fm.cw);
+  vm_free(ctx, fm.det);
   vm_free(ctx, fm.mark);
   vm_free(ctx, frozen);
   vm_free(ctx, omark);
@@ -919,8 +979,9 @@ done:
 }
 
 int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over70,
-                    double *nonortho_max, double *skew_max) {
+                    double *nonortho_max, double *skew_max, int64_t *det_small) {
   *over70 = 0;
+  *det_small = 0;
   *nonortho_max = *skew_max = 0;
   int nl = nlev - 1;
   int64_t nt = p->nt, nc = nt * nl;
@@ -940,9 +1001,9 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     pr_foam_cell(x, cc + 3 * c);
   }
   const double c70 = cos(70 * PR_PI / 180);
-  int64_t over = 0;
+  int64_t over = 0, nd = 0;
   double worst = 1, skew = 0;
-#pragma omp parallel for schedule(static) reduction(+ : over) reduction(min : worst) \
+#pragma omp parallel for schedule(static) reduction(+ : over, nd) reduction(min : worst) \
     reduction(max : skew)
   for (int64_t c = 0; c < nc; c++) {
     int64_t t = c / nl;
@@ -957,6 +1018,13 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     if (top_k[0] <= k && top_k[1] <= k && top_k[2] <= k) continue;
     int last = k == nl - 1 || (top_k[0] <= k + 1 && top_k[1] <= k + 1 && top_k[2] <= k + 1);
     pr_prism_at(p, L, t, k, x);
+    if (top_k[0] > k && top_k[1] > k && top_k[2] > k) {
+      /* a prism (no column ended below its top): its determinant */
+      double ccd[3], fc[5][3], fs[5][3];
+      pr_foam_cell_faces(x, ccd, fc, fs);
+      int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
+      nd += cell_det((const double(*)[3])fs, in) < PR_FOAM_DET_MIN;
+    }
     for (int f = 0; f < 5; f++) {
       double y[12];
       if (f >= 2 && top_k[f - 2] <= k && top_k[(f - 1) % 3] <= k) continue;
@@ -981,6 +1049,7 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     }
   }
   *over70 = over;
+  *det_small = nd;
   *nonortho_max = acos(worst < -1 ? -1 : worst) * 180 / PR_PI;
   *skew_max = skew;
   vm_free(p->ctx, nbt);

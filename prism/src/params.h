@@ -281,6 +281,12 @@ typedef struct pr_params {
                                       without a new least count of failing cells
                                       (vm-gen wing's own vertices at 5 %: 371
                                       from round 60 to 200, 88 s of 107) */
+  double det_relief_limit;         /* 0.003: the relief also weighs the cells
+                                      whose OpenFOAM determinant (over their
+                                      faces inside the hybrid mesh) is below
+                                      this, by (log10(0.003 / det))^2, and
+                                      visits their vertices (checkMesh fails
+                                      below 0.001: a margin) */
   double ortho_relief_fd;          /* 1e-6: finite-difference step of the gradient,
                                       a share of the local size */
   double stack_lean_deg;           /* 45: a prism of layers 1..n-1 whose centroids'
@@ -406,6 +412,7 @@ static inline pr_params pr_params_default(void) {
       .ortho_relief_wmin = 0.1,
       .ortho_relief_outer_angle = 20,
       .ortho_relief_outer_tries = 8,
+      .det_relief_limit = 0.003,
       .ortho_relief_fd = 1e-6,
       .split_margin = 0.02,
       .split_rounds = 200,

@@ -333,7 +333,8 @@ int vm_prism_get_report(vm_prism *p, vm_prism_report *r) {
     R.growth_p99 = nlev > 2 ? pr_percentile(gcol, nw, 0.99) : 0;
     R.growth_band_share = nlev > 2 ? (double)inband / (double)nw : 1;
     vm_free(p->ctx, dev);
-    int st = pr_foam_figures(p, L, nlev, &R.nonortho_over70, &R.nonortho_max, &R.skew_max);
+    int st =
+        pr_foam_figures(p, L, nlev, &R.nonortho_over70, &R.nonortho_max, &R.skew_max, &R.det_small);
     if (st < 0) return st;
   }
   *r = R;

@@ -224,6 +224,9 @@ typedef struct pr_ortho_summary {
   int sweeps;
   int64_t moves;                       /* vertex steps kept */
   int64_t over70_before, over70_after; /* internal faces beyond 70 degrees */
+  int64_t det_before, det_after;       /* cells with an OpenFOAM determinant below
+                                          0.001 (the top of the last layer taken
+                                          as inside: the fill's tets stand on it) */
   double cmin_before, cmin_after;      /* the worst face's non-orthogonality cosine */
   int64_t split_before, split_after;   /* prisms not positive in every 3-tet split,
                                           before and after the split repair */
@@ -249,6 +252,6 @@ int pr_ortho_relief(vm_prism *p, pr_ortho_summary *s);
  * largest non-orthogonality (degrees) and the largest skewness (the wall
  * and the outer surface included). */
 int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over70,
-                    double *nonortho_max, double *skew_max);
+                    double *nonortho_max, double *skew_max, int64_t *det_small);
 
 #endif

@@ -214,6 +214,10 @@ typedef struct vm_prism_report {
    * outer surface included; checkMesh fails at 4) */
   int64_t nonortho_over70;
   double nonortho_max, skew_max;
+  /* prisms whose OpenFOAM cell determinant is below 0.001 (checkMesh
+   * -allGeometry fails them; over the faces inside the hybrid mesh: the
+   * top of the last layer counts as inside, the fill's tets stand on it) */
+  int64_t det_small;
   /* the room the geometry leaves (vm_prism_medial_radius; all 0 if it was
    * not computed): a column has room for T where its wall vertex's
    * exterior medial radius is at least 1.05 T */
