@@ -796,6 +796,14 @@ done:
 /* Meshing passes with points in the slivers, at most; a tet of four
  * envelope vertices is flat below this least dihedral angle (degrees) */
 enum { FILL_SLIVER_PASSES = 4, FILL_FLAT_DEG = 5 };
+/* Of those, the first ones mesh the whole region again with Gmsh (about
+ * 6.5 s each on the demo aircraft); the later ones insert their points
+ * locally (insert_points, 0.1 s). The last Gmsh pass made local: the
+ * demo's fill 41-49 -> 39-43 s, a CAD wing's (test fill_slivers) 32 -> 28 s,
+ * checkMesh's figures as before (flat tets of envelope vertices 2 -> 0
+ * and 7 -> 5); the last two: 27-32 s and 21 s, but the wing's small
+ * determinants 72 -> 105 and weights below 0.05 51 -> 99 */
+enum { FILL_GMSH_PASSES = 3 };
 
 typedef struct {
   int32_t v[4]; /* ascending */
@@ -825,7 +833,8 @@ static int quad_cmp(const void *a, const void *b) {
  * pass's are added to seen. *nsliver: every sliver found. */
 static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin, const int32_t *vid,
                          const double *nrm, double min_deg, double **q, int64_t *nq,
-                         int64_t *nsliver, quad_key **seen, int64_t *nseen, int64_t *nrepeat) {
+                         int64_t *nsliver, quad_key **seen, int64_t *nseen, int64_t *nrepeat,
+                         size_t **src) {
   *nsliver = *nrepeat = 0;
   int64_t n = *nq, ns0 = *nseen;
   for (int64_t e = e0; e < o->ne; e++) {
@@ -893,6 +902,12 @@ static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin,
     if (!t) return VM_ERR_NOMEM;
     *q = t;
     for (int k = 0; k < 3; k++) t[3 * n + k] = g[k] + up * nv[k];
+    if (src) {
+      size_t *sr = vm_realloc(ctx, *src, (size_t)(4 * (n + 1)) * sizeof *sr);
+      if (!sr) return VM_ERR_NOMEM;
+      *src = sr;
+      for (int k = 0; k < 4; k++) sr[4 * n + k] = (size_t)c[k] + 1; /* Gmsh's tags */
+    }
     n++;
   }
   *nq = n;
@@ -929,6 +944,27 @@ typedef struct {
   size_t nt;
   size_t *tnode; /* 4 per tet */
 } gmsh_result;
+
+/* A copy of R in Gmsh's allocations (freed by gmsh_result_free). */
+static int gmsh_result_copy(const gmsh_result *R, gmsh_result *C) {
+  memset(C, 0, sizeof *C);
+  C->ntag = gmshMalloc((R->nn + 1) * sizeof *C->ntag);
+  C->coord = gmshMalloc((3 * R->nn + 1) * sizeof *C->coord);
+  C->tnode = gmshMalloc((4 * R->nt + 1) * sizeof *C->tnode);
+  if (!C->ntag || !C->coord || !C->tnode) {
+    gmshFree(C->ntag);
+    gmshFree(C->coord);
+    gmshFree(C->tnode);
+    memset(C, 0, sizeof *C);
+    return VM_ERR_NOMEM;
+  }
+  C->nn = R->nn;
+  C->nt = R->nt;
+  memcpy(C->ntag, R->ntag, R->nn * sizeof *C->ntag);
+  memcpy(C->coord, R->coord, 3 * R->nn * sizeof *C->coord);
+  memcpy(C->tnode, R->tnode, 4 * R->nt * sizeof *C->tnode);
+  return VM_OK;
+}
 
 static void gmsh_result_free(gmsh_result *R) {
   gmshFree(R->ntag);
@@ -979,6 +1015,47 @@ static int polygon_triangulations(int n, int tri[][FLIP_RING_MAX - 2][3]) {
   return cnt;
 }
 
+/* Room in the list of new tets nw (4 tags each, *cap of them) for need. */
+static int tets_room(vm_ctx *ctx, size_t **nw, size_t *cap, size_t need, size_t step) {
+  if (need <= *cap) return VM_OK;
+  size_t c = 2 * *cap + step;
+  if (c < need) c = need;
+  size_t *t = vm_realloc(ctx, *nw, 4 * c * sizeof *t);
+  if (!t) return VM_ERR_NOMEM;
+  *nw = t;
+  *cap = c;
+  return VM_OK;
+}
+
+/* R's tets 0..nt-1 not marked dead, then the nnew tets of nw. */
+static int tets_replace(gmsh_result *R, size_t nt, const uint8_t *dead, const size_t *nw,
+                        size_t nnew) {
+  size_t keep = 0;
+  for (size_t t = 0; t < nt; t++) keep += !dead[t];
+  size_t *out = gmshMalloc(4 * (keep + nnew + 1) * sizeof *out);
+  if (!out) return VM_ERR_NOMEM;
+  size_t o = 0;
+  for (size_t t = 0; t < nt; t++)
+    if (!dead[t]) memcpy(out + 4 * o++, R->tnode + 4 * t, 4 * sizeof *out);
+  if (nnew) memcpy(out + 4 * o, nw, 4 * nnew * sizeof *out);
+  gmshFree(R->tnode);
+  R->tnode = out;
+  R->nt = keep + nnew;
+  return VM_OK;
+}
+
+/* The orientation of R's tets (at: node index of each tag): the sign of
+ * the first one's volume that is not 0. */
+static double tets_sign(const gmsh_result *R, const int64_t *at) {
+  for (size_t t = 0; t < R->nt; t++) {
+    const size_t *c = R->tnode + 4 * t;
+    double o = tet_vol(R->coord + 3 * at[c[0]], R->coord + 3 * at[c[1]], R->coord + 3 * at[c[2]],
+                       R->coord + 3 * at[c[3]]);
+    if (o != 0) return o > 0 ? 1 : -1;
+  }
+  return 0;
+}
+
 /* Edge removal (Shewchuk's) on Gmsh's flat tets of four envelope vertices
  * (node tags 1..nenv): for each such tet (min dihedral below 5 degrees),
  * each of its edges whose tets close a ring of 3..FLIP_RING_MAX around it
@@ -1020,13 +1097,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
   int ntri[FLIP_RING_MAX + 1] = {0};
   for (int n = 3; n <= FLIP_RING_MAX; n++) ntri[n] = polygon_triangulations(n, tris_n[n]);
   /* the orientation of Gmsh's tets */
-  double sgn = 0;
-  for (size_t t = 0; t < R->nt && sgn == 0; t++) {
-    const size_t *c = R->tnode + 4 * t;
-    double o = tet_vol(R->coord + 3 * at[c[0]], R->coord + 3 * at[c[1]], R->coord + 3 * at[c[2]],
-                       R->coord + 3 * at[c[3]]);
-    sgn = o > 0 ? 1 : o < 0 ? -1 : 0;
-  }
+  double sgn = tets_sign(R, at);
   for (int round = 0; round < FLIP_ROUNDS; round++) {
     size_t nt = R->nt;
     /* vertex -> tets */
@@ -1146,15 +1217,8 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
         }
         if (best < 0) continue;
         /* applied */
-        if (nnew + 2 * (size_t)(n - 2) > cap) {
-          cap = 2 * cap + 2 * FLIP_RING_MAX;
-          size_t *t2 = vm_realloc(ctx, nw, 4 * cap * sizeof *t2);
-          if (!t2) {
-            st = VM_ERR_NOMEM;
-            goto done;
-          }
-          nw = t2;
-        }
+        if ((st = tets_room(ctx, &nw, &cap, nnew + 2 * (size_t)(n - 2), 2 * FLIP_RING_MAX)))
+          goto done;
         for (int j = 0; j < n - 2; j++) {
           const int *tr = tris_n[n][best][j];
           size_t tv[2][4] = {{w[tr[0]], w[tr[1]], w[tr[2]], u}, {w[tr[0]], w[tr[1]], w[tr[2]], v}};
@@ -1179,23 +1243,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
       }
     }
     if (flips) {
-      size_t keep = 0;
-      for (size_t t = 0; t < nt; t++) keep += !dead[t];
-      size_t *out = gmshMalloc(4 * (keep + nnew) * sizeof *out);
-      if (!out) {
-        st = VM_ERR_NOMEM;
-        goto done;
-      }
-      size_t o = 0;
-      for (size_t t = 0; t < nt; t++)
-        if (!dead[t]) {
-          memcpy(out + 4 * o, R->tnode + 4 * t, 4 * sizeof *out);
-          o++;
-        }
-      memcpy(out + 4 * o, nw, 4 * nnew * sizeof *out);
-      gmshFree(R->tnode);
-      R->tnode = out;
-      R->nt = keep + nnew;
+      if ((st = tets_replace(R, nt, dead, nw, nnew))) goto done;
       *nflips += flips;
     }
     if (!flips) break;
@@ -1209,6 +1257,311 @@ done:
   vm_free(ctx, fillp);
   vm_free(ctx, dead);
   vm_free(ctx, nw);
+  return st;
+}
+
+/* Local insertion of the sliver points, the passes after the first
+ * FILL_GMSH_PASSES (instead of meshing the whole region again with them):
+ * point i goes into the Delaunay cavity of the sliver it was made for
+ * (src[i], the sliver's four node tags): the tets whose circumsphere holds
+ * it, grown from the sliver across faces that have a tet on their other
+ * side (a boundary's triangles stay faces), then shrunk until every face
+ * of its boundary sees the point by a margin (a star-shaped cavity: the
+ * tet behind a face that does not is left out; the sliver itself stays in
+ * or the point is not taken), and filled with the tets of the point and
+ * those faces, oriented as Gmsh's. The point is tried at several heights
+ * on its line from the sliver's centroid (insert_heights) and the height
+ * whose new tets have the largest least dihedral angle is taken, if that
+ * beats the least angle of the tets it replaces and the cavity keeps every
+ * vertex on its boundary. A cavity that meets one an earlier point of the
+ * same call replaced is not taken (retry[i] = 1: the caller tries it again
+ * on the mesh this call leaves). New nodes get tags after the largest;
+ * *ninserted counts the points taken, why[CAV_*] those left by reason. The
+ * merge checks the result again (conformity, the boundary's triangles). */
+enum { INSERT_CAVITY_MAX = 96 };
+
+/* p inside the circumsphere of a, b, c, d (of orientation sign sgn)? */
+static int in_sphere(const double *a, const double *b, const double *c, const double *d,
+                     const double *p, double sgn) {
+  double m[4][4];
+  const double *q[4] = {a, b, c, d};
+  for (int i = 0; i < 4; i++) {
+    double x = q[i][0] - p[0], y = q[i][1] - p[1], z = q[i][2] - p[2];
+    m[i][0] = x, m[i][1] = y, m[i][2] = z, m[i][3] = x * x + y * y + z * z;
+  }
+  double d0 = m[1][1] * (m[2][2] * m[3][3] - m[2][3] * m[3][2]) -
+              m[1][2] * (m[2][1] * m[3][3] - m[2][3] * m[3][1]) +
+              m[1][3] * (m[2][1] * m[3][2] - m[2][2] * m[3][1]);
+  double d1 = m[0][1] * (m[2][2] * m[3][3] - m[2][3] * m[3][2]) -
+              m[0][2] * (m[2][1] * m[3][3] - m[2][3] * m[3][1]) +
+              m[0][3] * (m[2][1] * m[3][2] - m[2][2] * m[3][1]);
+  double d2 = m[0][1] * (m[1][2] * m[3][3] - m[1][3] * m[3][2]) -
+              m[0][2] * (m[1][1] * m[3][3] - m[1][3] * m[3][1]) +
+              m[0][3] * (m[1][1] * m[3][2] - m[1][2] * m[3][1]);
+  double d3 = m[0][1] * (m[1][2] * m[2][3] - m[1][3] * m[2][2]) -
+              m[0][2] * (m[1][1] * m[2][3] - m[1][3] * m[2][1]) +
+              m[0][3] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]);
+  double det = m[0][0] * d0 - m[1][0] * d1 + m[2][0] * d2 - m[3][0] * d3;
+  /* for a positively oriented tet the lifted determinant is negative
+   * inside (the sign convention of the 4x4 form without the column of 1s
+   * relative to p) */
+  return -det * sgn > 0;
+}
+
+/* The tets of R around nodes (CSR by tag: tets cnt[t]..cnt[t+1]-1 in adj)
+ * and the node index of each tag (at). */
+typedef struct {
+  const gmsh_result *R;
+  const int64_t *at;
+  const size_t *cnt, *adj;
+  const uint8_t *dead;
+  double sgn;
+} tet_index;
+
+/* The faces of a tet: face k leaves out vertex k, its three in the order
+ * that keeps the tet's orientation with vertex k (or a new point) fourth. */
+static const int tet_face[4][3] = {{1, 3, 2}, {0, 2, 3}, {0, 3, 1}, {0, 1, 2}};
+
+enum { CAV_OK, CAV_NO_SLIVER, CAV_CONFLICT, CAV_STAR, CAV_VERTEX, CAV_WORSE };
+
+/* The cavity of point p grown from tet t0 (see insert_points): its tets
+ * cav[0..*nc), its boundary faces bf[0..*nbf) oriented so that p fourth
+ * keeps the orientation, the least dihedral angle of the tets it replaces
+ * (*old) and of the new ones (*neu). */
+static int cavity(const tet_index *X, size_t t0, const double *p, size_t *cav, int *nc_out,
+                  size_t (*bf)[3], int *nbf_out, double *old, double *neu) {
+  const gmsh_result *R = X->R;
+  const int64_t *at = X->at;
+  int nc = 1;
+  cav[0] = t0;
+  const size_t *d0 = R->tnode + 4 * t0;
+  if (!in_sphere(R->coord + 3 * at[d0[0]], R->coord + 3 * at[d0[1]], R->coord + 3 * at[d0[2]],
+                 R->coord + 3 * at[d0[3]], p, X->sgn))
+    return CAV_NO_SLIVER;
+  /* grown across the faces no boundary holds (a boundary face has no tet
+   * on its other side) to the tets whose circumsphere holds p */
+  for (int c = 0; c < nc; c++) {
+    const size_t *d = R->tnode + 4 * cav[c];
+    for (int k = 0; k < 4; k++) {
+      size_t a = d[tet_face[k][0]], b = d[tet_face[k][1]], e = d[tet_face[k][2]], nb = (size_t)-1;
+      for (size_t j = X->cnt[a]; j < X->cnt[a + 1]; j++) {
+        size_t u = X->adj[j];
+        if (u == cav[c]) continue;
+        const size_t *g = R->tnode + 4 * u;
+        int hb = 0, he = 0;
+        for (int q = 0; q < 4; q++) hb |= g[q] == b, he |= g[q] == e;
+        if (hb && he) {
+          nb = u;
+          break;
+        }
+      }
+      if (nb == (size_t)-1) continue;
+      int in = 0;
+      for (int q = 0; q < nc && !in; q++) in = cav[q] == nb;
+      if (in) continue;
+      const size_t *g = R->tnode + 4 * nb;
+      if (!in_sphere(R->coord + 3 * at[g[0]], R->coord + 3 * at[g[1]], R->coord + 3 * at[g[2]],
+                     R->coord + 3 * at[g[3]], p, X->sgn))
+        continue;
+      if (X->dead[nb] || nc == INSERT_CAVITY_MAX) return CAV_CONFLICT;
+      cav[nc++] = nb;
+    }
+  }
+  /* shrunk until every boundary face sees p (by a margin): a face is on
+   * the boundary when no other tet of the cavity holds it; the sliver
+   * itself stays */
+  int nbf = 0;
+  for (;;) {
+    nbf = 0;
+    int drop = -1;
+    for (int c = 0; c < nc && drop < 0; c++) {
+      const size_t *d = R->tnode + 4 * cav[c];
+      for (int k = 0; k < 4; k++) {
+        size_t a = d[tet_face[k][0]], b = d[tet_face[k][1]], e = d[tet_face[k][2]];
+        int shared = 0;
+        for (int q = 0; q < nc && !shared; q++) {
+          if (q == c) continue;
+          const size_t *g = R->tnode + 4 * cav[q];
+          int h = 0;
+          for (int r = 0; r < 4; r++) h += g[r] == a || g[r] == b || g[r] == e;
+          shared = h == 3;
+        }
+        if (shared) continue;
+        const double *pa = R->coord + 3 * at[a], *pb = R->coord + 3 * at[b],
+                     *pe = R->coord + 3 * at[e], *pd = R->coord + 3 * at[d[k]];
+        double vt = tet_vol(pa, pb, pe, pd), vp = tet_vol(pa, pb, pe, p);
+        if (!(vp * vt > 0 && fabs(vp) > 1e-3 * fabs(vt))) {
+          drop = c;
+          break;
+        }
+        bf[nbf][0] = a, bf[nbf][1] = b, bf[nbf][2] = e;
+        nbf++;
+      }
+    }
+    if (drop < 0) break;
+    if (drop == 0) return CAV_STAR;
+    cav[drop] = cav[--nc];
+  }
+  /* every vertex of the cavity on its boundary (else it would be lost) */
+  for (int c = 0; c < nc; c++) {
+    const size_t *d = R->tnode + 4 * cav[c];
+    for (int k = 0; k < 4; k++) {
+      int on = 0;
+      for (int f = 0; f < nbf && !on; f++)
+        on = bf[f][0] == d[k] || bf[f][1] == d[k] || bf[f][2] == d[k];
+      if (!on) return CAV_VERTEX;
+    }
+  }
+  *old = *neu = PI;
+  for (int c = 0; c < nc; c++) {
+    const size_t *d = R->tnode + 4 * cav[c];
+    const double *q[4] = {R->coord + 3 * at[d[0]], R->coord + 3 * at[d[1]], R->coord + 3 * at[d[2]],
+                          R->coord + 3 * at[d[3]]};
+    double lo, hi;
+    tet_angles(q, &lo, &hi);
+    *old = fmin(*old, lo);
+  }
+  for (int f = 0; f < nbf; f++) {
+    const double *q[4] = {R->coord + 3 * at[bf[f][0]], R->coord + 3 * at[bf[f][1]],
+                          R->coord + 3 * at[bf[f][2]], p};
+    double lo, hi;
+    tet_angles(q, &lo, &hi);
+    *neu = fmin(*neu, lo);
+  }
+  *nc_out = nc;
+  *nbf_out = nbf;
+  return *neu > *old ? CAV_OK : CAV_WORSE;
+}
+
+/* Heights tried for a sliver's point, as shares of the way from the
+ * sliver's centroid to the point sliver_points made: the best kept. */
+static const double insert_heights[] = {1, 0.6, 1.5, 0.35, 2, 0.8, 1.2};
+
+static int insert_points(vm_ctx *ctx, gmsh_result *R, const double *pts, const size_t *src,
+                         int64_t np, uint8_t *retry, int64_t *ninserted, int64_t why[6]) {
+  *ninserted = 0;
+  if (R->nt == 0 || np == 0) return VM_OK;
+  size_t maxtag = 0, nt = R->nt;
+  for (size_t i = 0; i < R->nn; i++)
+    if (R->ntag[i] > maxtag) maxtag = R->ntag[i];
+  int64_t *at = vm_alloc_array(ctx, maxtag + 1, sizeof *at);
+  size_t *cnt = vm_calloc(ctx, maxtag + 2, sizeof *cnt);
+  size_t *adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
+  uint8_t *dead = vm_calloc(ctx, nt + 1, 1);
+  size_t *nw = NULL, nnew = 0, cap = 0;
+  double *np_xyz = vm_alloc_array(ctx, 3 * (size_t)np + 1, sizeof *np_xyz);
+  int st = at && cnt && adj && dead && np_xyz ? VM_OK : VM_ERR_NOMEM;
+  if (st) goto done;
+  for (size_t t = 0; t <= maxtag; t++) at[t] = -1;
+  for (size_t i = 0; i < R->nn; i++) at[R->ntag[i]] = (int64_t)i;
+  for (size_t i = 0; i < 4 * nt; i++)
+    if (R->tnode[i] > maxtag || at[R->tnode[i]] < 0) {
+      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with an unknown node %zu",
+                    R->tnode[i]);
+      goto done;
+    }
+  for (size_t i = 0; i < 4 * nt; i++) cnt[R->tnode[i] + 1]++;
+  for (size_t t = 1; t <= maxtag + 1; t++) cnt[t] += cnt[t - 1];
+  {
+    size_t *fp = vm_alloc_array(ctx, maxtag + 1, sizeof *fp);
+    if (!fp) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    memcpy(fp, cnt, (maxtag + 1) * sizeof *fp);
+    for (size_t t = 0; t < nt; t++)
+      for (int k = 0; k < 4; k++) adj[fp[R->tnode[4 * t + k]]++] = t;
+    vm_free(ctx, fp);
+  }
+  tet_index X = {R, at, cnt, adj, dead, tets_sign(R, at)};
+  int64_t nins = 0;
+  for (int64_t i = 0; i < np; i++) {
+    const size_t *s = src + 4 * i;
+    retry[i] = 0;
+    /* the sliver */
+    size_t t0 = (size_t)-1;
+    for (size_t j = cnt[s[0]]; j < cnt[s[0] + 1] && t0 == (size_t)-1; j++) {
+      const size_t *d = R->tnode + 4 * adj[j];
+      int h = 0;
+      for (int a = 1; a < 4; a++)
+        for (int b = 0; b < 4; b++) h += d[b] == s[a];
+      if (h == 3) t0 = adj[j];
+    }
+    if (t0 == (size_t)-1 || dead[t0]) {
+      why[CAV_NO_SLIVER]++;
+      continue;
+    }
+    double g[3] = {0, 0, 0};
+    for (int k = 0; k < 4; k++)
+      for (int r = 0; r < 3; r++) g[r] += R->coord[3 * at[s[k]] + r] / 4;
+    size_t cav[INSERT_CAVITY_MAX], bcav[INSERT_CAVITY_MAX], bf[4 * INSERT_CAVITY_MAX][3],
+        bbf[4 * INSERT_CAVITY_MAX][3];
+    int nc = 0, nbf = 0, bnc = 0, bnbf = 0, conflict = 0, last = CAV_NO_SLIVER;
+    double best = -1, bp[3];
+    const size_t nh = sizeof insert_heights / sizeof *insert_heights;
+    for (size_t h = 0; h < nh; h++) {
+      double p[3], old, neu;
+      for (int r = 0; r < 3; r++) p[r] = g[r] + insert_heights[h] * (pts[3 * i + r] - g[r]);
+      int c = cavity(&X, t0, p, cav, &nc, bf, &nbf, &old, &neu);
+      conflict |= c == CAV_CONFLICT;
+      if (c != CAV_OK) {
+        last = c;
+        continue;
+      }
+      if (neu > best) {
+        best = neu;
+        memcpy(bp, p, sizeof bp);
+        memcpy(bcav, cav, (size_t)nc * sizeof *cav);
+        memcpy(bbf, bf, (size_t)nbf * sizeof *bf);
+        bnc = nc;
+        bnbf = nbf;
+      }
+    }
+    if (best < 0) {
+      why[conflict ? CAV_CONFLICT : last]++;
+      retry[i] = (uint8_t)conflict;
+      continue;
+    }
+    /* applied: the point's tag, the new tets */
+    if ((st = tets_room(ctx, &nw, &cap, nnew + (size_t)bnbf, 4 * INSERT_CAVITY_MAX))) goto done;
+    size_t tag = maxtag + 1 + (size_t)nins;
+    for (int f = 0; f < bnbf; f++) {
+      size_t *o = nw + 4 * nnew++;
+      o[0] = bbf[f][0], o[1] = bbf[f][1], o[2] = bbf[f][2], o[3] = tag;
+    }
+    for (int c = 0; c < bnc; c++) dead[bcav[c]] = 1;
+    memcpy(np_xyz + 3 * nins, bp, sizeof bp);
+    nins++;
+  }
+  if (nins) {
+    size_t *tags = gmshMalloc((R->nn + (size_t)nins) * sizeof *tags);
+    double *xyz = gmshMalloc(3 * (R->nn + (size_t)nins) * sizeof *xyz);
+    if (!tags || !xyz || tets_replace(R, nt, dead, nw, nnew)) {
+      gmshFree(tags);
+      gmshFree(xyz);
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    memcpy(tags, R->ntag, R->nn * sizeof *tags);
+    memcpy(xyz, R->coord, 3 * R->nn * sizeof *xyz);
+    for (int64_t j = 0; j < nins; j++) {
+      tags[R->nn + (size_t)j] = maxtag + 1 + (size_t)j;
+      memcpy(xyz + 3 * (R->nn + (size_t)j), np_xyz + 3 * j, 3 * sizeof *xyz);
+    }
+    gmshFree(R->ntag);
+    gmshFree(R->coord);
+    R->ntag = tags;
+    R->coord = xyz;
+    R->nn += (size_t)nins;
+  }
+  *ninserted = nins;
+done:
+  vm_free(ctx, at);
+  vm_free(ctx, cnt);
+  vm_free(ctx, adj);
+  vm_free(ctx, dead);
+  vm_free(ctx, nw);
+  vm_free(ctx, np_xyz);
   return st;
 }
 
@@ -1998,10 +2351,11 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
    * tets after one pass) */
   int64_t ns = 0, ns_prev = INT64_MAX, nseen = 0, nrep = 0;
   quad_key *seen = NULL;
+  size_t *src = NULL;
   for (int pass = 0; !st && pass < FILL_SLIVER_PASSES; pass++) {
     int64_t nq0 = nq;
     if ((st = sliver_points(ctx, res, res->ne - F.nf - (int64_t)R.nt, in->nv, vid, nrm, 10, &q, &nq,
-                            &ns, &seen, &nseen, &nrep)) ||
+                            &ns, &seen, &nseen, &nrep, &src)) ||
         nq == nq0)
       break;
     if (ns >= ns_prev) {
@@ -2015,7 +2369,55 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
            (long long)ns, (long long)nrep);
     gmsh_result R2;
     vm_mesh *res2 = NULL;
-    int st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2, NULL);
+    int st2;
+    double tp = now();
+    if (pass >= FILL_GMSH_PASSES) {
+      int64_t nins = 0, why[6] = {0}, npt = nq - nq0;
+      st2 = gmsh_result_copy(&R, &R2);
+      /* rounds: a point whose cavity met one an earlier point of the round
+       * replaced goes again in the next */
+      uint8_t *retry = vm_alloc_array(ctx, (size_t)npt + 1, 1);
+      double *pq = vm_alloc_array(ctx, 3 * (size_t)npt + 1, sizeof *pq);
+      size_t *ps = vm_alloc_array(ctx, 4 * (size_t)npt + 1, sizeof *ps);
+      if (!st2 && (!retry || !pq || !ps)) st2 = VM_ERR_NOMEM;
+      if (!st2) {
+        memcpy(pq, q + 3 * nq0, 3 * (size_t)npt * sizeof *pq);
+        memcpy(ps, src + 4 * nq0, 4 * (size_t)npt * sizeof *ps);
+      }
+      for (int round = 0; !st2 && npt > 0 && round < 4; round++) {
+        int64_t ni = 0;
+        memset(why, 0, sizeof why);
+        st2 = insert_points(ctx, &R2, pq, ps, npt, retry, &ni, why);
+        nins += ni;
+        int64_t m = 0;
+        for (int64_t j = 0; j < npt; j++)
+          if (retry[j]) {
+            memmove(pq + 3 * m, pq + 3 * j, 3 * sizeof *pq);
+            memmove(ps + 4 * m, ps + 4 * j, 4 * sizeof *ps);
+            m++;
+          }
+        vm_log(ctx, VM_LOG_DEBUG,
+               "fill: local insertion round %d: %lld points in; left: sliver gone %lld, "
+               "meeting a cavity of this round %lld, no star-shaped cavity %lld, no better "
+               "%lld",
+               round + 1, (long long)ni, (long long)why[CAV_NO_SLIVER],
+               (long long)why[CAV_CONFLICT], (long long)(why[CAV_STAR] + why[CAV_VERTEX]),
+               (long long)why[CAV_WORSE]);
+        if (!ni) break;
+        npt = m;
+      }
+      vm_free(ctx, retry);
+      vm_free(ctx, pq);
+      vm_free(ctx, ps);
+      vm_log(ctx, VM_LOG_INFO,
+             "fill: %lld of the %lld points inserted in their slivers' cavities (the rest "
+             "would not make their tets better), %.2f s",
+             (long long)nins, (long long)(nq - nq0), now() - tp);
+    } else {
+      st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2, NULL);
+      vm_log(ctx, VM_LOG_DEBUG, "fill: Gmsh again with %lld points, %.2f s", (long long)nq,
+             now() - tp);
+    }
     if (!st2) st2 = merge(ctx, in, &E, &F, &R2, &res2);
     if (st2 == VM_OK) {
       vm_mesh_destroy(&res);
@@ -2064,6 +2466,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   }
   vm_free(ctx, q);
   vm_free(ctx, seen);
+  vm_free(ctx, src);
   if (st) goto done;
   rep.time_mesh = now() - t1;
   if (vm_ctx_interrupted(ctx)) {
