@@ -830,7 +830,9 @@ static int quad_cmp(const void *a, const void *b) {
  * the fill's). The slivers the passes before had a point for are sorted
  * in seen[0..*nseen): one that is still there gets none again (the same
  * point twice made Gmsh's Delaunay fail; *nrepeat counts them); this
- * pass's are added to seen. *nsliver: every sliver found. */
+ * pass's are added to seen. *nsliver: every sliver found. With src, each
+ * point's sliver too: its four Gmsh node tags (input index + 1), 4 per
+ * point in (*src)[4 * i..], for the local insertion (insert_points). */
 static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin, const int32_t *vid,
                          const double *nrm, double min_deg, double **q, int64_t *nq,
                          int64_t *nsliver, quad_key **seen, int64_t *nseen, int64_t *nrepeat,
@@ -2410,8 +2412,8 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
       vm_free(ctx, pq);
       vm_free(ctx, ps);
       vm_log(ctx, VM_LOG_INFO,
-             "fill: %lld of the %lld points inserted in their slivers' cavities (the rest "
-             "would not make their tets better), %.2f s",
+             "fill: %lld of the %lld points inserted in their slivers' cavities (the others "
+             "made no better tets or had no star-shaped cavity), %.2f s",
              (long long)nins, (long long)(nq - nq0), now() - tp);
     } else {
       st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, &R2, NULL);
