@@ -133,14 +133,21 @@ typedef struct facemap {
                     figure the report gives) */
 } facemap;
 
+/* The determinant of cell (t, k) from its faces' area vectors fs: its
+ * faces inside the hybrid mesh are all but the wall under layer 0 and the
+ * sides over open wall edges (nbt: edge_neighbours). */
+static double prism_det(const int32_t *nbt, int64_t t, int k, const double (*fs)[3]) {
+  int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
+  return cell_det(fs, in);
+}
+
 /* Cell c = (t, k)'s centre and determinant into the facemap. */
 static void cell_update(const vm_prism *p, const int32_t *nbt, facemap *fm, int64_t t, int k) {
   int64_t c = t * (p->nlev - 1) + k;
   double x[18], fc[5][3], fs[5][3];
   pr_prism_at(p, p->lev, t, k, x);
   pr_foam_cell_faces(x, fm->cc + 3 * c, fc, fs);
-  int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
-  fm->det[c] = cell_det((const double(*)[3])fs, in);
+  fm->det[c] = prism_det(nbt, t, k, (const double(*)[3])fs);
 }
 
 /* The cells around level k of column v (layers k - 1 and k of v's
@@ -994,16 +1001,25 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     return VM_ERR_NOMEM;
   }
   edge_neighbours(p, nbt);
-#pragma omp parallel for schedule(static)
+  /* the cell centres, and the determinants of the prisms (no column ended
+   * below their top: pr_end_layers) */
+  int64_t nd = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nd)
   for (int64_t c = 0; c < nc; c++) {
-    double x[18];
-    pr_prism_at(p, L, c / nl, (int)(c % nl), x);
-    pr_foam_cell(x, cc + 3 * c);
+    int64_t t = c / nl;
+    int k = (int)(c % nl);
+    double x[18], fc[5][3], fs[5][3];
+    pr_prism_at(p, L, t, k, x);
+    pr_foam_cell_faces(x, cc + 3 * c, fc, fs);
+    const int32_t *tc = p->tri + 3 * t;
+    if (pr_col_top(p, tc[0], nl) > k && pr_col_top(p, tc[1], nl) > k &&
+        pr_col_top(p, tc[2], nl) > k)
+      nd += prism_det(nbt, t, k, (const double(*)[3])fs) < PR_FOAM_DET_MIN;
   }
   const double c70 = cos(70 * PR_PI / 180);
-  int64_t over = 0, nd = 0;
+  int64_t over = 0;
   double worst = 1, skew = 0;
-#pragma omp parallel for schedule(static) reduction(+ : over, nd) reduction(min : worst) \
+#pragma omp parallel for schedule(static) reduction(+ : over) reduction(min : worst) \
     reduction(max : skew)
   for (int64_t c = 0; c < nc; c++) {
     int64_t t = c / nl;
@@ -1018,13 +1034,6 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     if (top_k[0] <= k && top_k[1] <= k && top_k[2] <= k) continue;
     int last = k == nl - 1 || (top_k[0] <= k + 1 && top_k[1] <= k + 1 && top_k[2] <= k + 1);
     pr_prism_at(p, L, t, k, x);
-    if (top_k[0] > k && top_k[1] > k && top_k[2] > k) {
-      /* a prism (no column ended below its top): its determinant */
-      double ccd[3], fc[5][3], fs[5][3];
-      pr_foam_cell_faces(x, ccd, fc, fs);
-      int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
-      nd += cell_det((const double(*)[3])fs, in) < PR_FOAM_DET_MIN;
-    }
     for (int f = 0; f < 5; f++) {
       double y[12];
       if (f >= 2 && top_k[f - 2] <= k && top_k[(f - 1) % 3] <= k) continue;

@@ -830,7 +830,7 @@ static int quad_cmp(const void *a, const void *b) {
  * the fill's). The slivers the passes before had a point for are sorted
  * in seen[0..*nseen): one that is still there gets none again (the same
  * point twice made Gmsh's Delaunay fail; *nrepeat counts them); this
- * pass's are added to seen. *nsliver: every sliver found. With src, each
+ * pass's are added to seen. *nsliver: every sliver found. *src: each
  * point's sliver too: its four Gmsh node tags (input index + 1), 4 per
  * point in (*src)[4 * i..], for the local insertion (insert_points). */
 static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin, const int32_t *vid,
@@ -904,12 +904,10 @@ static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin,
     if (!t) return VM_ERR_NOMEM;
     *q = t;
     for (int k = 0; k < 3; k++) t[3 * n + k] = g[k] + up * nv[k];
-    if (src) {
-      size_t *sr = vm_realloc(ctx, *src, (size_t)(4 * (n + 1)) * sizeof *sr);
-      if (!sr) return VM_ERR_NOMEM;
-      *src = sr;
-      for (int k = 0; k < 4; k++) sr[4 * n + k] = (size_t)c[k] + 1; /* Gmsh's tags */
-    }
+    size_t *sr = vm_realloc(ctx, *src, (size_t)(4 * (n + 1)) * sizeof *sr);
+    if (!sr) return VM_ERR_NOMEM;
+    *src = sr;
+    for (int k = 0; k < 4; k++) sr[4 * n + k] = (size_t)c[k] + 1; /* Gmsh's tags */
     n++;
   }
   *nq = n;
@@ -1058,6 +1056,56 @@ static double tets_sign(const gmsh_result *R, const int64_t *at) {
   return 0;
 }
 
+/* The largest node tag of R (*maxtag) and each tag's node index (*at,
+ * -1 for none), after checking Gmsh's tags: at most 4 (nn + nbase) + 16
+ * (nbase: the input's vertices, whose tags Gmsh keeps), and every tet's
+ * known. */
+static int tet_nodes(vm_ctx *ctx, const gmsh_result *R, size_t nbase, size_t *maxtag,
+                     int64_t **at) {
+  size_t mt = 0;
+  *at = NULL;
+  for (size_t i = 0; i < R->nn; i++)
+    if (R->ntag[i] > mt) mt = R->ntag[i];
+  if (mt > 4 * (R->nn + nbase) + 16)
+    return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned node tags up to %zu for %zu nodes", mt,
+                    R->nn);
+  int64_t *a = vm_alloc_array(ctx, mt + 1, sizeof *a);
+  if (!a) return VM_ERR_NOMEM;
+  for (size_t t = 0; t <= mt; t++) a[t] = -1;
+  for (size_t i = 0; i < R->nn; i++) a[R->ntag[i]] = (int64_t)i;
+  for (size_t i = 0; i < 4 * R->nt; i++)
+    if (R->tnode[i] > mt || a[R->tnode[i]] < 0) {
+      vm_free(ctx, a);
+      return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with an unknown node %zu",
+                      R->tnode[i]);
+    }
+  *maxtag = mt;
+  *at = a;
+  return VM_OK;
+}
+
+/* The tets around each node tag t: adj[cnt[t]..cnt[t + 1]) (both
+ * allocated here, the previous ones freed). */
+static int tet_csr(vm_ctx *ctx, const gmsh_result *R, size_t maxtag, size_t **cnt, size_t **adj) {
+  vm_free(ctx, *cnt);
+  vm_free(ctx, *adj);
+  *cnt = vm_calloc(ctx, maxtag + 2, sizeof **cnt);
+  *adj = vm_alloc_array(ctx, 4 * R->nt + 1, sizeof **adj);
+  size_t *fp = vm_alloc_array(ctx, maxtag + 1, sizeof *fp);
+  if (!*cnt || !*adj || !fp) {
+    vm_free(ctx, fp);
+    return VM_ERR_NOMEM;
+  }
+  size_t *c = *cnt, *a = *adj;
+  for (size_t i = 0; i < 4 * R->nt; i++) c[R->tnode[i] + 1]++;
+  for (size_t t = 1; t <= maxtag + 1; t++) c[t] += c[t - 1];
+  memcpy(fp, c, (maxtag + 1) * sizeof *fp);
+  for (size_t t = 0; t < R->nt; t++)
+    for (int k = 0; k < 4; k++) a[fp[R->tnode[4 * t + k]]++] = t;
+  vm_free(ctx, fp);
+  return VM_OK;
+}
+
 /* Edge removal (Shewchuk's) on Gmsh's flat tets of four envelope vertices
  * (node tags 1..nenv): for each such tet (min dihedral below 5 degrees),
  * each of its edges whose tets close a ring of 3..FLIP_RING_MAX around it
@@ -1073,29 +1121,17 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
   *nflips = 0;
   if (R->nt == 0) return VM_OK;
   size_t maxtag = 0;
-  for (size_t i = 0; i < R->nn; i++)
-    if (R->ntag[i] > maxtag) maxtag = R->ntag[i];
-  if (maxtag > 4 * (R->nn + nenv) + 16)
-    return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned node tags up to %zu for %zu nodes", maxtag,
-                    R->nn);
-  for (size_t i = 0; i < 4 * R->nt; i++)
-    if (R->tnode[i] > maxtag || R->tnode[i] == 0)
-      return vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with node tag %zu", R->tnode[i]);
-  int64_t *at = vm_alloc_array(ctx, maxtag + 1, sizeof *at);
+  int64_t *at = NULL;
+  int st = tet_nodes(ctx, R, nenv, &maxtag, &at);
+  if (st) return st;
   uint8_t *lock = vm_calloc(ctx, maxtag + 1, 1);
   int(*tris_n)[42][FLIP_RING_MAX - 2][3] = vm_alloc_array(ctx, FLIP_RING_MAX + 1, sizeof *tris_n);
-  size_t *cnt = NULL, *adj = NULL, *fillp = NULL, *nw = NULL;
+  size_t *cnt = NULL, *adj = NULL, *nw = NULL;
   uint8_t *dead = NULL;
-  int st = at && lock && tris_n ? VM_OK : VM_ERR_NOMEM;
-  if (st) goto done;
-  for (size_t t = 0; t <= maxtag; t++) at[t] = -1;
-  for (size_t i = 0; i < R->nn; i++) at[R->ntag[i]] = (int64_t)i;
-  for (size_t i = 0; i < 4 * R->nt; i++)
-    if (at[R->tnode[i]] < 0) {
-      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with an unknown node %zu",
-                    R->tnode[i]);
-      goto done;
-    }
+  if (!lock || !tris_n) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
   int ntri[FLIP_RING_MAX + 1] = {0};
   for (int n = 3; n <= FLIP_RING_MAX; n++) ntri[n] = polygon_triangulations(n, tris_n[n]);
   /* the orientation of Gmsh's tets */
@@ -1103,25 +1139,16 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
   for (int round = 0; round < FLIP_ROUNDS; round++) {
     size_t nt = R->nt;
     /* vertex -> tets */
-    vm_free(ctx, adj);
     vm_free(ctx, dead);
     vm_free(ctx, nw);
     size_t cap = nt + 64, nnew = 0;
-    adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
     dead = vm_calloc(ctx, nt + 1, 1);
     nw = vm_alloc_array(ctx, 4 * cap, sizeof *nw);
-    if (!cnt) cnt = vm_alloc_array(ctx, maxtag + 2, sizeof *cnt);
-    if (!fillp) fillp = vm_alloc_array(ctx, maxtag + 1, sizeof *fillp);
-    if (!cnt || !fillp || !adj || !dead || !nw) {
+    if (!dead || !nw) {
       st = VM_ERR_NOMEM;
       goto done;
     }
-    memset(cnt, 0, (maxtag + 2) * sizeof *cnt);
-    for (size_t i = 0; i < 4 * nt; i++) cnt[R->tnode[i] + 1]++;
-    for (size_t t = 1; t <= maxtag + 1; t++) cnt[t] += cnt[t - 1];
-    memcpy(fillp, cnt, (maxtag + 1) * sizeof *fillp);
-    for (size_t t = 0; t < nt; t++)
-      for (int k = 0; k < 4; k++) adj[fillp[R->tnode[4 * t + k]]++] = t;
+    if ((st = tet_csr(ctx, R, maxtag, &cnt, &adj))) goto done;
     memset(lock, 0, maxtag + 1);
     int64_t flips = 0;
     for (size_t t = 0; t < nt; t++) {
@@ -1256,7 +1283,6 @@ done:
   vm_free(ctx, tris_n);
   vm_free(ctx, cnt);
   vm_free(ctx, adj);
-  vm_free(ctx, fillp);
   vm_free(ctx, dead);
   vm_free(ctx, nw);
   return st;
@@ -1275,11 +1301,12 @@ done:
  * on its line from the sliver's centroid (insert_heights) and the height
  * whose new tets have the largest least dihedral angle is taken, if that
  * beats the least angle of the tets it replaces and the cavity keeps every
- * vertex on its boundary. A cavity that meets one an earlier point of the
- * same call replaced is not taken (retry[i] = 1: the caller tries it again
- * on the mesh this call leaves). New nodes get tags after the largest;
- * *ninserted counts the points taken, why[CAV_*] those left by reason. The
- * merge checks the result again (conformity, the boundary's triangles). */
+ * vertex on its boundary. A point whose cavity meets one an earlier point
+ * of the same round replaced waits for the next round (insert_round), on
+ * the mesh that round leaves (4 rounds at most). New nodes get tags after
+ * the largest (nbase: the input's vertex count, for the check of Gmsh's
+ * tags); *ninserted counts the points taken. The merge checks the result
+ * again (conformity, the boundary's triangles). */
 enum { INSERT_CAVITY_MAX = 96 };
 
 /* p inside the circumsphere of a, b, c, d (of orientation sign sgn)? */
@@ -1439,47 +1466,30 @@ static int cavity(const tet_index *X, size_t t0, const double *p, size_t *cav, i
  * sliver's centroid to the point sliver_points made: the best kept. */
 static const double insert_heights[] = {1, 0.6, 1.5, 0.35, 2, 0.8, 1.2};
 
-static int insert_points(vm_ctx *ctx, gmsh_result *R, const double *pts, const size_t *src,
-                         int64_t np, uint8_t *retry, int64_t *ninserted, int64_t why[6]) {
+/* One round of insert_points over the points todo[0..*ntodo); *ntodo
+ * becomes the count of those left to try again, first in todo (their
+ * cavities met one this round replaced). */
+static int insert_round(vm_ctx *ctx, gmsh_result *R, size_t nbase, const double *pts,
+                        const size_t *src, int64_t *todo, int64_t *ntodo, int64_t *ninserted,
+                        int64_t why[6]) {
   *ninserted = 0;
-  if (R->nt == 0 || np == 0) return VM_OK;
+  int64_t np = *ntodo, nretry = 0;
+  *ntodo = 0;
   size_t maxtag = 0, nt = R->nt;
-  for (size_t i = 0; i < R->nn; i++)
-    if (R->ntag[i] > maxtag) maxtag = R->ntag[i];
-  int64_t *at = vm_alloc_array(ctx, maxtag + 1, sizeof *at);
-  size_t *cnt = vm_calloc(ctx, maxtag + 2, sizeof *cnt);
-  size_t *adj = vm_alloc_array(ctx, 4 * nt + 1, sizeof *adj);
+  int64_t *at = NULL;
+  size_t *cnt = NULL, *adj = NULL, *nw = NULL, nnew = 0, cap = 0;
+  int st = tet_nodes(ctx, R, nbase, &maxtag, &at);
+  if (st) return st;
   uint8_t *dead = vm_calloc(ctx, nt + 1, 1);
-  size_t *nw = NULL, nnew = 0, cap = 0;
   double *np_xyz = vm_alloc_array(ctx, 3 * (size_t)np + 1, sizeof *np_xyz);
-  int st = at && cnt && adj && dead && np_xyz ? VM_OK : VM_ERR_NOMEM;
+  if (!dead || !np_xyz) st = VM_ERR_NOMEM;
+  if (!st) st = tet_csr(ctx, R, maxtag, &cnt, &adj);
   if (st) goto done;
-  for (size_t t = 0; t <= maxtag; t++) at[t] = -1;
-  for (size_t i = 0; i < R->nn; i++) at[R->ntag[i]] = (int64_t)i;
-  for (size_t i = 0; i < 4 * nt; i++)
-    if (R->tnode[i] > maxtag || at[R->tnode[i]] < 0) {
-      st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh returned a tet with an unknown node %zu",
-                    R->tnode[i]);
-      goto done;
-    }
-  for (size_t i = 0; i < 4 * nt; i++) cnt[R->tnode[i] + 1]++;
-  for (size_t t = 1; t <= maxtag + 1; t++) cnt[t] += cnt[t - 1];
-  {
-    size_t *fp = vm_alloc_array(ctx, maxtag + 1, sizeof *fp);
-    if (!fp) {
-      st = VM_ERR_NOMEM;
-      goto done;
-    }
-    memcpy(fp, cnt, (maxtag + 1) * sizeof *fp);
-    for (size_t t = 0; t < nt; t++)
-      for (int k = 0; k < 4; k++) adj[fp[R->tnode[4 * t + k]]++] = t;
-    vm_free(ctx, fp);
-  }
   tet_index X = {R, at, cnt, adj, dead, tets_sign(R, at)};
   int64_t nins = 0;
-  for (int64_t i = 0; i < np; i++) {
+  for (int64_t k0 = 0; k0 < np; k0++) {
+    const int64_t i = todo[k0];
     const size_t *s = src + 4 * i;
-    retry[i] = 0;
     /* the sliver */
     size_t t0 = (size_t)-1;
     for (size_t j = cnt[s[0]]; j < cnt[s[0] + 1] && t0 == (size_t)-1; j++) {
@@ -1521,7 +1531,7 @@ static int insert_points(vm_ctx *ctx, gmsh_result *R, const double *pts, const s
     }
     if (best < 0) {
       why[conflict ? CAV_CONFLICT : last]++;
-      retry[i] = (uint8_t)conflict;
+      if (conflict) todo[nretry++] = i;
       continue;
     }
     /* applied: the point's tag, the new tets */
@@ -1557,6 +1567,7 @@ static int insert_points(vm_ctx *ctx, gmsh_result *R, const double *pts, const s
     R->nn += (size_t)nins;
   }
   *ninserted = nins;
+  *ntodo = nretry;
 done:
   vm_free(ctx, at);
   vm_free(ctx, cnt);
@@ -1564,6 +1575,31 @@ done:
   vm_free(ctx, dead);
   vm_free(ctx, nw);
   vm_free(ctx, np_xyz);
+  return st;
+}
+
+static int insert_points(vm_ctx *ctx, gmsh_result *R, size_t nbase, const double *pts,
+                         const size_t *src, int64_t np, int64_t *ninserted) {
+  *ninserted = 0;
+  if (R->nt == 0 || np == 0) return VM_OK;
+  int64_t *todo = vm_alloc_array(ctx, (size_t)np, sizeof *todo), ntodo = np;
+  if (!todo) return VM_ERR_NOMEM;
+  for (int64_t i = 0; i < np; i++) todo[i] = i;
+  int st = VM_OK;
+  /* rounds: a point whose cavity met one an earlier point of the round
+   * replaced goes again in the next, on the mesh that round left */
+  for (int round = 0; !st && ntodo > 0 && round < 4; round++) {
+    int64_t ni = 0, why[6] = {0};
+    st = insert_round(ctx, R, nbase, pts, src, todo, &ntodo, &ni, why);
+    *ninserted += ni;
+    vm_log(ctx, VM_LOG_DEBUG,
+           "fill: local insertion round %d: %lld points in; left: sliver gone %lld, meeting a "
+           "cavity of this round %lld, no star-shaped cavity %lld, no better %lld",
+           round + 1, (long long)ni, (long long)why[CAV_NO_SLIVER], (long long)why[CAV_CONFLICT],
+           (long long)(why[CAV_STAR] + why[CAV_VERTEX]), (long long)why[CAV_WORSE]);
+    if (!ni) break;
+  }
+  vm_free(ctx, todo);
   return st;
 }
 
@@ -2374,43 +2410,10 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     int st2;
     double tp = now();
     if (pass >= FILL_GMSH_PASSES) {
-      int64_t nins = 0, why[6] = {0}, npt = nq - nq0;
+      int64_t nins = 0;
       st2 = gmsh_result_copy(&R, &R2);
-      /* rounds: a point whose cavity met one an earlier point of the round
-       * replaced goes again in the next */
-      uint8_t *retry = vm_alloc_array(ctx, (size_t)npt + 1, 1);
-      double *pq = vm_alloc_array(ctx, 3 * (size_t)npt + 1, sizeof *pq);
-      size_t *ps = vm_alloc_array(ctx, 4 * (size_t)npt + 1, sizeof *ps);
-      if (!st2 && (!retry || !pq || !ps)) st2 = VM_ERR_NOMEM;
-      if (!st2) {
-        memcpy(pq, q + 3 * nq0, 3 * (size_t)npt * sizeof *pq);
-        memcpy(ps, src + 4 * nq0, 4 * (size_t)npt * sizeof *ps);
-      }
-      for (int round = 0; !st2 && npt > 0 && round < 4; round++) {
-        int64_t ni = 0;
-        memset(why, 0, sizeof why);
-        st2 = insert_points(ctx, &R2, pq, ps, npt, retry, &ni, why);
-        nins += ni;
-        int64_t m = 0;
-        for (int64_t j = 0; j < npt; j++)
-          if (retry[j]) {
-            memmove(pq + 3 * m, pq + 3 * j, 3 * sizeof *pq);
-            memmove(ps + 4 * m, ps + 4 * j, 4 * sizeof *ps);
-            m++;
-          }
-        vm_log(ctx, VM_LOG_DEBUG,
-               "fill: local insertion round %d: %lld points in; left: sliver gone %lld, "
-               "meeting a cavity of this round %lld, no star-shaped cavity %lld, no better "
-               "%lld",
-               round + 1, (long long)ni, (long long)why[CAV_NO_SLIVER],
-               (long long)why[CAV_CONFLICT], (long long)(why[CAV_STAR] + why[CAV_VERTEX]),
-               (long long)why[CAV_WORSE]);
-        if (!ni) break;
-        npt = m;
-      }
-      vm_free(ctx, retry);
-      vm_free(ctx, pq);
-      vm_free(ctx, ps);
+      if (!st2)
+        st2 = insert_points(ctx, &R2, (size_t)in->nv, q + 3 * nq0, src + 4 * nq0, nq - nq0, &nins);
       vm_log(ctx, VM_LOG_INFO,
              "fill: %lld of the %lld points inserted in their slivers' cavities (the others "
              "made no better tets or had no star-shaped cavity), %.2f s",
