@@ -177,39 +177,15 @@ static int pass_wall_element_fields(vm_cli *cli, const vm_mesh *w, vm_mesh *r, i
   return st;
 }
 
-/* Whether one of the count intersecting pairs of triangles of t joins two
- * of its connected parts (the surface stage's union can repair those, not
- * a part that crosses itself). */
-static int pairs_across_parts(vm_ctx *ctx, const vm_mesh *t, const int32_t *pairs, int64_t count) {
-  int32_t *root = vm_alloc_array(ctx, (size_t)(t->nv ? t->nv : 1), sizeof *root);
-  if (!root) return 1; /* the surface stage then says what it can */
-  for (int64_t v = 0; v < t->nv; v++) root[v] = (int32_t)v;
-  for (int64_t e = 0; e < t->ne; e++)
-    for (int i = 1; i < 3; i++) {
-      int32_t a = t->conn[3 * e], b = t->conn[3 * e + i];
-      while (root[a] != a) a = root[a] = root[root[a]];
-      while (root[b] != b) b = root[b] = root[root[b]];
-      if (a != b) root[a < b ? b : a] = a < b ? a : b;
-    }
-  int across = 0;
-  for (int64_t k = 0; k < count && !across; k++) {
-    int32_t a = t->conn[3 * (int64_t)pairs[2 * k]], b = t->conn[3 * (int64_t)pairs[2 * k + 1]];
-    while (root[a] != a) a = root[a];
-    while (root[b] != b) b = root[b];
-    across = a != b;
-  }
-  vm_free(ctx, root);
-  return across;
-}
-
 /* vm-surface's check of the wall for self-intersections (CGAL, exact
  * predicates), before anything is built: a wall crossing itself cannot
  * carry valid layers, and the cutting would spend minutes finding that
  * out. The wall's triangles (quads split as vm_prism_create splits them);
  * a wall that is not a manifold triangle surface is left to the stage's
- * own checks. Returns the exit code; with npairs, a wall whose separate
- * parts intersect each other is not an error: the count goes to *npairs
- * (a part that crosses itself is). */
+ * own checks. Returns the exit code; with npairs, a wall that intersects
+ * itself is not an error: the count goes to *npairs (the caller sends the
+ * wall through the surface stage, whose repair unites overlapping parts and
+ * heals a part that crosses itself, or refuses it). */
 static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *w,
                                     int64_t *npairs) {
   vm_mesh *t = NULL;
@@ -240,7 +216,7 @@ static int check_wall_intersections(vm_cli *cli, const char *in, const vm_mesh *
   int rc = VM_EXIT_OK;
   if (st == VM_ERR_NOMEM) {
     rc = vm_cli_input_error(cli, NULL);
-  } else if (st == VM_OK && count > 0 && npairs && pairs_across_parts(cli->ctx, t, pairs, count)) {
+  } else if (st == VM_OK && count > 0 && npairs) {
     *npairs = count; /* the caller sends the wall through the surface stage */
   } else if (st == VM_OK && count > 0) {
     double c[3] = {0, 0, 0};
@@ -929,8 +905,9 @@ int main(int argc, char **argv) {
   int surface_ran = 0;
   char surface_said[256] = "";
   /* a wall that intersects itself (the parts of an assembly overlapping:
-   * a wing through a fuselage) goes there too: the surface stage's repair
-   * replaces overlapping closed parts by their union */
+   * a wing through a fuselage; a part folded locally) goes there too: the
+   * surface stage's repair replaces overlapping closed parts by their union
+   * and heals a part that crosses itself (or refuses it) */
   int64_t wall_pairs = 0;
   if (!a.keep_wall && (rc = check_wall_intersections(&cli, a.in, m, &wall_pairs)) != VM_EXIT_OK)
     goto done;
@@ -938,7 +915,7 @@ int main(int argc, char **argv) {
     char why[256];
     snprintf(why, sizeof why,
              "the wall intersects itself (%lld pairs of triangles): overlapping closed parts are "
-             "replaced by their union",
+             "replaced by their union, a part crossing itself is healed",
              (long long)wall_pairs);
     if ((rc = surface_stage(&cli, a.in, m, why, 0, &nneedle, &needle_min, surface_said,
                             sizeof surface_said)) != VM_EXIT_OK)

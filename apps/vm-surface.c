@@ -64,6 +64,11 @@ static const vm_opt opts[] = {
      "(by default the repair replaces them by their union: an assembly's wing through its "
      "fuselage, a part hidden inside)",
      .ival = 0},
+    {"--no-heal", NULL, VM_OPT_FLAG, A(so.repair_opts.heal_self), NULL,
+     "a closed part that intersects itself is refused (by default its crossing faces are "
+     "removed and the holes filled, if that moves the surface by less than the local edge "
+     "length)",
+     .ival = 0},
     {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections), NULL,
      "skip the self-intersection check of the repair", .ival = 0},
     {"--remesh", NULL, VM_OPT_CHOICE, A(so.remesh), NULL,
@@ -190,12 +195,13 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
            "\"removed_faces\": %lld, \"removed_degenerate\": %lld, \"removed_isolated\": %lld, "
            "\"reoriented\": %lld, \"stitched\": %lld, \"border_edges\": %lld, \"holes\": %lld, "
            "\"components\": %lld, \"self_intersections\": %lld, \"united\": %lld, "
-           "\"union_pairs\": %lld, \"volume\": ",
+           "\"union_pairs\": %lld, \"healed\": %lld, \"heal_pairs\": %lld, \"volume\": ",
            (long long)rr->nv, (long long)rr->nf, (long long)rr->merged_vertices,
            (long long)rr->removed_polygons, (long long)rr->removed_degenerate,
            (long long)rr->removed_isolated, (long long)rr->reoriented, (long long)rr->stitched,
            (long long)rr->border_edges, (long long)rr->holes, (long long)rr->components,
-           (long long)rr->self_intersections, (long long)rr->united, (long long)rr->union_pairs);
+           (long long)rr->self_intersections, (long long)rr->united, (long long)rr->union_pairs,
+           (long long)rr->healed, (long long)rr->heal_pairs);
     vm_json_double(stdout, rr->volume);
     printf("}");
   }

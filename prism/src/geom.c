@@ -100,7 +100,8 @@ static double best_visible(const pr_surf *p, int64_t v, const double *fn, int it
 }
 
 int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, const double *xyz,
-                        double *fn, double *vnrm, double *dir, int blend_passes) {
+                        double *fn, double *vnrm, double *dir, int blend_passes,
+                        int64_t *first_blind) {
   int64_t nw = p->nv, nt = p->nt;
   for (int64_t t = 0; t < nt; t++) {
     const int32_t *c = p->tri + 3 * t;
@@ -136,8 +137,10 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
     if (vm_normalize3(n) == 0) n[2] = 1;
     if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
     if (min_visibility(p, v, fn, n) < kp->visible_min &&
-        best_visible(p, v, fn, kp->visible_iter, n) <= 0)
+        best_visible(p, v, fn, kp->visible_iter, n) <= 0) {
+      if (!blind && first_blind) *first_blind = v;
       blind++;
+    }
   }
   /* blend near sharp edges: Jacobi averaging with the neighbours, kept only
    * where every incident face still sees the new direction well */

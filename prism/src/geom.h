@@ -44,10 +44,12 @@ typedef struct pr_surf {
  * with their neighbours where the surface has sharp edges, so columns
  * spread instead of crossing. fn: 3*nt face normals (computed here).
  * vnrm may be NULL; dir receives the blended directions. Returns the
- * number of vertices where no visible direction was found (ctx: scratch
- * memory; without it the blending is skipped). */
+ * number of vertices where no visible direction was found, the first of
+ * them into *first_blind (may be NULL; ctx: scratch memory; without it the
+ * blending is skipped). */
 int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *s, const pr_dir_params *k, const double *xyz,
-                        double *fn, double *vnrm, double *dir, int blend_passes);
+                        double *fn, double *vnrm, double *dir, int blend_passes,
+                        int64_t *first_blind);
 
 /* Targets of the prisms on triangles tri (nt) over surface `base`: each
  * corner a of triangle t goes to base_a + h_a * u_a with u_a = dir_a

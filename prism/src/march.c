@@ -743,7 +743,7 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied)
       for (int64_t v = 0; v < nw; v++)
         memcpy(dn + 3 * v, (p->smooth[v] ? p->vnrm : p->dir) + 3 * v, 3 * sizeof *dn);
     else
-      pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, dn, dn + lsz, 0);
+      pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, dn, dn + lsz, 0, NULL);
     for (int64_t v = 0; v < nw; v++) {
       double e[3];
       for (int c = 0; c < 3; c++) e[c] = up[3 * v + c] - base[3 * v + c];
@@ -1120,7 +1120,7 @@ int vm_prism_march(vm_prism *p) {
     const char *why = NULL;
     vm_node_stats ns;
     int it = 0;
-    pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, vn, dr, 0);
+    pr_surface_dirs(ctx, &ws, &kp->dir, base, fn, vn, dr, 0, NULL);
     /* with shares of their own (regions, raised first heights), the
      * columns' own splits first; where none of those is valid, the
      * schedule's common split for every column, as without them (the

@@ -677,13 +677,17 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
                     vol / 6);
   }
   pr_surf ws = pr_wall_surf(p);
+  int64_t first_blind = 0;
   int64_t blind = pr_surface_dirs(ctx, &ws, &p->k.dir, p->wall, p->fnrm, p->vnrm, p->dir,
-                                  p->k.dir_blend_passes);
+                                  p->k.dir_blend_passes, &first_blind);
   if (blind) {
+    const double *x = p->wall + 3 * first_blind;
+    int st = vm_error(ctx, VM_ERR_ARG,
+                      "prism: at %lld wall vertices no direction sees every incident triangle "
+                      "(the wall folds back or ends in a spike there), e.g. at (%g, %g, %g)",
+                      (long long)blind, x[0], x[1], x[2]);
     vm_prism_destroy(&p);
-    return vm_error(ctx, VM_ERR_ARG,
-                    "prism: at %lld wall vertices no direction sees every incident triangle",
-                    (long long)blind);
+    return st;
   }
   const double smooth_cos = cos(p->k.smooth_angle_deg * PR_PI / 180);
   for (int64_t v = 0; v < nw; v++) {

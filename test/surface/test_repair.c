@@ -1,7 +1,8 @@
 /* test/surface/test_repair.c: the CGAL/OpenMesh side of the surface stage:
  * repair of good and bad surfaces (open, non-manifold, zero-area faces,
  * inconsistent orientation, self-intersections, empty), the union of
- * overlapping and nested closed parts, features,
+ * overlapping and nested closed parts, a part crossing itself healed,
+ * features,
  * isotropic remeshing with protected features, the projector, Hausdorff. */
 #include <math.h>
 #include <stdio.h>
@@ -502,6 +503,85 @@ static void test_union(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* A closed part that intersects itself: an icosphere (level 3, radius 1)
+ * whose north pole is pushed 2 edge lengths sideways along the sphere
+ * folds its fan over its neighbours' (a model's local fold): healed, the
+ * crossing faces removed and the hole filled, the rest of the sphere kept
+ * bit for bit; the pole pushed through the south side instead is refused
+ * (healing would cut the spike off, far beyond the local edge length), as
+ * is the fold with heal_self 0. Each refusal leaves the mesh as it was. */
+static void test_heal(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  vm_repair_report r;
+  vm_repair_opts o = vm_repair_opts_default();
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
+  CHECK(vm_surface_repair(m, &o, &r) == 0 && r.healed == 0 && r.self_intersections == 0,
+        "the sphere as it is: nothing to heal");
+  double vol0 = r.volume, edge = 0;
+  int64_t top = 0;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->xyz[3 * v + 2] > m->xyz[3 * top + 2]) top = v;
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *t = m->conn + m->eoff[e];
+    for (int k = 0; k < 3; k++) {
+      const double *a = m->xyz + 3 * t[k], *b = m->xyz + 3 * t[(k + 1) % 3];
+      edge += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                   (a[2] - b[2]) * (a[2] - b[2]));
+    }
+  }
+  edge /= 3.0 * (double)m->ne;
+  double *x = m->xyz + 3 * top, q[3] = {x[0] + 2 * edge, x[1], x[2]};
+  double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  for (int d = 0; d < 3; d++) x[d] = q[d] / nq;
+  int64_t nv0 = m->nv;
+  double *keep = malloc(sizeof *keep * 3 * (size_t)nv0);
+  int64_t nkeep = 0;
+  for (int64_t v = 0; v < nv0; v++)
+    if (m->xyz[3 * v + 2] < 0.5) memcpy(keep + 3 * nkeep++, m->xyz + 3 * v, sizeof *keep * 3);
+  int64_t pairs = 0;
+  CHECK(vm_surface_self_intersections(m, &pairs, NULL) == 0 && pairs > 0, "the fold: %lld pairs",
+        (long long)pairs);
+
+  /* with heal_self 0: refused, untouched */
+  o.heal_self = 0;
+  double x0 = x[0];
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && m->nv == nv0 && m->xyz[3 * top] == x0 &&
+            strstr(vm_ctx_error(ctx), "self-intersecting surface"),
+        "the fold refused with heal_self 0: %s", vm_ctx_error(ctx));
+  o.heal_self = 1;
+
+  CHECK(vm_surface_repair(m, &o, &r) == 0 && r.healed == 1 && r.heal_pairs == pairs &&
+            r.self_intersections == 0 && r.components == 1 && consistently_closed(m),
+        "the fold healed: %lld healed, %lld pairs healed, %lld left (%s)", (long long)r.healed,
+        (long long)r.heal_pairs, (long long)r.self_intersections, vm_ctx_error(ctx));
+  CHECK(r.heal_moved > 0 && r.heal_moved < edge && fabs(r.volume - vol0) < 0.01 * vol0,
+        "moved %g (edge %g), volume %.6g against %.6g", r.heal_moved, edge, r.volume, vol0);
+  int64_t found = 0;
+  for (int64_t i = 0; i < nkeep; i++)
+    for (int64_t v = 0; v < m->nv; v++)
+      if (!memcmp(m->xyz + 3 * v, keep + 3 * i, sizeof *keep * 3)) {
+        found++;
+        break;
+      }
+  CHECK(found == nkeep, "the vertices away from the fold kept bit for bit: %lld of %lld",
+        (long long)found, (long long)nkeep);
+  free(keep);
+  vm_mesh_destroy(&m);
+
+  /* the pole pushed through the south side: refused, untouched */
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
+  m->xyz[3 * top + 2] = -1.5;
+  nv0 = m->nv;
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && m->nv == nv0 &&
+            m->xyz[3 * top + 2] == -1.5 && strstr(vm_ctx_error(ctx), "intersects itself near") &&
+            strstr(vm_ctx_error(ctx), "healing would move the surface by more than the local "
+                                      "edge length"),
+        "a spike through the sphere refused: %s", vm_ctx_error(ctx));
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
@@ -509,6 +589,7 @@ int main(void) {
   test_soup_cleanup(ctx);
   test_refusals(ctx);
   test_union(ctx);
+  test_heal(ctx);
   test_zero_area(ctx);
   test_features(ctx);
   test_remesh(ctx);

@@ -1,6 +1,9 @@
 // lib/geom/src/repair_cgal.cpp: CGAL adapter: repair of an imported surface
 // (Polygon_mesh_processing), self-intersection detection, isotropic
 // remeshing with protected features.
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
@@ -14,6 +17,7 @@
 #include <CGAL/Polygon_mesh_processing/repair.h>
 #include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/repair_self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
@@ -418,6 +422,96 @@ void append_mesh(SMesh &a, const SMesh &b) {
   }
 }
 
+// The largest distance from a vertex or a face centroid of a to the
+// surface b (one side of a Hausdorff distance, at those points).
+double max_distance_to(const SMesh &a, const SMesh &b) {
+  typedef CGAL::AABB_face_graph_triangle_primitive<SMesh> Prim;
+  typedef CGAL::AABB_tree<CGAL::AABB_traits<K, Prim>> Tree;
+  Tree tree(faces(b).first, faces(b).second, b);
+  tree.accelerate_distance_queries();
+  double d2 = 0;
+  for (vertex_descriptor v : a.vertices()) d2 = std::max(d2, tree.squared_distance(a.point(v)));
+  for (face_descriptor f : a.faces()) d2 = std::max(d2, tree.squared_distance(face_centroid(a, f)));
+  return std::sqrt(d2);
+}
+
+// The closed components of sm that intersect themselves (pairs of faces of
+// one component: a model's local folds, a T-junction closed by a cap that
+// rounding turned over) healed: the crossing faces removed and the holes
+// filled (CGAL's remove_self_intersections, per component). A component
+// is healed only if the result is closed, intersects itself nowhere,
+// bounds a volume and lies within the local edge length of the input both
+// ways (the median length of the edges at the crossing faces' vertices;
+// a part pushed through itself would be cut off: refused, with how far). *healed: the components
+// healed (0: none intersected itself, sm unchanged); *moved: the largest distance between a healed
+// component and its input.
+int heal_components(vm_ctx *ctx, SMesh &sm,
+                    const std::vector<std::pair<face_descriptor, face_descriptor>> &pairs,
+                    const SMesh::Property_map<face_descriptor, std::size_t> &fcc, std::size_t ncc,
+                    int64_t *healed, int64_t *heal_pairs, double *moved) {
+  *healed = *heal_pairs = 0;
+  *moved = 0;
+  // per component: its pairs, and the local edge length: the median
+  // length of the edges at the crossing faces' vertices (the crossing
+  // faces' own edges are stretched by the fold; most edges there are not)
+  std::vector<int64_t> npair(ncc, 0);
+  std::vector<face_descriptor> first(ncc);
+  std::vector<std::vector<double>> len(ncc);
+  std::vector<char> seen(sm.number_of_vertices() + sm.number_of_removed_vertices(), 0);
+  for (const auto &p : pairs) {
+    std::size_t c = fcc[p.first];
+    if (c != fcc[p.second]) continue;
+    if (!npair[c]++) first[c] = p.first;
+    for (face_descriptor f : {p.first, p.second})
+      for (vertex_descriptor v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+        if (seen[v.idx()]) continue;
+        seen[v.idx()] = 1;
+        for (halfedge_descriptor h : CGAL::halfedges_around_target(v, sm))
+          len[c].push_back(std::sqrt(CGAL::squared_distance(sm.point(sm.source(h)), sm.point(v))));
+      }
+  }
+  std::size_t nself = 0;
+  for (std::size_t c = 0; c < ncc; c++) nself += npair[c] > 0;
+  if (!nself) return VM_OK;
+  std::vector<SMesh> comp = component_meshes(sm, fcc, ncc);
+  for (std::size_t c = 0; c < ncc; c++) {
+    if (!npair[c]) continue;
+    std::vector<double> &l = len[c];
+    std::nth_element(l.begin(), l.begin() + static_cast<std::ptrdiff_t>(l.size() / 2), l.end());
+    double tol = l[l.size() / 2];
+    SMesh h = comp[c];
+    bool ok =
+        PMP::experimental::remove_self_intersections(h, CGAL::parameters::preserve_genus(false));
+    h.collect_garbage();
+    const char *why = NULL;
+    double d = 0;
+    if (!ok || h.is_empty() || !CGAL::is_closed(h) || PMP::does_self_intersect(h))
+      why = "the crossing faces could not be removed and the holes filled";
+    else if (!PMP::does_bound_a_volume(h))
+      why = "the healed part does not bound a volume";
+    else if ((d = std::max(max_distance_to(comp[c], h), max_distance_to(h, comp[c]))) > tol)
+      why = "healing would move the surface by more than the local edge length";
+    if (why) {
+      Point p = face_centroid(sm, first[c]);
+      return vm_error(ctx, VM_ERR_FORMAT,
+                      "self-intersecting surface: %zu pairs of faces intersect, %lld of them "
+                      "within one closed component, which intersects itself near (%g, %g, %g): "
+                      "%s (moved %g, local edge length %g); repair the model",
+                      pairs.size(), static_cast<long long>(npair[c]), p.x(), p.y(), p.z(), why, d,
+                      tol);
+    }
+    if (PMP::volume(h) < 0) PMP::reverse_face_orientations(h);
+    comp[c] = std::move(h);
+    *moved = std::max(*moved, d);
+    (*healed)++;
+    *heal_pairs += npair[c];
+  }
+  SMesh out;
+  for (const SMesh &c : comp) append_mesh(out, c);
+  sm = std::move(out);
+  return VM_OK;
+}
+
 // The closed components of sm that overlap (a face of one intersects a
 // face of another: pairs) or nest (one inside another) replaced by their
 // union (CGAL corefinement, pairwise in rounds, the largest volumes
@@ -506,6 +600,7 @@ extern "C" vm_repair_opts vm_repair_opts_default(void) {
   o.require_closed = 1;
   o.check_self_intersections = 1;
   o.union_overlaps = 1;
+  o.heal_self = 1;
   return o;
 }
 
@@ -604,6 +699,30 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     std::vector<std::pair<face_descriptor, face_descriptor>> pairs;
     PMP::self_intersections(sm, std::back_inserter(pairs));
     r.self_intersections = static_cast<int64_t>(pairs.size());
+    if (o.heal_self && r.border_edges == 0 && !pairs.empty()) {
+      int64_t healed = 0, hpairs = 0;
+      double moved = 0;
+      if ((st = heal_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),
+                                &healed, &hpairs, &moved)))
+        return st;
+      if (healed) {
+        // sm is a new mesh: its component map and pairs are gone
+        r.healed = healed;
+        r.heal_pairs = hpairs;
+        r.heal_moved = moved;
+        if ((st = remove_degenerate(ctx, sm, &r))) return st;
+        pairs.clear();
+        PMP::self_intersections(sm, std::back_inserter(pairs));
+        r.self_intersections = static_cast<int64_t>(pairs.size());
+        fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+        r.components = static_cast<int64_t>(PMP::connected_components(sm, fcc));
+        vm_log(ctx, VM_LOG_WARN,
+               "repair: %lld closed components intersected themselves (%lld pairs of faces): "
+               "their crossing faces removed and the holes filled, the surface moved by at most "
+               "%g",
+               static_cast<long long>(healed), static_cast<long long>(hpairs), moved);
+      }
+    }
     if (o.union_overlaps && r.border_edges == 0 && r.components > 1) {
       int64_t united = 0;
       if ((st = unite_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),

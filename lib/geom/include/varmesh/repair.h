@@ -23,6 +23,15 @@ typedef struct vm_repair_opts {
                                    another are replaced by their union (CGAL
                                    corefinement), with a VM_LOG_WARN; 0: such
                                    a surface is refused as self-intersecting */
+  int heal_self;                /* (default 1; with check_self_intersections, on a
+                                   closed surface) a closed component that
+                                   intersects itself is healed: its crossing
+                                   faces removed and the holes filled (CGAL
+                                   remove_self_intersections), if the result is
+                                   closed, bounds a volume and lies within the
+                                   crossing faces' mean edge length of the
+                                   input (both ways), with a VM_LOG_WARN;
+                                   otherwise, or with 0, refused */
 } vm_repair_opts;
 
 vm_repair_opts vm_repair_opts_default(void);
@@ -44,6 +53,11 @@ typedef struct vm_repair_report {
   int64_t united;             /* closed components replaced by their union (0: none) */
   int64_t union_pairs;        /* the pairs of faces of different components that
                                  intersected before the union */
+  int64_t healed;             /* closed components that intersected themselves,
+                                 healed (heal_self; 0: none) */
+  int64_t heal_pairs;         /* their pairs of intersecting faces before */
+  double heal_moved;          /* the largest distance between a healed
+                                 component and its input */
   double volume;              /* enclosed volume (closed surfaces; else 0) */
 } vm_repair_report;
 
@@ -51,7 +65,8 @@ typedef struct vm_repair_report {
  * error): merge duplicate points, drop faces with a repeated vertex and
  * duplicate faces, orient consistently (CGAL orient_polygon_soup), stitch
  * coincident borders, remove degenerate (zero-area) faces, remove isolated
- * vertices, triangulate quads, check for self-intersections, replace the
+ * vertices, triangulate quads, check for self-intersections, heal the
+ * closed components that intersect themselves (o->heal_self), replace the
  * closed components that overlap or nest by their union (o->union_overlaps),
  * and orient every closed component outward (orient_to_bound_a_volume). The
  * result is a triangle mesh with new vertex numbering. Attributes are kept; fields,
