@@ -48,7 +48,7 @@ for f in poked overlap; do
   if [ $f = overlap ]; then
     check '[ $rc -eq 1 ] && [ ! -e "$dir/o.vmsh" ] && grep -Eq "intersects itself: [0-9]+ pairs of triangles intersect, e.g. elements [0-9]+ and [0-9]+ near \(" "$dir/err" && [ $(wc -l <"$dir/err") -eq 1 ]' "$f sphere: refused as bad input, pairs and a location (exit $rc, $(cat "$dir/err"))"
   else
-    check '[ $rc -eq 1 ] && [ ! -e "$dir/o.vmsh" ] && tail -1 "$dir/err" | grep -Eq "error: .*the surface stage: self-intersecting surface: [0-9]+ pairs of faces intersect, [0-9]+ of them within one closed component, which intersects itself near \(.*\): healing would move the surface by more than the local edge length \(moved 0\.8[0-9]*, local edge length 0\.1[0-9]*\)"' "$f sphere: refused as bad input, how far and where (exit $rc, $(cat "$dir/err"))"
+    check '[ $rc -eq 1 ] && [ ! -e "$dir/o.vmsh" ] && tail -1 "$dir/err" | grep -Eq "error: .*the surface stage: self-intersecting surface: [0-9]+ pairs of faces intersect, [0-9]+ of them within one closed component, which intersects itself near \(.*\): healing would move the surface by more than twice the local edge length \(moved 0\.8[0-9]*, local edge length 0\.1[0-9]*\)"' "$f sphere: refused as bad input, how far and where (exit $rc, $(cat "$dir/err"))"
   fi
   check '[ $ms -lt 5000 ]' "$f sphere: refused in ${ms} ms"
 done

@@ -440,11 +440,18 @@ double max_distance_to(const SMesh &a, const SMesh &b) {
 // rounding turned over) healed: the crossing faces removed and the holes
 // filled (CGAL's remove_self_intersections, per component). A component
 // is healed only if the result is closed, intersects itself nowhere,
-// bounds a volume and lies within the local edge length of the input both
-// ways (the median length of the edges at the crossing faces' vertices;
-// a part pushed through itself would be cut off: refused, with how far). *healed: the components
+// bounds a volume and lies within heal_reach local edge lengths of the
+// input both ways (the median length of the edges at the crossing faces'
+// vertices; a part pushed through itself would be cut off: refused, with
+// how far). *healed: the components
 // healed (0: none intersected itself, sm unchanged); *moved: the largest distance between a healed
 // component and its input.
+// How far healing may move the surface, in local edge lengths: a coarse
+// model's fold spans a face or two (a public 1,118-triangle airplane:
+// 1.43), a spike pushed through a part many (a sphere's pole through its
+// south side: 5.2).
+const double heal_reach = 2;
+
 int heal_components(vm_ctx *ctx, SMesh &sm,
                     const std::vector<std::pair<face_descriptor, face_descriptor>> &pairs,
                     const SMesh::Property_map<face_descriptor, std::size_t> &fcc, std::size_t ncc,
@@ -478,7 +485,7 @@ int heal_components(vm_ctx *ctx, SMesh &sm,
     if (!npair[c]) continue;
     std::vector<double> &l = len[c];
     std::nth_element(l.begin(), l.begin() + static_cast<std::ptrdiff_t>(l.size() / 2), l.end());
-    double tol = l[l.size() / 2];
+    double edge = l[l.size() / 2], tol = heal_reach * edge;
     SMesh h = comp[c];
     bool ok =
         PMP::experimental::remove_self_intersections(h, CGAL::parameters::preserve_genus(false));
@@ -490,7 +497,7 @@ int heal_components(vm_ctx *ctx, SMesh &sm,
     else if (!PMP::does_bound_a_volume(h))
       why = "the healed part does not bound a volume";
     else if ((d = std::max(max_distance_to(comp[c], h), max_distance_to(h, comp[c]))) > tol)
-      why = "healing would move the surface by more than the local edge length";
+      why = "healing would move the surface by more than twice the local edge length";
     if (why) {
       Point p = face_centroid(sm, first[c]);
       return vm_error(ctx, VM_ERR_FORMAT,
@@ -498,7 +505,7 @@ int heal_components(vm_ctx *ctx, SMesh &sm,
                       "within one closed component, which intersects itself near (%g, %g, %g): "
                       "%s (moved %g, local edge length %g); repair the model",
                       pairs.size(), static_cast<long long>(npair[c]), p.x(), p.y(), p.z(), why, d,
-                      tol);
+                      edge);
     }
     if (PMP::volume(h) < 0) PMP::reverse_face_orientations(h);
     comp[c] = std::move(h);
@@ -517,12 +524,13 @@ int heal_components(vm_ctx *ctx, SMesh &sm,
 // union (CGAL corefinement, pairwise in rounds, the largest volumes
 // first); the others kept as they are. A component that intersects itself
 // cannot be united: refused. *united: the components the union took in
-// (0: none overlapped or nested, sm unchanged).
+// (0: none overlapped or nested, sm unchanged); *cavities: the voids the
+// union enclosed (inward shells), dropped.
 int unite_components(vm_ctx *ctx, SMesh &sm,
                      const std::vector<std::pair<face_descriptor, face_descriptor>> &pairs,
                      const SMesh::Property_map<face_descriptor, std::size_t> &fcc, std::size_t ncc,
-                     int64_t *united) {
-  *united = 0;
+                     int64_t *united, int64_t *cavities) {
+  *united = *cavities = 0;
   for (const auto &p : pairs)
     if (fcc[p.first] == fcc[p.second]) {
       Point c = face_centroid(sm, p.first);
@@ -587,6 +595,30 @@ int unite_components(vm_ctx *ctx, SMesh &sm,
     work = std::move(next);
   }
   SMesh u = std::move(work.front());
+  // the union of parts that overlap can enclose voids (between a wing, a
+  // fuselage and a fairing): closed shells oriented inwards, negative
+  // volume, inside the union's outer shell; no layer grows into them
+  {
+    auto ucc = u.add_property_map<face_descriptor, std::size_t>("f:vm_ucc").first;
+    std::size_t nu = PMP::connected_components(u, ucc);
+    std::vector<double> vol(nu, 0);
+    for (face_descriptor f : u.faces()) {
+      halfedge_descriptor h = u.halfedge(f);
+      const Point &a = u.point(u.source(h)), &b = u.point(u.target(h)),
+                  &c = u.point(u.target(u.next(h)));
+      vol[ucc[f]] += CGAL::scalar_product(a - CGAL::ORIGIN,
+                                          CGAL::cross_product(b - CGAL::ORIGIN, c - CGAL::ORIGIN));
+    }
+    std::vector<std::size_t> drop;
+    for (std::size_t c = 0; c < nu; c++)
+      if (vol[c] < 0) drop.push_back(c);
+    if (!drop.empty() && drop.size() < nu) {
+      PMP::remove_connected_components(u, drop, ucc);
+      u.collect_garbage();
+      *cavities = static_cast<int64_t>(drop.size());
+    }
+    u.remove_property_map(ucc);
+  }
   for (std::size_t c = 0; c < ncc; c++)
     if (!in[c]) append_mesh(u, comp[c]);
   sm = std::move(u);
@@ -724,9 +756,9 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
       }
     }
     if (o.union_overlaps && r.border_edges == 0 && r.components > 1) {
-      int64_t united = 0;
+      int64_t united = 0, cavities = 0;
       if ((st = unite_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),
-                                 &united)))
+                                 &united, &cavities)))
         return st;
       if (united) {
         // sm is a new mesh: its component map is gone
@@ -743,12 +775,12 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
         std::size_t left = PMP::connected_components(sm, fcc);
         vm_log(ctx, VM_LOG_WARN,
                "repair: %lld of the %lld closed components %s (%lld pairs of faces intersected): "
-               "replaced by their union, %lld triangles; %zu components left (--no-union: "
-               "not united)",
+               "replaced by their union, %lld triangles (%lld voids it enclosed dropped); %zu "
+               "components left (--no-union: not united)",
                static_cast<long long>(united), static_cast<long long>(r.components),
                r.union_pairs ? "overlap or lie inside one another" : "lie inside one another",
                static_cast<long long>(r.union_pairs), static_cast<long long>(sm.number_of_faces()),
-               left);
+               static_cast<long long>(cavities), left);
         r.components = static_cast<int64_t>(left);
         if (r.border_edges > 0)
           return vm_error(ctx, VM_ERR_FORMAT,
