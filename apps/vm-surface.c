@@ -66,8 +66,8 @@ static const vm_opt opts[] = {
      .ival = 0},
     {"--no-heal", NULL, VM_OPT_FLAG, A(so.repair_opts.heal_self), NULL,
      "a closed part that intersects itself is refused (by default its crossing faces are "
-     "removed and the holes filled, if that moves the surface by less than the local edge "
-     "length)",
+     "removed and the holes filled, if that moves the surface by less than twice the local "
+     "edge length)",
      .ival = 0},
     {"--no-intersection-check", NULL, VM_OPT_FLAG, A(so.repair_opts.check_self_intersections), NULL,
      "skip the self-intersection check of the repair", .ival = 0},

@@ -435,6 +435,12 @@ double max_distance_to(const SMesh &a, const SMesh &b) {
   return std::sqrt(d2);
 }
 
+// How far healing may move the surface, in local edge lengths: a coarse
+// model's fold spans a face or two (a public 1,118-triangle airplane:
+// 1.43), a spike pushed through a part many (a sphere's pole through its
+// south side: 5.2).
+const double heal_reach = 2;
+
 // The closed components of sm that intersect themselves (pairs of faces of
 // one component: a model's local folds, a T-junction closed by a cap that
 // rounding turned over) healed: the crossing faces removed and the holes
@@ -442,16 +448,10 @@ double max_distance_to(const SMesh &a, const SMesh &b) {
 // is healed only if the result is closed, intersects itself nowhere,
 // bounds a volume and lies within heal_reach local edge lengths of the
 // input both ways (the median length of the edges at the crossing faces'
-// vertices; a part pushed through itself would be cut off: refused, with
-// how far). *healed: the components
-// healed (0: none intersected itself, sm unchanged); *moved: the largest distance between a healed
-// component and its input.
-// How far healing may move the surface, in local edge lengths: a coarse
-// model's fold spans a face or two (a public 1,118-triangle airplane:
-// 1.43), a spike pushed through a part many (a sphere's pole through its
-// south side: 5.2).
-const double heal_reach = 2;
-
+// vertices); a part pushed through itself would be cut off: refused, with
+// how far, sm unchanged. *healed: the components healed (0: none
+// intersected itself, sm unchanged); *heal_pairs: their pairs; *moved:
+// the largest distance between a healed component and its input.
 int heal_components(vm_ctx *ctx, SMesh &sm,
                     const std::vector<std::pair<face_descriptor, face_descriptor>> &pairs,
                     const SMesh::Property_map<face_descriptor, std::size_t> &fcc, std::size_t ncc,

@@ -28,10 +28,11 @@ typedef struct vm_repair_opts {
                                    intersects itself is healed: its crossing
                                    faces removed and the holes filled (CGAL
                                    remove_self_intersections), if the result is
-                                   closed, bounds a volume and lies within the
-                                   crossing faces' mean edge length of the
-                                   input (both ways), with a VM_LOG_WARN;
-                                   otherwise, or with 0, refused */
+                                   closed, bounds a volume and lies within
+                                   twice the local edge length of the input
+                                   both ways (the median length of the edges
+                                   at the crossing faces' vertices), with a
+                                   VM_LOG_WARN; otherwise, or with 0, refused */
 } vm_repair_opts;
 
 vm_repair_opts vm_repair_opts_default(void);
