@@ -731,6 +731,20 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     std::vector<std::pair<face_descriptor, face_descriptor>> pairs;
     PMP::self_intersections(sm, std::back_inserter(pairs));
     r.self_intersections = static_cast<int64_t>(pairs.size());
+    // after the healing or the union sm is a new mesh: its degenerate faces
+    // removed, its border, pairs and component map found again
+    auto renewed = [&]() -> int {
+      int s2 = remove_degenerate(ctx, sm, &r);
+      if (s2) return s2;
+      r.border_edges = 0;
+      for (halfedge_descriptor h : sm.halfedges())
+        if (sm.is_border(h)) r.border_edges++;
+      pairs.clear();
+      PMP::self_intersections(sm, std::back_inserter(pairs));
+      r.self_intersections = static_cast<int64_t>(pairs.size());
+      fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+      return VM_OK;
+    };
     if (o.heal_self && r.border_edges == 0 && !pairs.empty()) {
       int64_t healed = 0, hpairs = 0;
       double moved = 0;
@@ -738,15 +752,10 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
                                 &healed, &hpairs, &moved)))
         return st;
       if (healed) {
-        // sm is a new mesh: its component map and pairs are gone
         r.healed = healed;
         r.heal_pairs = hpairs;
         r.heal_moved = moved;
-        if ((st = remove_degenerate(ctx, sm, &r))) return st;
-        pairs.clear();
-        PMP::self_intersections(sm, std::back_inserter(pairs));
-        r.self_intersections = static_cast<int64_t>(pairs.size());
-        fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+        if ((st = renewed())) return st;
         r.components = static_cast<int64_t>(PMP::connected_components(sm, fcc));
         vm_log(ctx, VM_LOG_WARN,
                "repair: %lld closed components intersected themselves (%lld pairs of faces): "
@@ -761,17 +770,9 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
                                  &united, &cavities)))
         return st;
       if (united) {
-        // sm is a new mesh: its component map is gone
         r.united = united;
         r.union_pairs = static_cast<int64_t>(pairs.size());
-        if ((st = remove_degenerate(ctx, sm, &r))) return st;
-        r.border_edges = 0;
-        for (halfedge_descriptor h : sm.halfedges())
-          if (sm.is_border(h)) r.border_edges++;
-        pairs.clear();
-        PMP::self_intersections(sm, std::back_inserter(pairs));
-        r.self_intersections = static_cast<int64_t>(pairs.size());
-        fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
+        if ((st = renewed())) return st;
         std::size_t left = PMP::connected_components(sm, fcc);
         vm_log(ctx, VM_LOG_WARN,
                "repair: %lld of the %lld closed components %s (%lld pairs of faces intersected): "
