@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "cli_report.h"
 #include "cli_verify.h"
+#include "varmesh/cleanup.h"
 #include "varmesh/io.h"
 #include "varmesh/quadrature.h"
 #include "varmesh/prism.h"
@@ -476,6 +477,32 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
   return VM_EXIT_OK;
 }
 
+/* The folds of the wall m taken out (vm_surface_unblind), said on stderr;
+ * those left are the prism stage's to refuse, with where. */
+static int unblind_wall(vm_cli *cli, const char *in, vm_mesh *m, vm_unblind_report *rp) {
+  vm_unblind_opts uo = vm_unblind_opts_default();
+  vm_unblind_report r;
+  int st = vm_surface_unblind(m, &uo, &r);
+  *rp = r;
+  /* a wall that is not a manifold, consistently oriented triangle surface
+   * is left as it is: the prism stage refuses it with its own message */
+  if (st == VM_ERR_ARG) return VM_EXIT_OK;
+  if (st < 0) {
+    vm_cli_error(cli, "%s: %s", in, vm_ctx_error(cli->ctx));
+    return VM_EXIT_INPUT;
+  }
+  if (r.blind_in > 0)
+    vm_log(cli->ctx, VM_LOG_WARN,
+           "%s: the wall folds back at %lld vertices (no direction sees every incident triangle "
+           "there, e.g. at (%g, %g, %g)): %lld edge collapses and %lld flips %s %lld of them "
+           "out, moving the surface by at most %g%s",
+           in, (long long)r.blind_in, r.at_in[0], r.at_in[1], r.at_in[2], (long long)r.collapses,
+           (long long)r.flips, r.undone ? "would have taken" : "took",
+           (long long)(r.blind_in - r.blind), r.max_dev,
+           r.undone ? " (undone: they made triangles intersect)" : "");
+  return VM_EXIT_OK;
+}
+
 #define A(f) offsetof(args, f)
 static const vm_opt opts[] = {
     {"--thickness", "-T", VM_OPT_DOUBLE, A(T_abs), "X", "total thickness, absolute", .lo = 1e-300,
@@ -653,8 +680,9 @@ static void print_summary(const char *out, const vm_prism_report *r, int64_t npa
 }
 
 static void print_json(const char *in, const char *out, const vm_prism_report *rp, double L,
-                       int64_t npairs, int64_t needles_in, int surface, int64_t needles, int rc,
-                       int verified, int interrupted, int timed_out) {
+                       int64_t npairs, int64_t needles_in, int surface, int64_t needles,
+                       const vm_unblind_report *folds, int rc, int verified, int interrupted,
+                       int timed_out) {
   const vm_prism_report r = *rp;
   printf("{\"input\": ");
   vm_json_string(stdout, in);
@@ -679,6 +707,8 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   printf(", \"reoriented\": %s, \"needles_in\": %lld, \"surface_stage\": %s, \"needles\": %lld",
          r.reoriented ? "true" : "false", (long long)needles_in, surface ? "true" : "false",
          (long long)needles);
+  printf(", \"folded_in\": %lld, \"folded\": %lld", (long long)folds->blind_in,
+         (long long)folds->blind);
   printf(", \"ended_columns\": %lld, \"ended_kept\": %lld, \"pyramids\": %lld, \"tets\": %lld",
          (long long)r.ended_columns, (long long)r.ended_kept, (long long)r.pyramids,
          (long long)r.tets);
@@ -904,6 +934,8 @@ int main(int argc, char **argv) {
   int64_t nneedle = wall_needles(m, 1.0, &needle_min), needles_in = nneedle;
   int surface_ran = 0;
   char surface_said[256] = "";
+  vm_unblind_report folds; /* vm-prism's own pass (the surface stage's is said there) */
+  memset(&folds, 0, sizeof folds);
   /* a wall that intersects itself (the parts of an assembly overlapping:
    * a wing through a fuselage; a part folded locally) goes there too: the
    * surface stage's repair replaces overlapping closed parts by their union
@@ -940,6 +972,12 @@ int main(int argc, char **argv) {
     surface_ran = 1;
     L = model_length(m);
   }
+  /* a wall that folds back on itself somewhere (a triangle turned over
+   * onto its neighbours, needles folded against theirs, the rim of a
+   * plate of no thickness) has vertices no column direction can stand on:
+   * the folds are taken out by local flips and collapses first (the
+   * surface stage ends with the same step) */
+  if (!a.keep_wall && (rc = unblind_wall(&cli, a.in, m, &folds)) != VM_EXIT_OK) goto done;
   vm_prism_opts *o = &a.o;
   o->thickness = a.T_abs > 0 ? a.T_abs : a.T_rel * L;
   /* a thickness lost in rounding against the model's coordinates is a
@@ -1102,7 +1140,7 @@ int main(int argc, char **argv) {
             r.inverted > 0 || npairs > 0 ? "NOT VALID" : "not verified", (long long)r.inverted,
             (long long)npairs);
   if (a.json)
-    print_json(a.in, a.out, &r, L, npairs, needles_in, surface_ran, nneedle, rc, verified,
+    print_json(a.in, a.out, &r, L, npairs, needles_in, surface_ran, nneedle, &folds, rc, verified,
                st == VM_ERR_INTERRUPTED, timed_out);
   if (report) {
     int rrc = write_report(&cli, &report, a.report, a.in, a.out, &r, L, npairs, rc, verified, res,

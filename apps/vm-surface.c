@@ -211,6 +211,15 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
          : s->size_used == VM_SURFACE_SIZE_CURVATURE ? "curvature"
                                                      : "input",
          (long long)s->needles_in, s->remeshed ? "true" : "false");
+  {
+    const vm_unblind_report *u = &s->unblind;
+    printf(", \"unblind\": {\"folded_in\": %lld, \"folded\": %lld, \"collapses\": %lld, "
+           "\"flips\": %lld, \"undone\": %s, \"moved\": ",
+           (long long)u->blind_in, (long long)u->blind, (long long)u->collapses,
+           (long long)u->flips, u->undone ? "true" : "false");
+    vm_json_double(stdout, u->max_dev);
+    printf("}");
+  }
   if (s->remeshed && s->size_used == VM_SURFACE_SIZE_UNIFORM) {
     printf(", \"target_edge_length\": ");
     vm_json_double(stdout, s->target_edge_length);

@@ -7,6 +7,7 @@
 
 #include "varmesh/quadrature.h"
 #include "varmesh/quality.h"
+#include "varmesh/surface_mesh.h"
 
 static double node_ratio(const vm_qnode *q, const double *x) {
   double c[3][3];
@@ -99,6 +100,22 @@ static double best_visible(const pr_surf *p, int64_t v, const double *fn, int it
   return bm;
 }
 
+/* Where the iterations found no direction: the exact one
+ * (vm_visible_direction, O(k^4)) over up to 24 incident faces, taken into
+ * n if it sees them all; 1 then, else 0 (n unchanged). */
+static int exact_visible(const pr_surf *p, int64_t v, const double *fn, double *n) {
+  enum { KMAX = 24 };
+  double f[3 * KMAX], e[3];
+  int k = 0;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    if (k == KMAX) return 0;
+    memcpy(f + 3 * k++, fn + 3 * (int64_t)p->vt[j], 3 * sizeof *f);
+  }
+  if (!(vm_visible_direction(f, k, e) > 0)) return 0;
+  memcpy(n, e, sizeof e);
+  return 1;
+}
+
 int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, const double *xyz,
                         double *fn, double *vnrm, double *dir, int blend_passes,
                         int64_t *first_blind) {
@@ -137,7 +154,7 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
     if (vm_normalize3(n) == 0) n[2] = 1;
     if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
     if (min_visibility(p, v, fn, n) < kp->visible_min &&
-        best_visible(p, v, fn, kp->visible_iter, n) <= 0) {
+        best_visible(p, v, fn, kp->visible_iter, n) <= 0 && !exact_visible(p, v, fn, n)) {
       if (!blind && first_blind) *first_blind = v;
       blind++;
     }

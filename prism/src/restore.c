@@ -145,6 +145,7 @@ int vm_prism_restore(vm_prism *p) {
   double *t = vm_alloc_array(ctx, (size_t)nw, sizeof *t);
   double *told = vm_alloc_array(ctx, (size_t)nw, sizeof *told);
   double *tcut = vm_alloc_array(ctx, (size_t)nw, sizeof *tcut);
+  double *tstart = vm_alloc_array(ctx, (size_t)nw, sizeof *tstart);
   double *tp = vm_alloc_array(ctx, (size_t)nw, sizeof *tp);
   double *alpha = vm_alloc_array(ctx, (size_t)nw, sizeof *alpha);
   double *q = vm_alloc_array(ctx, (size_t)p->nt, sizeof *q);
@@ -154,8 +155,8 @@ int vm_prism_restore(vm_prism *p) {
   top_state ts = {vm_alloc_array(ctx, (size_t)nw, sizeof *ts.tq),
                   vm_calloc(ctx, (size_t)nw, sizeof *ts.dirty)};
   int st = VM_OK;
-  if (!d || !t || !told || !tcut || !tp || !alpha || !q || !qold || !zone || !tmp || !ts.tq ||
-      !ts.dirty) {
+  if (!d || !t || !told || !tcut || !tstart || !tp || !alpha || !q || !qold || !zone || !tmp ||
+      !ts.tq || !ts.dirty) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -171,6 +172,7 @@ int vm_prism_restore(vm_prism *p) {
    * gives back the old prism bit for bit */
   pr_set_top(p, t, d);
   memcpy(ts.tq, t, (size_t)nw * sizeof *t);
+  memcpy(tstart, t, (size_t)nw * sizeof *t);
   layer_quality(p, &ts, 1, qold);
   memcpy(q, qold, (size_t)p->nt * sizeof *q);
   mark_zone(p, p->k.restore_zone_rings, zone, tmp);
@@ -243,6 +245,27 @@ int vm_prism_restore(vm_prism *p) {
     pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw, np, 0);
     if (np > np0 || change < p->k.restore_stop_change * T) break;
   }
+  /* a sliver the restoration kept positive by pr_prism_quality but that
+   * the solver's own rounding judges inverted (det C <= 0 at a node: prisms
+   * of quality 1e-10 over needles; a public Cessna model) has its columns
+   * sent back to where the restoration found them, until none is left: the
+   * layer it found was valid and free of new intersections */
+  for (int round = 0; st >= 0 && round < 64; round++) {
+    int64_t bad = pr_mark_inverted(p, tmp);
+    if (bad <= 0) {
+      if (bad < 0) st = (int)bad;
+      break;
+    }
+    for (int64_t v = 0; v < nw; v++)
+      if (tmp[v]) t[v] = tstart[v];
+    sync_top(p, t, d, &ts);
+    if (round == 0)
+      vm_log(ctx, VM_LOG_INFO,
+             "prism: restoring: %lld nodes of slivers the solver judges inverted; their "
+             "columns go back to their length before the restoration",
+             (long long)bad);
+    if ((st = pr_layer_intersections(p, NULL, &np))) goto done;
+  }
   p->rep.intersections = np;
   if (np && st == VM_OK) st = VM_WARN_MAXITER;
   {
@@ -259,6 +282,7 @@ done:
   vm_free(ctx, t);
   vm_free(ctx, told);
   vm_free(ctx, tcut);
+  vm_free(ctx, tstart);
   vm_free(ctx, tp);
   vm_free(ctx, alpha);
   vm_free(ctx, q);

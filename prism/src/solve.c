@@ -1,6 +1,7 @@
 /* prism/src/solve.c: the layer's variational solves: its problem and
  * targets, minimizer runs with progress, time limit and step budget. */
 #include <math.h>
+#include <string.h>
 
 #include "state.h"
 
@@ -77,11 +78,41 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
   return pr_solve_budget(p, prob, m, kind, max_iter, 0, ph, iters);
 }
 
+/* A prism that the new targets would put outside the measure's domain (a
+ * node's det C <= 0 in the solver's own rounding, though the prism and its
+ * target are both positive by pr_prism_quality: prisms of quality 1e-10
+ * over needles, which the earlier solves left) keeps its old target, so
+ * that the next solve starts where F is finite (a public Cessna model: the
+ * cutting's 26th local solve started at F = inf and the run ended there). */
 int pr_set_targets(vm_prism *p, const double *hv) {
   vm_field *f = vm_mesh_find_field(p->layer, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
   if (!f) return vm_error(p->ctx, VM_ERR_ARG, "prism: layer without targets");
-  pr_build_targets(p->nt, p->tri, &p->k.dir, p->wall, p->fnrm, p->dir, hv, f->data);
-  return vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
+  int64_t nq = vm_problem_num_nodes(p->prob);
+  double *old = vm_alloc_array(p->ctx, (size_t)(18 * p->nt), sizeof *old);
+  double *det = vm_alloc_array(p->ctx, (size_t)(nq > 0 ? nq : 1), sizeof *det);
+  int st = old && det ? VM_OK : VM_ERR_NOMEM;
+  if (!st) {
+    memcpy(old, f->data, (size_t)(18 * p->nt) * sizeof *old);
+    pr_build_targets(p->nt, p->tri, &p->k.dir, p->wall, p->fnrm, p->dir, hv, f->data);
+    st = vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
+  }
+  if (!st) st = vm_problem_node_dets(p->prob, p->layer->xyz, det);
+  if (!st) {
+    const int32_t *ne = vm_problem_node_elements(p->prob);
+    double *t = f->data;
+    int64_t kept = 0;
+    for (int64_t q = 0; q < nq; q++) {
+      int64_t e = ne[q];
+      if (det[q] > 0 || e < 0 || e >= p->nt || !memcmp(t + 18 * e, old + 18 * e, 18 * sizeof *t))
+        continue;
+      memcpy(t + 18 * e, old + 18 * e, 18 * sizeof *t);
+      kept++;
+    }
+    if (kept) st = vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
+  }
+  vm_free(p->ctx, old);
+  vm_free(p->ctx, det);
+  return st;
 }
 
 int pr_make_problem(vm_prism *p) {
@@ -94,6 +125,27 @@ int pr_make_problem(vm_prism *p) {
       (st = vm_problem_set_rule(p->prob, VM_RULE_GEOMETRIC)))
     return st;
   return VM_OK;
+}
+
+int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark) {
+  int64_t nq = vm_problem_num_nodes(p->prob);
+  double *det = vm_alloc_array(p->ctx, (size_t)(nq > 0 ? nq : 1), sizeof *det);
+  if (!det) return VM_ERR_NOMEM;
+  int st = vm_problem_node_dets(p->prob, p->layer->xyz, det);
+  if (st) {
+    vm_free(p->ctx, det);
+    return st;
+  }
+  memset(mark, 0, (size_t)p->nw);
+  const int32_t *ne = vm_problem_node_elements(p->prob);
+  int64_t n = 0;
+  for (int64_t q = 0; q < nq; q++) {
+    if (det[q] > 0 || ne[q] < 0 || ne[q] >= p->nt) continue;
+    for (int i = 0; i < 3; i++) mark[p->tri[3 * (int64_t)ne[q] + i]] = 1;
+    n++;
+  }
+  vm_free(p->ctx, det);
+  return n;
 }
 
 int pr_check_valid(vm_prism *p, const char *when) {

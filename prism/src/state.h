@@ -192,6 +192,10 @@ int pr_make_problem(vm_prism *p);
 int pr_set_targets(vm_prism *p, const double *hv);
 /* VM_ERR_NUMERIC (naming `when`) if a node of the layer is inverted. */
 int pr_check_valid(vm_prism *p, const char *when);
+/* The wall vertices of the prisms with a node whose det C <= 0 in the
+ * solver's own rounding marked in mark (nw, cleared first); how many such
+ * nodes, or a negative status. */
+int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark);
 
 /* Intersections of the single layer's faces (top, sides, wall), queried
  * incrementally: marks the wall vertex of every column that carries an

@@ -76,7 +76,7 @@ int vm_prism_thin(vm_prism *p) {
    * pass 1 goes on from there, halving the neighbours too and keeping no
    * column more than thin_grade of an edge above a neighbour. A wall the first pass
    * serves is left exactly as it was. */
-  int64_t nbad = 0;
+  int64_t nbad = 0, bad_t = 0;
   for (int pass = 0, round = 0; pass < 2; pass++, round = 0) {
     if (pass == 1) {
       if (!nbad) break;
@@ -96,6 +96,7 @@ int vm_prism_thin(vm_prism *p) {
         double share = p->k.thin_quality_share * q0[t];
         double lim = share < p->k.thin_quality_cap ? share : p->k.thin_quality_cap;
         if (pr_prism_quality(x) > lim && lim > 0) continue;
+        if (!nbad) bad_t = t;
         nbad++;
         for (int i = 0; i < 3; i++) bad[c[i]] = 1;
       }
@@ -125,10 +126,23 @@ int vm_prism_thin(vm_prism *p) {
   }
   vm_free(ctx, hv);
   vm_free(ctx, bad);
+  if (nbad) {
+    /* where: the first one's wall triangle, and why */
+    const int32_t *c = p->tri + 3 * bad_t;
+    double g[3];
+    for (int r = 0; r < 3; r++)
+      g[r] = (p->wall[3 * (int64_t)c[0] + r] + p->wall[3 * (int64_t)c[1] + r] +
+              p->wall[3 * (int64_t)c[2] + r]) /
+             3;
+    double q = q0[bad_t];
+    vm_free(ctx, q0);
+    return vm_error(ctx, VM_ERR_NUMERIC,
+                    "prism: %lld thin prisms stay degenerate, e.g. over the wall triangle at "
+                    "(%g, %g, %g)%s",
+                    (long long)nbad, g[0], g[1], g[2],
+                    q > 0 ? "" : " (degenerate however thin: its columns do not see it)");
+  }
   vm_free(ctx, q0);
-  if (nbad)
-    return vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld thin prisms stay degenerate",
-                    (long long)nbad);
   vm_field *f;
   if ((st = vm_mesh_add_field(m, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT, VM_FIELD_F64, 18, &f)))
     return st;

@@ -894,6 +894,28 @@ static int ortho(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
   return st;
 }
 
+/* The last step of every step: where the surface folds back on itself (no
+ * direction sees every triangle at a vertex, so no prism column can stand
+ * there) the folds are taken out by local collapses and flips
+ * (vm_surface_unblind; undone if that makes triangles intersect). */
+static int unblind(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s) {
+  vm_unblind_report *r = &s->unblind;
+  int st = vm_surface_unblind(m, NULL, r);
+  /* not a manifold, consistently oriented surface (--repair no): the step
+   * does not apply */
+  if (st == VM_ERR_ARG) return VM_OK;
+  if (st < 0 || r->blind_in == 0) return st;
+  vm_log(ctx, VM_LOG_WARN,
+         "folds: the surface folds back at %lld vertices (no direction sees every incident "
+         "triangle there, e.g. at (%g, %g, %g)); %lld edge collapses and %lld flips %s %lld of "
+         "them out, moving the surface by at most %g%s",
+         (long long)r->blind_in, r->at_in[0], r->at_in[1], r->at_in[2], (long long)r->collapses,
+         (long long)r->flips, r->undone ? "would have taken" : "took",
+         (long long)(r->blind_in - r->blind), r->max_dev,
+         r->undone ? " (undone: they made triangles intersect)" : "");
+  return VM_OK;
+}
+
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
                    vm_surface_summary *summary) {
   vm_surface_summary local;
@@ -1054,5 +1076,9 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
   }
   vm_free(ctx, x0);
   vm_mesh_destroy(&input);
+  if (st >= 0 && o.step != VM_SURFACE_CURVATURE && all_triangles(m)) {
+    int b = unblind(ctx, m, s);
+    if (b < 0) st = b;
+  }
   return st;
 }

@@ -8,7 +8,9 @@
 # them and the layer is built); --time-limit exited 0
 # with "valid": true and 1 of 20 layers (now exit 4, "timed_out": true, the
 # layers reached on stderr); a stopped run whose outer faces cross says
-# NOT VALID; -T 1e-300 is a usage error, not bad input (item 14).
+# NOT VALID; -T 1e-300 is a usage error, not bad input (item 14); a
+# wall folded flat onto itself (a flap) gets its layer after the fold is
+# taken out (refused before: no column direction there).
 # usage: test_prism_honest.sh VM_GEN VM_CONVERT VM_PRISM
 set -u
 gen=$1 conv=$2 prism=$3
@@ -61,6 +63,30 @@ awk 'NR == 2 { nv = $1 } NR > 2 && NR <= 2 + nv && $3 > 0.999 { $1 = 0.30146 / 1
 rc=$?
 check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/j" && grep -q "\"surface_stage\": true" "$dir/j" && grep -Eq "repair: 1 closed components intersected themselves \([0-9]+ pairs of faces\): their crossing faces removed and the holes filled" "$dir/err"' \
   "folded sphere: healed by the surface stage, a valid layer (exit $rc, $(head -c 400 "$dir/err"))"
+rm -f "$dir/o.vmsh"
+# a flap: one triangle split by a point pushed 0.3 of its height past an
+# edge, in its plane, lifted by 1e-5 (no two triangles intersect): the
+# wall folds back there (main refused it: no column direction), and the
+# folds are taken out before the layer
+awk 'NR == 1 { next } NR == 2 { nv = $1; nf = $2; next }
+  NR <= 2 + nv { v[NR - 3] = $0; next } { f[NR - 3 - nv] = $0 }
+  END {
+    split(f[0], t, " "); a = t[2]; b = t[3]; c = t[4]
+    split(v[a], A, " "); split(v[b], B, " "); split(v[c], C, " ")
+    for (r = 1; r <= 3; r++) { u[r] = B[r] - A[r]; w[r] = C[r] - A[r] }
+    n[1] = u[2] * w[3] - u[3] * w[2]; n[2] = u[3] * w[1] - u[1] * w[3]; n[3] = u[1] * w[2] - u[2] * w[1]
+    l = sqrt(n[1] ^ 2 + n[2] ^ 2 + n[3] ^ 2)
+    for (r = 1; r <= 3; r++) { m = (A[r] + B[r]) / 2; p[r] = m + 0.3 * (m - C[r]) + 1e-5 * n[r] / l }
+    print "OFF"; print nv + 1, nf + 2, 0
+    for (i = 0; i < nv; i++) print v[i]
+    printf "%.17g %.17g %.17g\n", p[1], p[2], p[3]
+    print 3, a, b, nv; print 3, b, c, nv; print 3, c, a, nv
+    for (i = 1; i < nf; i++) print f[i]
+  }' "$dir/s.off" >"$dir/flap.off"
+"$prism" -q --json "$dir/flap.off" "$dir/o.vmsh" >"$dir/j" 2>"$dir/err"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"valid\": true" "$dir/j" && grep -Eq "\"folded_in\": [1-9][0-9]*, \"folded\": 0" "$dir/j" && grep -Eq "the wall folds back at [0-9]+ vertices .*took [0-9]+ of them out" "$dir/err"' \
+  "flap sphere: the fold taken out, a valid layer (exit $rc, $(head -c 400 "$dir/err"))"
 rm -f "$dir/o.vmsh"
 "$prism" -q --json "$dir/overlap.off" "$dir/o.vmsh" >"$dir/j" 2>"$dir/err"
 rc=$?

@@ -1,5 +1,6 @@
 /* lib/core/src/surface_mesh.c: triangles, edges and one-rings of a surface
  * mesh, shared by curvature, feature detection and adaptation. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -166,4 +167,62 @@ int64_t vm_surf_edge_find(const vm_surf_edges *E, int32_t a, int32_t b) {
   }
   if (lo < E->ne && E->ev[2 * lo] == a && E->ev[2 * lo + 1] == b) return lo;
   return -1;
+}
+
+/* the least n_i . e over the k vectors */
+static double least_seen(const double *n, int k, const double e[3]) {
+  double m = INFINITY;
+  for (int i = 0; i < k; i++) {
+    double d = vm_dot3(n + 3 * i, e);
+    if (d < m) m = d;
+  }
+  return m;
+}
+
+/* p as a candidate direction: kept in best/dir if it sees the n_i better */
+static void try_direction(const double *n, int k, const double p[3], double *best, double dir[3]) {
+  double e[3] = {p[0], p[1], p[2]};
+  if (!(vm_normalize3(e) > 1e-300)) return;
+  double m = least_seen(n, k, e);
+  if (m > *best) {
+    *best = m;
+    memcpy(dir, e, sizeof e);
+  }
+}
+
+double vm_visible_direction(const double *n, int k, double dir[3]) {
+  double e[3] = {0, 0, 1}, best = -INFINITY;
+  if (k <= 0) {
+    if (dir) memcpy(dir, e, sizeof e);
+    return -1;
+  }
+  for (int i = 0; i < k; i++) {
+    const double *a = n + 3 * i;
+    try_direction(n, k, a, &best, e);
+    for (int j = i + 1; j < k; j++) {
+      const double *b = n + 3 * j;
+      double u[3], p[3];
+      vm_sub3(b, a, u);
+      double uu = vm_dot3(u, u);
+      if (!(uu > 1e-24)) continue;
+      double t = -vm_dot3(a, u) / uu;
+      if (t > 0 && t < 1) {
+        for (int r = 0; r < 3; r++) p[r] = a[r] + t * u[r];
+        try_direction(n, k, p, &best, e);
+      }
+      for (int l = j + 1; l < k; l++) {
+        double v[3];
+        vm_sub3(n + 3 * l, a, v);
+        double uv = vm_dot3(u, v), vv = vm_dot3(v, v), det = uu * vv - uv * uv;
+        if (!(det > 1e-12 * uu * vv)) continue;
+        double au = -vm_dot3(a, u), av = -vm_dot3(a, v);
+        double s = (au * vv - av * uv) / det, w = (av * uu - au * uv) / det;
+        if (!(s > 0 && w > 0 && s + w < 1)) continue;
+        for (int r = 0; r < 3; r++) p[r] = a[r] + s * u[r] + w * v[r];
+        try_direction(n, k, p, &best, e);
+      }
+    }
+  }
+  if (dir) memcpy(dir, e, sizeof e);
+  return best;
 }

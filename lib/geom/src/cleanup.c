@@ -266,19 +266,6 @@ static int is_feature(const cmesh *c, int32_t a, int32_t b) {
   return hm_get(&c->fe, ukey(a, b)) >= 0;
 }
 
-/* Do two faces carry the same values of every element field? */
-static int same_fields(const vm_mesh *m, int64_t f, int64_t g) {
-  for (int i = 0; i < m->nfield; i++) {
-    const vm_field *fl = &m->fields[i];
-    if (fl->location != VM_FIELD_ELEMENT) continue;
-    size_t sz = (size_t)fl->ncomp * (fl->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
-    if (memcmp((const char *)fl->data + (size_t)f * sz, (const char *)fl->data + (size_t)g * sz,
-               sz))
-      return 0;
-  }
-  return 1;
-}
-
 typedef struct {
   int kind; /* 0 none, 1 flip (a, b), 2 collapse a -> b */
   int32_t a, b;
@@ -314,7 +301,7 @@ static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
   double dev, lmax;
   if (!vm_tm_flip_check(&c->t, c->x, a, b, 0.5, opp, &dev, &lmax)) return;
   int32_t cc = opp[0], d = opp[1];
-  if (!same_fields(c->m, he_find(c, a, b) / 3, he_find(c, b, a) / 3)) return;
+  if (!vm_tm_same_fields(c->m, he_find(c, a, b) / 3, he_find(c, b, a) / 3)) return;
   const double *x = c->x;
   /* what earlier moves there changed adds up */
   double e0 = c->err[a] > c->err[b] ? c->err[a] : c->err[b];
@@ -420,19 +407,10 @@ static void apply_collapse(cmesh *c, int32_t u, int32_t w, double dev) {
   int64_t f0 = h / 3, f1 = t / 3;
   int64_t *Fu = c->fu;
   int nu = ring(c, u, Fu);
-  for (int i = 0; i < nu; i++) face_keys(c, Fu[i], 0);
-  c->fdead[f0] = c->fdead[f1] = 1;
-  for (int i = 0; i < nu; i++) {
-    int64_t g = Fu[i];
-    if (g == f0 || g == f1) continue;
-    int32_t *tt = c->t.tri + 3 * g;
-    tt[vm_tm_index(tt, u)] = w;
-    face_keys(c, g, 1);
-    for (int j = 0; j < 3; j++) {
-      c->t.vface[tt[j]] = (int32_t)g;
-      raise_err(c, tt[j], dev);
-    }
-  }
+  c->bad_keys += vm_tm_collapse(&c->t, c->fdead, Fu, nu, u, w);
+  for (int i = 0; i < nu; i++)
+    if (Fu[i] != f0 && Fu[i] != f1)
+      for (int j = 0; j < 3; j++) raise_err(c, c->t.tri[3 * Fu[i] + j], dev);
   c->vdead[u] = 1;
 }
 

@@ -39,6 +39,22 @@ int vm_tm_flip(vm_tm *t, int32_t a, int32_t b, int32_t cd[2]) {
   return dup;
 }
 
+int vm_tm_collapse(vm_tm *t, uint8_t *fdead, const int64_t *fu, int nu, int32_t u, int32_t w) {
+  int64_t f0 = vm_tm_he(t, u, w) / 3, f1 = vm_tm_he(t, w, u) / 3;
+  for (int i = 0; i < nu; i++) vm_tm_keys(t, fu[i], 0);
+  fdead[f0] = fdead[f1] = 1;
+  int dup = 0;
+  for (int i = 0; i < nu; i++) {
+    int64_t g = fu[i];
+    if (g == f0 || g == f1) continue;
+    int32_t *x = t->tri + 3 * g;
+    x[vm_tm_index(x, u)] = w;
+    dup += vm_tm_keys(t, g, 1);
+    for (int j = 0; j < 3; j++) t->vface[x[j]] = (int32_t)g;
+  }
+  return dup;
+}
+
 int vm_tm_flip_check(const vm_tm *t, const double *x, int32_t a, int32_t b, double min_cos,
                      int32_t cd[2], double *dev, double *lmax) {
   int64_t h = vm_tm_he(t, a, b), w = vm_tm_he(t, b, a);

@@ -128,6 +128,19 @@ static inline double cos_between(const double *a, const double *b) {
   return la > 0 && lb > 0 ? vm_dot3(a, b) / (la * lb) : -1;
 }
 
+/* Do faces f and g of m carry the same values of every element field? */
+static inline int vm_tm_same_fields(const vm_mesh *m, int64_t f, int64_t g) {
+  for (int i = 0; i < m->nfield; i++) {
+    const vm_field *fl = &m->fields[i];
+    if (fl->location != VM_FIELD_ELEMENT) continue;
+    size_t sz = (size_t)fl->ncomp * (fl->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
+    if (memcmp((const char *)fl->data + (size_t)f * sz, (const char *)fl->data + (size_t)g * sz,
+               sz))
+      return 0;
+  }
+  return 1;
+}
+
 /* Room for n more keys: the map is rebuilt, twice as large, when it
  * would be more than half full (tombstones counted). */
 static inline int hm_reserve(vm_ctx *ctx, hmap *h, size_t n) {
@@ -183,6 +196,11 @@ int vm_tm_flip_check(const vm_tm *t, const double *x, int32_t a, int32_t b, doub
  * (c, d) (not checked: the caller has); cd = {c, d}; the duplicate edges
  * the new faces met, as vm_tm_keys. */
 int vm_tm_flip(vm_tm *t, int32_t a, int32_t b, int32_t cd[2]);
+/* Collapse u onto w (the link condition checked by the caller): the faces
+ * fu (nu: u's ring) lose u's directed edges, the two on the edge (u, w)
+ * are marked in fdead, the others take w for u; the duplicate edges the
+ * new faces met, as vm_tm_keys. u's own state is the caller's. */
+int vm_tm_collapse(vm_tm *t, uint8_t *fdead, const int64_t *fu, int nu, int32_t u, int32_t w);
 /* The faces around v, in order (at most max; -1 if more). */
 int vm_tm_ring(const vm_tm *t, int32_t v, int64_t *out, int max);
 /* The vertices of the faces fs (n) other than v, each once. */

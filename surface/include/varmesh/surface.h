@@ -87,6 +87,7 @@ typedef struct vm_surface_summary {
   int64_t nv_before_remesh;
   int cleaned;                 /* the sliver cleanup ran */
   vm_cleanup_report cleanup;   /* its figures */
+  vm_unblind_report unblind;   /* the last step: folds taken out (cleanup.h) */
   int size_used;               /* the size the surface was remeshed to in the end
                                   (VM_SURFACE_SIZE_INPUT: the input's own vertices) */
   int64_t needles_in;          /* size INPUT: triangles under needle_angle after the sliver

@@ -47,6 +47,18 @@ void vm_surf_edges_free(vm_ctx *ctx, vm_surf_edges *e);
 /* Index of edge (a, b) (either order) or -1. */
 int64_t vm_surf_edge_find(const vm_surf_edges *e, int32_t a, int32_t b);
 
+/* The direction that sees k unit vectors n (3 each: a vertex's incident
+ * face normals) best: the unit e maximizing min_i n_i . e, exactly. It is
+ * the least-norm point p of the convex hull of the n_i, scaled to unit
+ * length, and the minimum is |p| (hard-margin duality); p is the
+ * projection of the origin onto the affine hull of one, two or three of
+ * the n_i, so every such projection is tried and the best kept: O(k^4),
+ * for the few vertices a cheaper guess does not serve. Returns that
+ * minimum, and e in dir (dir may be NULL); where no direction sees every
+ * n_i (the origin in their hull: the surface folds back there) the best
+ * of the candidates, at most 0. k <= 0: returns -1. */
+double vm_visible_direction(const double *n, int k, double dir[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -99,6 +99,50 @@ int64_t vm_surface_mark_cones(const vm_mesh *m, vm_surface_features *f, double c
 int vm_surface_detect_features_cones(const vm_mesh *m, double angle_deg, double corner_deg,
                                      double cone_deg, vm_surface_features *f, int64_t *ncones);
 
+/* Where a surface folds back on itself (a triangle turned over onto its
+ * neighbours, the rim of a plate of no thickness, needles folded against
+ * their neighbours), no direction sees every triangle at a vertex, and no
+ * column of a prism layer can stand there. vm_surface_unblind works on
+ * every vertex whose margin -- the best, over unit directions e, of the
+ * least n . e over its triangles' unit normals (vm_visible_direction) --
+ * is below `margin`: of the edge flips and edge collapses at the vertex,
+ * it takes the one that changes the surface least among those that leave
+ * fewer such vertices around it and no other vertex there below
+ * min(`target`, its margin before), if that change, added to what earlier
+ * moves there changed, is at most `reach` times the mean length of the
+ * vertex's edges. Border vertices and fixed vertices are never removed,
+ * faces with different element fields never flipped; vertices that stay
+ * keep their coordinates bit for bit and their order, vertex and element
+ * fields follow them. With `keep_clean` the moves are all undone if they
+ * leave more pairs of triangles intersecting than before (checked
+ * exactly; r->undone). Deterministic. VM_OK (also if some are left: r->blind),
+ * VM_ERR_ARG (not a manifold, consistently oriented triangle surface),
+ * VM_ERR_NOMEM. */
+typedef struct vm_unblind_opts {
+  double margin;  /* worked on below this (default 1e-3: 0.06 degrees) */
+  double target;  /* default 0.02 */
+  double reach;   /* default 1 */
+  int rounds;     /* passes over the vertices below the margin (default 8) */
+  int keep_clean; /* default 1 */
+} vm_unblind_opts;
+
+vm_unblind_opts vm_unblind_opts_default(void);
+
+typedef struct vm_unblind_report {
+  int64_t blind_in, blind; /* vertices below the margin before and after */
+  int64_t flips, collapses;
+  double max_dev; /* the largest change of the surface, added up where moves follow each other */
+  int rounds;
+  int undone;             /* the moves made triangles intersect and were undone */
+  double at_in[3], at[3]; /* the first vertex below the margin before, the first left */
+} vm_unblind_report;
+
+int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *o, vm_unblind_report *r);
+
+/* The vertices of the triangle surface m whose margin is below thr, and
+ * where the first is (at may be NULL); a negative status on failure. */
+int64_t vm_surface_count_blind(const vm_mesh *m, double thr, double at[3]);
+
 #ifdef __cplusplus
 }
 #endif
