@@ -491,6 +491,12 @@ static int unblind_wall(vm_cli *cli, const char *in, vm_mesh *m, vm_unblind_repo
     vm_cli_error(cli, "%s: %s", in, vm_ctx_error(cli->ctx));
     return VM_EXIT_INPUT;
   }
+  if (r.caps_in > 0)
+    vm_log(cli->ctx, VM_LOG_WARN,
+           "%s: %lld wall triangles have an angle within 0.1 degrees of 180 (caps: their apex on "
+           "their long edge); %lld flips of that edge %s %lld of them out",
+           in, (long long)r.caps_in, (long long)r.cap_flips, r.undone ? "would have taken" : "took",
+           (long long)(r.undone ? 0 : r.caps_in - r.caps));
   if (r.blind_in > 0)
     vm_log(cli->ctx, VM_LOG_WARN,
            "%s: the wall folds back at %lld vertices (no direction sees every incident triangle "
@@ -707,8 +713,9 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   printf(", \"reoriented\": %s, \"needles_in\": %lld, \"surface_stage\": %s, \"needles\": %lld",
          r.reoriented ? "true" : "false", (long long)needles_in, surface ? "true" : "false",
          (long long)needles);
-  printf(", \"folded_in\": %lld, \"folded\": %lld", (long long)folds->blind_in,
-         (long long)folds->blind);
+  printf(", \"folded_in\": %lld, \"folded\": %lld, \"caps_in\": %lld, \"caps\": %lld",
+         (long long)folds->blind_in, (long long)folds->blind, (long long)folds->caps_in,
+         (long long)folds->caps);
   printf(", \"ended_columns\": %lld, \"ended_kept\": %lld, \"pyramids\": %lld, \"tets\": %lld",
          (long long)r.ended_columns, (long long)r.ended_kept, (long long)r.pyramids,
          (long long)r.tets);

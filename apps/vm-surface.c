@@ -214,9 +214,11 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
   {
     const vm_unblind_report *u = &s->unblind;
     printf(", \"unblind\": {\"folded_in\": %lld, \"folded\": %lld, \"collapses\": %lld, "
-           "\"flips\": %lld, \"undone\": %s, \"moved\": ",
+           "\"flips\": %lld, \"caps_in\": %lld, \"caps\": %lld, \"cap_flips\": %lld, "
+           "\"undone\": %s, \"moved\": ",
            (long long)u->blind_in, (long long)u->blind, (long long)u->collapses,
-           (long long)u->flips, u->undone ? "true" : "false");
+           (long long)u->flips, (long long)u->caps_in, (long long)u->caps, (long long)u->cap_flips,
+           u->undone ? "true" : "false");
     vm_json_double(stdout, u->max_dev);
     printf("}");
   }

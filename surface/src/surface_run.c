@@ -904,15 +904,23 @@ static int unblind(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s) {
   /* not a manifold, consistently oriented surface (--repair no): the step
    * does not apply */
   if (st == VM_ERR_ARG) return VM_OK;
-  if (st < 0 || r->blind_in == 0) return st;
-  vm_log(ctx, VM_LOG_WARN,
-         "folds: the surface folds back at %lld vertices (no direction sees every incident "
-         "triangle there, e.g. at (%g, %g, %g)); %lld edge collapses and %lld flips %s %lld of "
-         "them out, moving the surface by at most %g%s",
-         (long long)r->blind_in, r->at_in[0], r->at_in[1], r->at_in[2], (long long)r->collapses,
-         (long long)r->flips, r->undone ? "would have taken" : "took",
-         (long long)(r->blind_in - r->blind), r->max_dev,
-         r->undone ? " (undone: they made triangles intersect)" : "");
+  if (st < 0) return st;
+  if (r->caps_in > 0)
+    vm_log(ctx, VM_LOG_WARN,
+           "caps: %lld triangles with an angle within 0.1 degrees of 180 (their apex on their "
+           "long edge); %lld flips of that edge %s %lld of them out%s",
+           (long long)r->caps_in, (long long)r->cap_flips, r->undone ? "would have taken" : "took",
+           (long long)(r->undone ? 0 : r->caps_in - r->caps),
+           r->undone ? " (undone: the moves made triangles intersect)" : "");
+  if (r->blind_in > 0)
+    vm_log(ctx, VM_LOG_WARN,
+           "folds: the surface folds back at %lld vertices (no direction sees every incident "
+           "triangle there, e.g. at (%g, %g, %g)); %lld edge collapses and %lld flips %s %lld of "
+           "them out, moving the surface by at most %g%s",
+           (long long)r->blind_in, r->at_in[0], r->at_in[1], r->at_in[2], (long long)r->collapses,
+           (long long)r->flips, r->undone ? "would have taken" : "took",
+           (long long)(r->blind_in - r->blind), r->max_dev,
+           r->undone ? " (undone: they made triangles intersect)" : "");
   return VM_OK;
 }
 

@@ -22,6 +22,8 @@ vm_unblind_opts vm_unblind_opts_default(void) {
   o.reach = 1.0;
   o.rounds = 8;
   o.keep_clean = 1;
+  o.cap_deg = 0.1;
+  o.cap_dev = 1e-3;
   return o;
 }
 
@@ -160,6 +162,66 @@ static int flip(umesh *u, int32_t a, int32_t b, int32_t cd[2]) {
   journal_face(u, f0);
   journal_face(u, f1);
   u->bad_keys += vm_tm_flip(&u->t, a, b, cd);
+  return 1;
+}
+
+/* The cap's apex: the corner of face e whose angle is within cap_deg of
+ * 180 degrees, or -1. */
+static int cap_corner(const umesh *u, int64_t e, double cap_deg) {
+  const int32_t *t = u->t.tri + 3 * e;
+  for (int i = 0; i < 3; i++) {
+    const double *p = u->x + 3 * (int64_t)t[i];
+    if (corner_deg(p, u->x + 3 * (int64_t)t[(i + 1) % 3], u->x + 3 * (int64_t)t[(i + 2) % 3]) >=
+        180 - cap_deg)
+      return i;
+  }
+  return -1;
+}
+
+/* Caps: a triangle whose largest angle is within cap_deg of 180 degrees
+ * has its apex c within a hair of its long edge ab. Flipping ab (to c and
+ * the far vertex d of the triangle across it) removes the cap and leaves
+ * the surface where it was to within c's distance from ab, even where ab
+ * is a crease: the crease then runs a-c-b, along the cap's two short
+ * edges. Taken where c lies within dev_rel |ab| of the line ab, both new
+ * triangles' smallest angle beats the two old ones', and none of the four
+ * vertices falls below min(target, its margin before). 1 if taken. */
+static int cap_flip(umesh *u, int64_t e, double cap_deg, double dev_rel) {
+  const int32_t *t = u->t.tri + 3 * e;
+  int k = cap_corner(u, e, cap_deg);
+  if (k < 0) return 0;
+  int32_t c = t[k], a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+  int64_t g = vm_tm_he(&u->t, b, a);
+  if (g < 0) return 0;
+  int32_t d = u->t.tri[3 * (g / 3) + (g % 3 + 2) % 3];
+  /* c's distance from the line ab, against |ab| */
+  double ab[3], ac[3], cr[3];
+  vm_sub3(u->x + 3 * (int64_t)b, u->x + 3 * (int64_t)a, ab);
+  vm_sub3(u->x + 3 * (int64_t)c, u->x + 3 * (int64_t)a, ac);
+  vm_cross3(ab, ac, cr);
+  double lab = vm_norm3(ab);
+  if (!(lab > 0) || !(vm_norm3(cr) / lab <= dev_rel * lab)) return 0;
+  double o0 = tri_min_deg(u->x, a, b, c), o1 = tri_min_deg(u->x, b, a, d);
+  double oldmin = o0 < o1 ? o0 : o1;
+  int32_t vs[4] = {a, b, c, d};
+  double before[4];
+  for (int i = 0; i < 4; i++) before[i] = margin(u, vs[i]);
+  u->nj = u->njv = 0;
+  int32_t cd[2];
+  if (!flip(u, a, b, cd)) return 0;
+  double n0 = tri_min_deg(u->x, a, d, c), n1 = tri_min_deg(u->x, d, b, c);
+  int ok = (n0 < n1 ? n0 : n1) > oldmin;
+  for (int i = 0; i < 4 && ok; i++) {
+    double need = before[i] < u->target ? before[i] : u->target;
+    ok = margin(u, vs[i]) >= need;
+  }
+  if (!ok) {
+    undo(u);
+    return 0;
+  }
+  double dev = vm_norm3(cr) / lab;
+  for (int i = 0; i < 4; i++)
+    if (dev > u->err[vs[i]]) u->err[vs[i]] = dev;
   return 1;
 }
 
@@ -452,7 +514,20 @@ int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *opts, vm_unblind_repor
   r.blind_in = count_blind(u, r.at_in);
   memcpy(r.at, r.at_in, sizeof r.at);
   r.blind = r.blind_in;
-  if (r.blind_in == 0) goto done;
+  for (int64_t e = 0; e < u->nf; e++) r.caps_in += cap_corner(u, e, o.cap_deg) >= 0;
+  r.caps = r.caps_in;
+  if (r.blind_in == 0 && r.caps_in == 0) goto done;
+  /* caps first: their flips leave the surface where it was */
+  for (int round = 0; round < o.rounds && r.caps > 0; round++) {
+    int64_t changed = 0;
+    for (int64_t e = 0; e < u->nf; e++)
+      if (!u->fdead[e] && cap_flip(u, e, o.cap_deg, o.cap_dev)) changed++;
+    r.cap_flips += changed;
+    r.caps = 0;
+    for (int64_t e = 0; e < u->nf; e++) r.caps += !u->fdead[e] && cap_corner(u, e, o.cap_deg) >= 0;
+    if (!changed || vm_ctx_interrupted(ctx)) break;
+  }
+  if (r.cap_flips) r.blind = count_blind(u, r.at);
   for (int round = 0; round < o.rounds && r.blind > 0; round++) {
     int64_t changed = 0;
     for (int64_t v = 0; v < u->nv; v++) {
@@ -474,7 +549,7 @@ int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *opts, vm_unblind_repor
   }
   for (int64_t v = 0; v < u->nv; v++)
     if (u->err[v] > r.max_dev) r.max_dev = u->err[v];
-  if (r.flips + r.collapses == 0) goto done;
+  if (r.flips + r.collapses + r.cap_flips == 0) goto done;
   feat.nv = m->nv;
   feat.vclass = vm_calloc(ctx, nv1, 1);
   if (!feat.vclass) {
@@ -495,6 +570,7 @@ int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *opts, vm_unblind_repor
     *keep = tmp;
     r.undone = 1;
     r.blind = r.blind_in;
+    r.caps = r.caps_in;
     memcpy(r.at, r.at_in, sizeof r.at);
   }
 done:

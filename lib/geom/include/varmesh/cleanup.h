@@ -124,6 +124,13 @@ typedef struct vm_unblind_opts {
   double reach;   /* default 1 */
   int rounds;     /* passes over the vertices below the margin (default 8) */
   int keep_clean; /* default 1 */
+  /* caps first: a triangle with an angle within cap_deg of 180 degrees
+   * (default 0.1) whose apex lies within cap_dev (default 1e-3) times its
+   * long edge of that edge has the edge flipped (across a crease too: the
+   * crease then runs through the apex), where that raises the two
+   * triangles' smallest angle and no vertex there falls below min(target,
+   * its margin before) */
+  double cap_deg, cap_dev;
 } vm_unblind_opts;
 
 vm_unblind_opts vm_unblind_opts_default(void);
@@ -131,6 +138,7 @@ vm_unblind_opts vm_unblind_opts_default(void);
 typedef struct vm_unblind_report {
   int64_t blind_in, blind; /* vertices below the margin before and after */
   int64_t flips, collapses;
+  int64_t caps_in, caps, cap_flips; /* caps before and after, their flips */
   double max_dev; /* the largest change of the surface, added up where moves follow each other */
   int rounds;
   int undone;             /* the moves made triangles intersect and were undone */
