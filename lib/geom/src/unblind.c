@@ -449,6 +449,56 @@ static int64_t count_blind(umesh *u, double at[3]) {
   return n;
 }
 
+/* A first look, in two passes over the triangles and nothing but two
+ * arrays over the vertices: how many vertices the angle-weighted normal
+ * does not see every incident face of at `target` (the cheap guess of
+ * margin(), which decides where it is at least the target), and how many
+ * triangles are caps. 0: nothing for the step to do. */
+static int64_t quick_suspects(const vm_mesh *m, double target, double cap_deg) {
+  vm_ctx *ctx = m->ctx;
+  const size_t nv1 = (size_t)(m->nv > 0 ? m->nv : 1);
+  double *vn = vm_calloc(ctx, 3 * nv1, sizeof *vn), *low = vm_alloc_array(ctx, nv1, sizeof *low);
+  if (!vn || !low) {
+    vm_free(ctx, vn);
+    vm_free(ctx, low);
+    return VM_ERR_NOMEM;
+  }
+  const double *x = m->xyz;
+  int64_t n = 0;
+  for (int pass = 0; pass < 2; pass++) {
+    for (int64_t e = 0; e < m->ne; e++) {
+      const int32_t *t = m->conn + 3 * e;
+      double f[3];
+      tri_normal(x, t[0], t[1], t[2], f);
+      double l = vm_norm3(f);
+      for (int r = 0; r < 3; r++) f[r] = l > 0 ? f[r] / l : 0;
+      for (int i = 0; i < 3; i++) {
+        const double *p = x + 3 * (int64_t)t[i];
+        double *w = vn + 3 * (int64_t)t[i];
+        if (pass == 0) {
+          double a =
+              corner_deg(p, x + 3 * (int64_t)t[(i + 1) % 3], x + 3 * (int64_t)t[(i + 2) % 3]);
+          for (int r = 0; r < 3; r++) w[r] += a * f[r];
+          n += a >= 180 - cap_deg;
+        } else {
+          double d = vm_dot3(w, f);
+          if (d < low[t[i]]) low[t[i]] = d;
+        }
+      }
+    }
+    if (pass == 0)
+      /* a vertex whose normals cancel keeps a zero vector: seen at 0 */
+      for (int64_t v = 0; v < m->nv; v++) {
+        low[v] = INFINITY;
+        vm_normalize3(vn + 3 * v);
+      }
+  }
+  for (int64_t v = 0; v < m->nv; v++) n += low[v] < target;
+  vm_free(ctx, vn);
+  vm_free(ctx, low);
+  return n;
+}
+
 int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *opts, vm_unblind_report *rep) {
   vm_unblind_report r;
   memset(&r, 0, sizeof r);
@@ -463,6 +513,9 @@ int vm_surface_unblind(vm_mesh *m, const vm_unblind_opts *opts, vm_unblind_repor
       o.rounds < 0)
     return vm_error(ctx, VM_ERR_ARG, "unblind: margin %g, target %g, reach %g, %d rounds", o.margin,
                     o.target, o.reach, o.rounds);
+  /* most surfaces have nothing to do: said without the edited structure */
+  int64_t suspects = quick_suspects(m, o.target, o.cap_deg);
+  if (suspects <= 0) return suspects < 0 ? (int)suspects : VM_OK;
   umesh *u = vm_calloc(ctx, 1, sizeof *u);
   if (!u) return VM_ERR_NOMEM;
   u->ctx = ctx;
