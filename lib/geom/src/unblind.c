@@ -486,8 +486,8 @@ static int64_t quick_suspects(const vm_mesh *m, double target, double cap_deg) {
         }
       }
     }
+    /* a vertex whose normals cancel keeps a zero vector: seen at 0 */
     if (pass == 0)
-      /* a vertex whose normals cancel keeps a zero vector: seen at 0 */
       for (int64_t v = 0; v < m->nv; v++) {
         low[v] = INFINITY;
         vm_normalize3(vn + 3 * v);
