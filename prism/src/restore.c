@@ -249,13 +249,13 @@ int vm_prism_restore(vm_prism *p) {
    * the solver's own rounding judges inverted (det C <= 0 at a node: prisms
    * of quality 1e-10 over needles; a public Cessna model) has its columns
    * sent back to where the restoration found them, until none is left: the
-   * layer it found was valid and free of new intersections */
-  for (int round = 0; st >= 0 && round < 64; round++) {
-    int64_t bad = pr_mark_inverted(p, tmp);
-    if (bad <= 0) {
-      if (bad < 0) st = (int)bad;
-      break;
-    }
+   * layer it found was valid and free of new intersections; one left
+   * after 64 rounds ends the run */
+  int64_t bad = 0;
+  for (int round = 0; st >= 0; round++) {
+    bad = pr_mark_inverted(p, tmp);
+    if (bad < 0) st = (int)bad;
+    if (bad <= 0 || round == 64) break;
     for (int64_t v = 0; v < nw; v++)
       if (tmp[v]) t[v] = tstart[v];
     sync_top(p, t, d, &ts);
@@ -268,15 +268,9 @@ int vm_prism_restore(vm_prism *p) {
   }
   p->rep.intersections = np;
   if (np && st == VM_OK) st = VM_WARN_MAXITER;
-  {
-    vm_node_stats ns;
-    int s2 = vm_problem_node_stats(p->prob, p->layer->xyz, &ns);
-    if (s2 < 0)
-      st = s2;
-    else if (ns.inverted)
-      st = vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after restoring",
-                    (long long)ns.inverted);
-  }
+  if (st >= 0 && bad > 0)
+    st =
+        vm_error(ctx, VM_ERR_NUMERIC, "prism: %lld inverted nodes after restoring", (long long)bad);
 done:
   vm_free(ctx, d);
   vm_free(ctx, t);

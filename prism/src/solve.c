@@ -7,6 +7,8 @@
 
 enum { FALL_WINDOW_MAX = 64 };
 
+static int64_t settle_slivers(vm_prism *p);
+
 typedef struct {
   vm_prism *p;
   vm_prism_phase ph;
@@ -67,6 +69,18 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
   if (budget > 0) mo.before_iteration = budget_spent;
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
+  /* the layer's solve that could not start (F = inf at its first
+   * iteration, nothing moved): its slivers settled, once more */
+  if (st == VM_ERR_ARG && prob == p->prob && m == p->layer) {
+    int64_t n = settle_slivers(p);
+    if (n > 0) {
+      vm_log(p->ctx, VM_LOG_INFO,
+             "prism: %lld slivers the solver judges inverted under their new targets take "
+             "their present shape as target",
+             (long long)n);
+      st = vm_minimizer_run(mz, m->xyz, &res);
+    }
+  }
   if (iters && st >= 0) *iters = res.iterations;
   vm_minimizer_destroy(&mz);
   if (st == VM_WARN_MAXITER) st = VM_OK;
@@ -78,41 +92,11 @@ int pr_solve(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, 
   return pr_solve_budget(p, prob, m, kind, max_iter, 0, ph, iters);
 }
 
-/* A prism that the new targets would put outside the measure's domain (a
- * node's det C <= 0 in the solver's own rounding, though the prism and its
- * target are both positive by pr_prism_quality: prisms of quality 1e-10
- * over needles, which the earlier solves left) keeps its old target, so
- * that the next solve starts where F is finite (a public Cessna model: the
- * cutting's 26th local solve started at F = inf and the run ended there). */
 int pr_set_targets(vm_prism *p, const double *hv) {
   vm_field *f = vm_mesh_find_field(p->layer, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
   if (!f) return vm_error(p->ctx, VM_ERR_ARG, "prism: layer without targets");
-  int64_t nq = vm_problem_num_nodes(p->prob);
-  double *old = vm_alloc_array(p->ctx, (size_t)(18 * p->nt), sizeof *old);
-  double *det = vm_alloc_array(p->ctx, (size_t)(nq > 0 ? nq : 1), sizeof *det);
-  int st = old && det ? VM_OK : VM_ERR_NOMEM;
-  if (!st) {
-    memcpy(old, f->data, (size_t)(18 * p->nt) * sizeof *old);
-    pr_build_targets(p->nt, p->tri, &p->k.dir, p->wall, p->fnrm, p->dir, hv, f->data);
-    st = vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
-  }
-  if (!st) st = vm_problem_node_dets(p->prob, p->layer->xyz, det);
-  if (!st) {
-    const int32_t *ne = vm_problem_node_elements(p->prob);
-    double *t = f->data;
-    int64_t kept = 0;
-    for (int64_t q = 0; q < nq; q++) {
-      int64_t e = ne[q];
-      if (det[q] > 0 || e < 0 || e >= p->nt || !memcmp(t + 18 * e, old + 18 * e, 18 * sizeof *t))
-        continue;
-      memcpy(t + 18 * e, old + 18 * e, 18 * sizeof *t);
-      kept++;
-    }
-    if (kept) st = vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
-  }
-  vm_free(p->ctx, old);
-  vm_free(p->ctx, det);
-  return st;
+  pr_build_targets(p->nt, p->tri, &p->k.dir, p->wall, p->fnrm, p->dir, hv, f->data);
+  return vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD);
 }
 
 int pr_make_problem(vm_prism *p) {
@@ -127,15 +111,24 @@ int pr_make_problem(vm_prism *p) {
   return VM_OK;
 }
 
-int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark) {
-  int64_t nq = vm_problem_num_nodes(p->prob);
-  double *det = vm_alloc_array(p->ctx, (size_t)(nq > 0 ? nq : 1), sizeof *det);
-  if (!det) return VM_ERR_NOMEM;
-  int st = vm_problem_node_dets(p->prob, p->layer->xyz, det);
+/* det C of every node of the layer's problem at its present position
+ * (vm_alloc'd, *nq values), or NULL (*nq: a negative status). */
+static double *node_dets(vm_prism *p, int64_t *nq) {
+  *nq = vm_problem_num_nodes(p->prob);
+  double *det = vm_alloc_array(p->ctx, (size_t)(*nq > 0 ? *nq : 1), sizeof *det);
+  int st = det ? vm_problem_node_dets(p->prob, p->layer->xyz, det) : VM_ERR_NOMEM;
   if (st) {
     vm_free(p->ctx, det);
-    return st;
+    *nq = st;
+    return NULL;
   }
+  return det;
+}
+
+int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark) {
+  int64_t nq;
+  double *det = node_dets(p, &nq);
+  if (!det) return nq;
   memset(mark, 0, (size_t)p->nw);
   const int32_t *ne = vm_problem_node_elements(p->prob);
   int64_t n = 0;
@@ -146,6 +139,37 @@ int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark) {
   }
   vm_free(p->ctx, det);
   return n;
+}
+
+/* A sliver whose node det C is <= 0 in the solver's own rounding, though
+ * it and its target are positive by pr_prism_quality (prisms of quality
+ * 1e-10 over needles under targets just installed: a public Cessna
+ * model's cutting stopped at its 26th local solve, "iteration 1 starts
+ * outside the measure's domain"), takes its present shape as its target
+ * (det C = 1 there), so that the solve can start. How many, or a negative
+ * status. */
+static int64_t settle_slivers(vm_prism *p) {
+  vm_field *f = vm_mesh_find_field(p->layer, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
+  if (!f) return 0;
+  int64_t nq;
+  double *det = node_dets(p, &nq);
+  if (!det) return nq;
+  const int32_t *ne = vm_problem_node_elements(p->prob);
+  double *t = f->data;
+  int64_t n = 0;
+  for (int64_t q = 0; q < nq; q++) {
+    int64_t e = ne[q];
+    if (det[q] > 0 || e < 0 || e >= p->nt) continue;
+    const int32_t *c = p->layer->conn + 6 * e;
+    double y[18];
+    for (int i = 0; i < 6; i++) memcpy(y + 3 * i, p->layer->xyz + 3 * (int64_t)c[i], sizeof y / 6);
+    if (!memcmp(t + 18 * e, y, sizeof y)) continue;
+    memcpy(t + 18 * e, y, sizeof y);
+    n++;
+  }
+  vm_free(p->ctx, det);
+  int st = n ? vm_problem_set_target_field(p->prob, PRISM_TARGET_FIELD) : VM_OK;
+  return st ? st : n;
 }
 
 int pr_check_valid(vm_prism *p, const char *when) {
