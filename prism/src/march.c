@@ -776,6 +776,10 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied)
       (st = vm_problem_set_rule(pb, VM_RULE_GEOMETRIC)) || (st = vm_problem_set_weights(pb, w)) ||
       (st = vm_problem_set_target_field(pb, PRISM_TARGET_FIELD)))
     goto done;
+  /* the problem holds its own copy of the targets (nothing else reads the
+   * patch's field: 144 bytes a prism less at the marching's peak) */
+  vm_mesh_remove_field(m, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
+  tf = NULL;
   /* in chunks of k.solve_iter iterations while the count of free smooth
    * columns tilted beyond k.tilt_limit_deg falls (restarting Newton gets further
    * than one long solve: on the demo aircraft read from STL at T = 20 %,
@@ -1015,6 +1019,9 @@ done:
 int vm_prism_march(vm_prism *p) {
   if (!p) return VM_ERR_ARG;
   if (p->done != 4) return vm_error(p->ctx, VM_ERR_ARG, "prism: marching needs the restored layer");
+  /* the single layer's problem (springback, cutting, restoring) is done
+   * with: its node targets and graph go before the marching's peak */
+  vm_problem_destroy(&p->prob);
   double t0 = omp_get_wtime();
   vm_ctx *ctx = p->ctx;
   const pr_params *kp = &p->k;
@@ -1065,8 +1072,12 @@ int vm_prism_march(vm_prism *p) {
   if ((st = vm_problem_create(ctx, m2, &pb))) goto done;
   vm_measure_params prm = vm_measure_params_default();
   prm.theta = p->o.theta;
+  /* two sublayers: their node targets stay stored however large (a tenth
+   * of the stack smoothing's patch at most, and freed before it; computing
+   * them at every evaluation made the splits 18 % slower) */
   if ((st = vm_problem_set_measure(pb, VM_MEASURE_BALANCED, &prm)) ||
-      (st = vm_problem_set_rule(pb, VM_RULE_GEOMETRIC)) || (st = vm_problem_set_weights(pb, w)))
+      (st = vm_problem_set_rule(pb, VM_RULE_GEOMETRIC)) || (st = vm_problem_set_weights(pb, w)) ||
+      (st = vm_problem_set_target_store(pb, INT64_MAX)))
     goto done;
   int made = n; /* levels 0..made */
   double rem = 0;
@@ -1209,6 +1220,10 @@ int vm_prism_march(vm_prism *p) {
   }
   memcpy(p->lev + (size_t)made * lsz, outer, lsz * sizeof *p->lev);
   p->nlev = made + 1;
+  /* the splits' problem and mesh go before the stack smoothing's patch
+   * solve, the marching's peak */
+  vm_problem_destroy(&pb);
+  vm_mesh_destroy(&m2);
   /* seconds of the marching's steps: splits, stack smoothing,
    * redistribution, orthogonal first level, orthogonal solve, skewness
    * relief, non-orthogonality relief */

@@ -105,8 +105,12 @@ int pr_make_problem(vm_prism *p) {
   if (st) return st;
   vm_measure_params prm = vm_measure_params_default();
   prm.theta = p->o.theta;
+  /* the single layer's node targets stay stored however large: the
+   * marching's patch (up to every layer) sets the peak, and this problem
+   * is freed before it */
   if ((st = vm_problem_set_measure(p->prob, VM_MEASURE_BALANCED, &prm)) ||
-      (st = vm_problem_set_rule(p->prob, VM_RULE_GEOMETRIC)))
+      (st = vm_problem_set_rule(p->prob, VM_RULE_GEOMETRIC)) ||
+      (st = vm_problem_set_target_store(p->prob, INT64_MAX)))
     return st;
   return VM_OK;
 }

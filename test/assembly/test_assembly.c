@@ -1,7 +1,8 @@
 /* test/assembly/test_assembly.c: the discrete functional: gradient and
  * Hessian blocks against finite differences for every element type, rule
  * and measure; invariances, known values, node statistics, subsets, errors
- * and bit-identical results for 1 and 2 threads. */
+ * and bit-identical results for 1 and 2 threads and for node targets kept
+ * or computed at evaluation. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -463,6 +464,104 @@ static void test_threads(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* Node targets kept in memory or computed at every evaluation
+ * (vm_problem_set_target_store): the same bits for F, the gradient, both
+ * Hessian forms, node statistics and determinants, for reference and field
+ * targets on every element type (2D plane and surface meshes included)
+ * and both rules; a bad store or a degenerate target is refused with the
+ * problem as it was. */
+static void test_target_store(vm_ctx *ctx) {
+  for (int ci = 0; ci < NCASE; ci++) {
+    const ecase *ec = &ecases[ci];
+    for (int field = 0; field < 2; field++) {
+      vm_ctx_seed(ctx, 77 + 5 * ci + field);
+      vm_mesh *m = mg_build(ctx, ec->type, ec->surf, ec->n[0] + 1, ec->n[1] + 1, ec->n[2], 1.0);
+      CHECK(m != NULL, "mesh %s", ec->name);
+      if (!m) continue;
+      double *ref = dup(m->xyz, 3 * m->nv);
+      for (int64_t k = 0; k < 3 * m->nv; k++)
+        if (m->dim == 3 || k % 3 < 2) ref[k] += 0.08 * (2 * vm_ctx_rand_unit(ctx) - 1);
+      mg_jitter(ctx, m, 0.1);
+      vm_problem *p = NULL;
+      CHECK(vm_problem_create(ctx, m, &p) == 0, "create %s", ec->name);
+      CHECK(vm_problem_set_rule(p, ec->rule) == 0, "rule");
+      int st;
+      if (field) {
+        vm_field *f = NULL;
+        int nc = 3 * vm_elem_nverts(ec->type);
+        CHECK(vm_mesh_add_field(m, "tgt", VM_FIELD_ELEMENT, VM_FIELD_F64, nc, &f) == 0, "field");
+        for (int64_t e = 0; e < m->ne; e++)
+          for (int a = 0; a < nc / 3; a++)
+            memcpy((double *)f->data + (size_t)e * nc + 3 * a,
+                   ref + 3 * (int64_t)m->conn[m->eoff[e] + a], 3 * sizeof(double));
+        st = vm_problem_set_target_field(p, "tgt");
+      } else {
+        st = vm_problem_set_target_reference(p, ref);
+      }
+      CHECK(st == 0, "%s targets: %s", ec->name, vm_ctx_error(ctx));
+      const int64_t *rp;
+      const int32_t *adj;
+      vm_problem_graph(p, &rp, &adj);
+      size_t nv = (size_t)m->nv, nnz = (size_t)rp[nv], nn = (size_t)vm_problem_num_nodes(p);
+      double F[2], Fb[2], Fv[2], *g[2], *hd[2], *ho[2], *hb[2], *dt[2];
+      vm_node_stats ns[2];
+      for (int lazy = 0; lazy < 2; lazy++) {
+        if (lazy) CHECK(vm_problem_set_target_store(p, 0) == 0, "store 0");
+        g[lazy] = malloc(3 * nv * sizeof(double));
+        hd[lazy] = malloc(9 * nv * sizeof(double));
+        ho[lazy] = malloc(3 * nnz * sizeof(double));
+        hb[lazy] = malloc(9 * nnz * sizeof(double));
+        dt[lazy] = malloc(nn * sizeof(double));
+        double *gb = malloc(3 * nv * sizeof(double)), *hdb = malloc(9 * nv * sizeof(double));
+        vm_eval ev = {&F[lazy], g[lazy], hd[lazy], ho[lazy]};
+        vm_eval_blocks eb = {&Fb[lazy], gb, hdb, hb[lazy], 1};
+        CHECK(vm_problem_eval(p, m->xyz, &ev) == 0, "eval");
+        CHECK(vm_problem_eval_blocks(p, m->xyz, &eb) == 0, "eval blocks");
+        CHECK(vm_problem_value(p, m->xyz, &Fv[lazy]) == 0, "value");
+        CHECK(vm_problem_node_stats(p, m->xyz, &ns[lazy]) == 0, "node stats");
+        CHECK(vm_problem_node_dets(p, m->xyz, dt[lazy]) == 0, "node dets");
+        free(gb);
+        free(hdb);
+      }
+      CHECK(isfinite(F[0]) && F[0] > 0, "%s F %g", ec->name, F[0]);
+      CHECK(same_bits(F, F + 1, 1) && same_bits(Fb, Fb + 1, 1) && same_bits(Fv, Fv + 1, 1),
+            "%s %s: F %.17g vs %.17g computed at evaluation", ec->name, field ? "field" : "ref",
+            F[0], F[1]);
+      CHECK(same_bits(g[0], g[1], 3 * nv) && same_bits(hd[0], hd[1], 9 * nv) &&
+                same_bits(ho[0], ho[1], 3 * nnz) && same_bits(hb[0], hb[1], 9 * nnz),
+            "%s: derivatives differ with targets computed at evaluation", ec->name);
+      CHECK(!memcmp(&ns[0], &ns[1], sizeof ns[0]) && same_bits(dt[0], dt[1], nn),
+            "%s: node statistics differ", ec->name);
+      for (int t = 0; t < 2; t++) {
+        free(g[t]);
+        free(hd[t]);
+        free(ho[t]);
+        free(hb[t]);
+        free(dt[t]);
+      }
+      /* a degenerate target refused in either mode; the problem as it was */
+      if (!field && vm_elem_dim(ec->type) == 3) {
+        CHECK(vm_problem_set_target_store(p, -1) == VM_ERR_ARG, "negative store refused");
+        vm_ctx_clear_error(ctx);
+        double *flat = dup(ref, 3 * m->nv);
+        for (int64_t v = 0; v < m->nv; v++) flat[3 * v + 2] = 0;
+        CHECK(vm_problem_set_target_reference(p, flat) == VM_ERR_ARG, "%s flat target", ec->name);
+        vm_ctx_clear_error(ctx);
+        double F2;
+        CHECK(vm_problem_value(p, m->xyz, &F2) == 0 && same_bits(&F2, F, 1),
+              "%s: the old targets kept", ec->name);
+        CHECK(vm_problem_set_target_store(p, (int64_t)1 << 40) == 0, "store back");
+        CHECK(vm_problem_value(p, m->xyz, &F2) == 0 && same_bits(&F2, F, 1),
+              "%s: stored again, the same F", ec->name);
+        free(flat);
+      }
+      free(ref);
+      vm_problem_destroy(&p);
+      vm_mesh_destroy(&m);
+    }
+  }
+}
+
 /* One mirrored hex inverts exactly its 8 (corner) or 64 (geometric) nodes;
  * one tet with two vertices swapped, exactly its node. */
 static void test_node_stats(vm_ctx *ctx) {
@@ -893,6 +992,7 @@ int main(void) {
   test_invariance(ctx);
   test_known_values(ctx);
   test_threads(ctx);
+  test_target_store(ctx);
   test_node_stats(ctx);
   test_subsets(ctx);
   test_node_weights(ctx);

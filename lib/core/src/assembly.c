@@ -36,6 +36,8 @@ typedef struct {
   const double *G; /* tensor metric (6) or NULL */
   double n[3];     /* reference normal (2D elements) */
   int64_t n0;
+  /* S and wb when they are computed at evaluation (problem.c) */
+  double Sbuf[VM_QRULE_MAX_NODES * 9], wbuf[VM_QRULE_MAX_NODES];
 } elem_ctx;
 
 static void elem_setup(const vm_problem *p, int64_t i, const double *xyz, elem_ctx *ec) {
@@ -49,9 +51,15 @@ static void elem_setup(const vm_problem *p, int64_t i, const double *xyz, elem_c
   ec->R = p->qr[t];
   ec->n0 = p->noff[i];
   int dd = p->tdim * p->tdim;
-  ec->S = p->Snode ? p->Snode + dd * ec->n0 : p->Sid[t];
-  ec->diag = !p->Snode && p->sdiag[t];
-  ec->wb = p->wnode ? p->wnode + ec->n0 : p->wid[t];
+  if (p->wsum) {
+    vm_problem_elem_targets(p, i, ec->Sbuf, ec->wbuf);
+    ec->S = ec->Sbuf;
+    ec->wb = ec->wbuf;
+  } else {
+    ec->S = p->Snode ? p->Snode + dd * ec->n0 : p->Sid[t];
+    ec->wb = p->wnode ? p->wnode + ec->n0 : p->wid[t];
+  }
+  ec->diag = p->tgt == VM_TGT_IDEAL && p->sdiag[t];
   ec->nw = p->node_w ? p->node_w + ec->n0 : NULL;
   ec->w = p->wel[i];
   ec->g = p->metric == VM_METRIC_SCALAR ? p->mg[i] : 1.0;

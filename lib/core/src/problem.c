@@ -185,17 +185,59 @@ static void target_coords(const vm_problem *p, int64_t i, double *tc) {
 static void update_tvol(vm_problem *p) {
   double tv = 0;
   for (int64_t i = 0; i < p->nae; i++) {
-    int t = elem_type(p, i);
-    const double *wb = p->wnode ? p->wnode + p->noff[i] : p->wid[t];
     double s = 0;
-    for (int j = 0; j < p->qr[t]->nnodes; j++) s += wb[j];
+    if (p->wsum) {
+      s = p->wsum[i];
+    } else {
+      int t = elem_type(p, i);
+      const double *wb = p->wnode ? p->wnode + p->noff[i] : p->wid[t];
+      for (int j = 0; j < p->qr[t]->nnodes; j++) s += wb[j];
+    }
     tv += p->wel[i] * s;
   }
   p->tvol = tv;
 }
 
-/* (Re)build S and wb of every node from the target description in p.
- * On failure p is unchanged. */
+/* S (d x d per node) and wb of every node of active element i from its
+ * target coordinates (reference or field targets). Returns -1, or the
+ * first node whose target is degenerate or inverted (its det T in *fdet;
+ * 0 for a 2D element without a normal). */
+static int elem_node_targets(const vm_problem *p, int64_t i, double *S, double *wb, double *fdet) {
+  int d = p->tdim, dd = d * d;
+  double tc[VM_MAX_ELEM_VERTS * 3], n[3] = {0, 0, 0};
+  int t = elem_type(p, i);
+  const vm_qrule *R = p->qr[t];
+  target_coords(p, i, tc);
+  *fdet = 0;
+  if (d == 2 && target_normal(p, tc, vm_elem_nverts(t), n)) return 0;
+  for (int j = 0; j < R->nnodes; j++) {
+    double dt = node_target(&R->nodes[j], d, tc, n, S + dd * j);
+    wb[j] = R->nodes[j].beta * R->kappa * dt;
+    if (!(dt > 0) || !isfinite(dt)) {
+      *fdet = dt;
+      return j;
+    }
+  }
+  return -1;
+}
+
+void vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb) {
+  double fdet;
+  (void)elem_node_targets(p, i, S, wb, &fdet);
+}
+
+/* Keep S and wb of every node (nn (d^2 + 1) doubles) or compute them from
+ * the element's target coordinates whenever it is evaluated: the same
+ * arithmetic, so the same bits either way. Stored while they take at most
+ * p->tgt_store bytes (vm_problem_set_target_store), computed beyond. */
+static int targets_lazy(const vm_problem *p) {
+  double bytes = (double)p->nn * (double)(p->tdim * p->tdim + 1) * (double)sizeof(double);
+  return bytes > (double)p->tgt_store;
+}
+
+/* (Re)build S and wb of every node from the target description in p (or,
+ * when they are computed at evaluation, check them and sum wb per
+ * element). On failure p is unchanged. */
 static int compute_targets(vm_problem *p) {
   vm_ctx *ctx = p->ctx;
   int d = p->tdim, dd = d * d;
@@ -218,13 +260,20 @@ static int compute_targets(vm_problem *p) {
     }
     vm_free(ctx, p->Snode);
     vm_free(ctx, p->wnode);
-    p->Snode = p->wnode = NULL;
+    vm_free(ctx, p->wsum);
+    p->Snode = p->wnode = p->wsum = NULL;
     update_tvol(p);
     return VM_OK;
   }
-  double *S = vm_alloc_array(ctx, (size_t)(p->nn ? p->nn : 1) * (size_t)dd, sizeof *S);
-  double *w = vm_alloc_array(ctx, (size_t)(p->nn ? p->nn : 1), sizeof *w);
-  if (!S || !w) {
+  int lazy = targets_lazy(p);
+  double *S = NULL, *w = NULL, *ws = NULL;
+  if (lazy) {
+    ws = vm_alloc_array(ctx, (size_t)(p->nae ? p->nae : 1), sizeof *ws);
+  } else {
+    S = vm_alloc_array(ctx, (size_t)(p->nn ? p->nn : 1) * (size_t)dd, sizeof *S);
+    w = vm_alloc_array(ctx, (size_t)(p->nn ? p->nn : 1), sizeof *w);
+  }
+  if (lazy ? !ws : !S || !w) {
     vm_free(ctx, S);
     vm_free(ctx, w);
     return VM_ERR_NOMEM;
@@ -234,25 +283,14 @@ static int compute_targets(vm_problem *p) {
   double baddet = 0;
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
   for (int64_t i = 0; i < p->nae; i++) {
-    double tc[VM_MAX_ELEM_VERTS * 3], n[3];
-    int t = elem_type(p, i);
-    const vm_qrule *R = p->qr[t];
-    target_coords(p, i, tc);
+    double Sl[VM_QRULE_MAX_NODES * 9], wl[VM_QRULE_MAX_NODES], fdet;
     int64_t n0 = p->noff[i];
-    int fail = -1;
-    double fdet = 0;
-    if (d == 2 && target_normal(p, tc, vm_elem_nverts(t), n)) {
-      fail = 0;
-    } else {
-      for (int j = 0; j < R->nnodes; j++) {
-        double dt = node_target(&R->nodes[j], d, tc, n, S + dd * (n0 + j));
-        w[n0 + j] = R->nodes[j].beta * R->kappa * dt;
-        if (!(dt > 0) || !isfinite(dt)) {
-          fail = j;
-          fdet = dt;
-          break;
-        }
-      }
+    double *Si = lazy ? Sl : S + dd * n0, *wi = lazy ? wl : w + n0;
+    int fail = elem_node_targets(p, i, Si, wi, &fdet);
+    if (fail < 0 && lazy) {
+      double s = 0;
+      for (int j = 0; j < p->qr[elem_type(p, i)]->nnodes; j++) s += wi[j];
+      ws[i] = s;
     }
     if (fail >= 0) {
 #pragma omp critical(vm_problem_target_fail)
@@ -266,6 +304,7 @@ static int compute_targets(vm_problem *p) {
   if (bad < p->nae) {
     vm_free(ctx, S);
     vm_free(ctx, w);
+    vm_free(ctx, ws);
     return vm_error(ctx, VM_ERR_ARG,
                     "element %d: target of quadrature node %d is degenerate or inverted "
                     "(det T = %g)",
@@ -273,10 +312,23 @@ static int compute_targets(vm_problem *p) {
   }
   vm_free(ctx, p->Snode);
   vm_free(ctx, p->wnode);
+  vm_free(ctx, p->wsum);
   p->Snode = S;
   p->wnode = w;
+  p->wsum = ws;
   update_tvol(p);
   return VM_OK;
+}
+
+int vm_problem_set_target_store(vm_problem *p, int64_t max_bytes) {
+  if (!p) return VM_ERR_ARG;
+  if (max_bytes < 0)
+    return vm_error(p->ctx, VM_ERR_ARG, "target store of %lld bytes", (long long)max_bytes);
+  int64_t old = p->tgt_store;
+  p->tgt_store = max_bytes;
+  int st = p->tgt == VM_TGT_IDEAL ? VM_OK : compute_targets(p);
+  if (st) p->tgt_store = old;
+  return st;
 }
 
 /* Signed volume (area) of active element i at coordinates xyz by the
@@ -807,6 +859,7 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
   p->ops = vm_measure_get(VM_MEASURE_BALANCED);
   p->prm = vm_measure_params_default();
   p->rule = VM_RULE_CORNER;
+  p->tgt_store = VM_PROBLEM_TARGET_STORE;
   for (int t = 0; t < VM_NTYPES; t++) p->qr[t] = vm_qrule_get(t, VM_RULE_CORNER);
   build_patterns(p);
   int st = VM_OK;
@@ -884,6 +937,7 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->tgt_fld);
   vm_free(ctx, p->Snode);
   vm_free(ctx, p->wnode);
+  vm_free(ctx, p->wsum);
   vm_free(ctx, p->mg);
   vm_free(ctx, p->mG);
   vm_free(ctx, p->mdq);

@@ -68,11 +68,14 @@ struct vm_problem {
   /* targets: node S = T^{-1} (d x d row-major) and wb = beta kappa det T,
    * shared per element type for ideal targets, per node otherwise */
   int tgt;
-  double tgt_size; /* edge length of the ideal targets */
-  double *tgt_ref; /* VM_TGT_REFERENCE: 3*nv copy */
-  double *tgt_fld; /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
-  double *Snode;   /* nn*d*d or NULL */
-  double *wnode;   /* nn or NULL */
+  double tgt_size;   /* edge length of the ideal targets */
+  double *tgt_ref;   /* VM_TGT_REFERENCE: 3*nv copy */
+  double *tgt_fld;   /* VM_TGT_FIELD: 3*eoff[ne] copy, element e vertex a at 3*(eoff[e]+a) */
+  double *Snode;     /* nn*d*d or NULL */
+  double *wnode;     /* nn or NULL */
+  int64_t tgt_store; /* bytes of node targets kept at most (vm_problem_set_target_store) */
+  double *wsum;      /* nae or NULL: the sum of wb over each element's nodes when S and wb
+                        are computed at evaluation (Snode, wnode NULL; see compute_targets) */
   double Sid[VM_NTYPES][VM_QRULE_MAX_NODES * 9];
   double wid[VM_NTYPES][VM_QRULE_MAX_NODES];
   int sdiag[VM_NTYPES]; /* ideal S of every node of the type is diagonal */
@@ -119,6 +122,18 @@ struct vm_problem {
   double *part; /* blocks of VM_PROBLEM_FBLOCK elements */
   int64_t nblock;
 };
+
+/* Node targets above this many bytes are by default not stored but
+ * computed from the element's target coordinates whenever it is evaluated
+ * (vm_problem_set_target_store). */
+#ifndef VM_PROBLEM_TARGET_STORE
+#define VM_PROBLEM_TARGET_STORE (64ll << 20)
+#endif
+
+/* S (d x d per node) and wb of every node of active element i, computed
+ * from its reference or field targets as compute_targets does (the same
+ * bits). */
+void vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb);
 
 /* Threads for an OpenMP region of this problem (the context's setting,
  * else the OpenMP default). */

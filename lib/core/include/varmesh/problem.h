@@ -49,6 +49,13 @@ int vm_problem_set_rule(vm_problem *p, vm_rule rule);
 int vm_problem_set_target_ideal(vm_problem *p, double size);
 int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref);
 int vm_problem_set_target_field(vm_problem *p, const char *field_name);
+/* Reference and field targets: T^{-1} and det T of every quadrature node
+ * are kept in memory ((d^2 + 1) doubles a node: 960 bytes a prism under
+ * the corner rule, 4.6 KB a hex under the geometric one) while they take
+ * at most max_bytes (default 64 MiB), else computed from the element's
+ * target coordinates whenever it is evaluated: less memory, a little more
+ * time, the same results bit for bit. */
+int vm_problem_set_target_store(vm_problem *p, int64_t max_bytes);
 
 /* Metric G_x of (13)/(20): NULL for identity; else per-vertex values
  * averaged over each element's vertices: scalar g > 0 (G_x = g I, used by
