@@ -526,6 +526,15 @@ static int build_prolongator(vm_ctx *ctx, const mat *F, const int32_t *agg, int6
   }
   vm_free(ctx, mark);
   vm_free(ctx, d);
+  /* the bound above was the row lengths of F: P keeps what it uses */
+  int32_t *ci = vm_realloc(ctx, P->ci, (size_t)(pos ? pos : 1) * sizeof *ci);
+  if (ci) P->ci = ci;
+  double *v = ci ? vm_realloc(ctx, P->v, (size_t)(pos ? pos : 1) * sizeof *v) : NULL;
+  if (v) P->v = v;
+  if (!ci || !v) {
+    mat_free(ctx, P);
+    return VM_ERR_NOMEM;
+  }
   return VM_OK;
 }
 
