@@ -779,7 +779,6 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied)
   /* the problem holds its own copy of the targets (nothing else reads the
    * patch's field: 144 bytes a prism less at the marching's peak) */
   vm_mesh_remove_field(m, PRISM_TARGET_FIELD, VM_FIELD_ELEMENT);
-  tf = NULL;
   /* in chunks of k.solve_iter iterations while the count of free smooth
    * columns tilted beyond k.tilt_limit_deg falls (restarting Newton gets further
    * than one long solve: on the demo aircraft read from STL at T = 20 %,

@@ -52,7 +52,8 @@ static void elem_setup(const vm_problem *p, int64_t i, const double *xyz, elem_c
   ec->n0 = p->noff[i];
   int dd = p->tdim * p->tdim;
   if (p->wsum) {
-    vm_problem_elem_targets(p, i, ec->Sbuf, ec->wbuf);
+    double fdet; /* checked when they were set (compute_targets) */
+    (void)vm_problem_elem_targets(p, i, ec->Sbuf, ec->wbuf, &fdet);
     ec->S = ec->Sbuf;
     ec->wb = ec->wbuf;
   } else {

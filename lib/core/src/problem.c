@@ -182,27 +182,24 @@ static void target_coords(const vm_problem *p, int64_t i, double *tc) {
   }
 }
 
+/* The sum of wb over active element i's n nodes, in node order. */
+static double wb_sum(const double *wb, int n) {
+  double s = 0;
+  for (int j = 0; j < n; j++) s += wb[j];
+  return s;
+}
+
 static void update_tvol(vm_problem *p) {
   double tv = 0;
   for (int64_t i = 0; i < p->nae; i++) {
-    double s = 0;
-    if (p->wsum) {
-      s = p->wsum[i];
-    } else {
-      int t = elem_type(p, i);
-      const double *wb = p->wnode ? p->wnode + p->noff[i] : p->wid[t];
-      for (int j = 0; j < p->qr[t]->nnodes; j++) s += wb[j];
-    }
-    tv += p->wel[i] * s;
+    int t = elem_type(p, i);
+    const double *wb = p->wnode ? p->wnode + p->noff[i] : p->wid[t];
+    tv += p->wel[i] * (p->wsum ? p->wsum[i] : wb_sum(wb, p->qr[t]->nnodes));
   }
   p->tvol = tv;
 }
 
-/* S (d x d per node) and wb of every node of active element i from its
- * target coordinates (reference or field targets). Returns -1, or the
- * first node whose target is degenerate or inverted (its det T in *fdet;
- * 0 for a 2D element without a normal). */
-static int elem_node_targets(const vm_problem *p, int64_t i, double *S, double *wb, double *fdet) {
+int vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb, double *fdet) {
   int d = p->tdim, dd = d * d;
   double tc[VM_MAX_ELEM_VERTS * 3], n[3] = {0, 0, 0};
   int t = elem_type(p, i);
@@ -219,11 +216,6 @@ static int elem_node_targets(const vm_problem *p, int64_t i, double *S, double *
     }
   }
   return -1;
-}
-
-void vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb) {
-  double fdet;
-  (void)elem_node_targets(p, i, S, wb, &fdet);
 }
 
 /* Keep S and wb of every node (nn (d^2 + 1) doubles) or compute them from
@@ -286,12 +278,8 @@ static int compute_targets(vm_problem *p) {
     double Sl[VM_QRULE_MAX_NODES * 9], wl[VM_QRULE_MAX_NODES], fdet;
     int64_t n0 = p->noff[i];
     double *Si = lazy ? Sl : S + dd * n0, *wi = lazy ? wl : w + n0;
-    int fail = elem_node_targets(p, i, Si, wi, &fdet);
-    if (fail < 0 && lazy) {
-      double s = 0;
-      for (int j = 0; j < p->qr[elem_type(p, i)]->nnodes; j++) s += wi[j];
-      ws[i] = s;
-    }
+    int fail = vm_problem_elem_targets(p, i, Si, wi, &fdet);
+    if (fail < 0 && lazy) ws[i] = wb_sum(wi, p->qr[elem_type(p, i)]->nnodes);
     if (fail >= 0) {
 #pragma omp critical(vm_problem_target_fail)
       if (i < bad) {

@@ -126,14 +126,14 @@ struct vm_problem {
 /* Node targets above this many bytes are by default not stored but
  * computed from the element's target coordinates whenever it is evaluated
  * (vm_problem_set_target_store). */
-#ifndef VM_PROBLEM_TARGET_STORE
 #define VM_PROBLEM_TARGET_STORE (64ll << 20)
-#endif
 
-/* S (d x d per node) and wb of every node of active element i, computed
- * from its reference or field targets as compute_targets does (the same
- * bits). */
-void vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb);
+/* S (d x d per node) and wb of every node of active element i from its
+ * reference or field targets: what compute_targets stores, or what an
+ * evaluation computes when they are not stored (the same bits). Returns
+ * -1, or the first node whose target is degenerate or inverted (its det T
+ * in *fdet; 0 for a 2D element without a normal). */
+int vm_problem_elem_targets(const vm_problem *p, int64_t i, double *S, double *wb, double *fdet);
 
 /* Threads for an OpenMP region of this problem (the context's setting,
  * else the OpenMP default). */
