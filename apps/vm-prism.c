@@ -557,6 +557,12 @@ static const vm_opt opts[] = {
      "implicit iterations of the springback (default 100; up to 3N while the line search keeps "
      "cutting the step or F still falls by more than 1 % per 10 iterations)",
      .lo = 0, .hi = 100000000},
+    {"--hold-retries", NULL, VM_OPT_FLAG, A(o.hold_retries), NULL,
+     "where the springback's solve is still held past its budget (a few prisms that cannot "
+     "reach their targets cutting every step short), go on retrying each short step with "
+     "those prisms' vertices held still: more columns reach T on thick layers, in more time, "
+     "and the cells are not better everywhere (docs/prism.md; default: off)",
+     .ival = 1},
     {"--resolve-iter", NULL, VM_OPT_INT, A(o.resolve_iter), "N",
      "implicit iterations after each cutting round (default 6)", .lo = 0, .hi = 100000000},
     {"--cut-rounds", NULL, VM_OPT_INT, A(o.max_cut_rounds), "N",
@@ -763,9 +769,10 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   printf(", \"fill_rest\": ");
   vm_json_double(stdout, r.medial_fill_rest);
   printf(", \"time\": %.3f}", r.medial_time);
-  printf(", \"springback_iterations\": %d, \"cut_rounds\": %d, \"cut_pairs_first\": %lld, "
+  printf(", \"springback_iterations\": %d, \"held_steps\": %d, \"cut_rounds\": %d, "
+         "\"cut_pairs_first\": %lld, "
          "\"time\": {",
-         r.springback_iter, r.cut_rounds, (long long)r.cut_pairs_first);
+         r.springback_iter, r.held_steps, r.cut_rounds, (long long)r.cut_pairs_first);
   for (int k = 0; k < VM_PRISM_NPHASES; k++)
     printf("\"%s\": %.3f, ", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
   printf("\"total\": %.3f}, \"march_time\": {", r.time_total);

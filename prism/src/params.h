@@ -122,6 +122,11 @@ typedef struct pr_params {
   double rel_decrease_tol;  /* 1e-5: the solves stop when F falls by less
                                than this, relative ... */
   int rel_decrease_count;   /* 2: ... this many times in a row */
+  double hold_tau;          /* 0.25: with o.hold_retries, a solve held
+                               past its budget goes on with each step cut
+                               below this tried again with the vertices of
+                               the prisms that hold it back held still
+                               (vm_minimize_options) */
 
   /* phase 2, springback (springback.c) */
   double springback_grow;     /* 8: target heights grow at most 8 times the
@@ -355,6 +360,7 @@ static inline pr_params pr_params_default(void) {
       .budget_fall = 0.01,
       .rel_decrease_tol = 1e-5,
       .rel_decrease_count = 2,
+      .hold_tau = 0.25,
       .springback_grow = 8,
       .springback_stages = 60,
       .springback_stage_iter = 5,

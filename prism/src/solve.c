@@ -12,7 +12,7 @@ static int64_t settle_slivers(vm_prism *p);
 typedef struct {
   vm_prism *p;
   vm_prism_phase ph;
-  int base;
+  int base;     /* iterations of the solve's earlier runs */
   int budget;   /* > 0: stop after this many iterations once the steps sum to a share of it */
   double share; /* that share (k.budget_step_share) */
   double steps; /* sum of the accepted step lengths (at most 1 each) */
@@ -20,23 +20,33 @@ typedef struct {
    * last `window` iterations (F after iteration i in F[i % (window + 1)]) */
   int window, last;
   double fall, F[FALL_WINDOW_MAX + 1];
+  /* past the budget with the steps still short (the line search held to
+   * short steps): stop this run to go on with held retries (hold), and
+   * say so (held) */
+  int hold, held;
 } monitor_data;
 
 static void monitor(void *user, const vm_iter_info *it) {
   monitor_data *d = user;
+  int i = d->base + it->iter;
   d->steps += it->tau < 1 ? it->tau : 1;
-  d->F[it->iter % (d->window + 1)] = it->F;
-  d->last = it->iter;
+  d->F[i % (d->window + 1)] = it->F;
+  d->last = i;
   /* in the cutting phase the progress steps are rounds (pairs left), not
    * the iterations of the local re-solves */
-  if (d->ph != VM_PRISM_PHASE_CUT)
-    pr_progress(d->p, d->ph, d->base + it->iter, it->F, it->inverted, 1);
+  if (d->ph != VM_PRISM_PHASE_CUT) pr_progress(d->p, d->ph, i, it->F, it->inverted, 1);
 }
 
 static int budget_spent(void *user, int iter, const double *x) {
   (void)x;
-  const monitor_data *d = user;
-  if (!(iter > d->budget && d->steps >= d->share * d->budget)) return 0;
+  monitor_data *d = user;
+  int i = d->base + iter;
+  if (i <= d->budget) return 0;
+  if (d->steps < d->share * d->budget) {
+    if (!d->hold) return 0;
+    d->held = 1;
+    return 1;
+  }
   /* still falling fast: the solve is not done (the demo aircraft's F fell
    * 11 % in the 10 iterations past the budget and settled 50 later) */
   if (d->window > 0 && d->last >= d->window) {
@@ -46,10 +56,11 @@ static int budget_spent(void *user, int iter, const double *x) {
   return 1;
 }
 
-int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
-                    int budget, vm_prism_phase ph, int *iters) {
-  if (iters) *iters = 0;
-  if (max_iter <= 0) return VM_OK;
+/* One minimizer run of the solve: at most max_iter iterations, hold_tau
+ * as given; the slivers settled once if it cannot start. */
+static int solve_run(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
+                     int max_iter, double hold_tau, monitor_data *md, int *iters) {
+  *iters = 0;
   double left = pr_time_left(p);
   if (left <= 0) return VM_WARN_TIME;
   vm_minimizer *mz = NULL;
@@ -60,13 +71,11 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
   mo.time_limit = isfinite(left) ? left : 0;
   mo.rel_decrease_tol = p->k.rel_decrease_tol;
   mo.rel_decrease_count = p->k.rel_decrease_count;
+  mo.hold_tau = hold_tau;
   mo.stats_every = 0;
-  monitor_data md = {p, ph, 0, budget, p->k.budget_step_share, 0, 0, 0, 0, {0}};
-  md.window = p->k.budget_fall_window < FALL_WINDOW_MAX ? p->k.budget_fall_window : FALL_WINDOW_MAX;
-  md.fall = p->k.budget_fall;
   mo.monitor = monitor;
-  mo.user = &md;
-  if (budget > 0) mo.before_iteration = budget_spent;
+  mo.user = md;
+  if (md->budget > 0) mo.before_iteration = budget_spent;
   vm_minimize_result res;
   if (!(st = vm_minimizer_set_options(mz, &mo))) st = vm_minimizer_run(mz, m->xyz, &res);
   /* the layer's solve that could not start (F = inf at its first
@@ -81,9 +90,41 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
       st = vm_minimizer_run(mz, m->xyz, &res);
     }
   }
-  if (iters && st >= 0) *iters = res.iterations;
+  if (st >= 0) {
+    *iters = res.iterations;
+    p->rep.held_steps += res.held_steps;
+  }
   vm_minimizer_destroy(&mz);
   if (st == VM_WARN_MAXITER) st = VM_OK;
+  return st;
+}
+
+int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind, int max_iter,
+                    int budget, vm_prism_phase ph, int *iters) {
+  if (iters) *iters = 0;
+  if (max_iter <= 0) return VM_OK;
+  monitor_data md = {p, ph, 0, budget, p->k.budget_step_share, 0, 0, 0, 0, {0}, 0, 0};
+  md.window = p->k.budget_fall_window < FALL_WINDOW_MAX ? p->k.budget_fall_window : FALL_WINDOW_MAX;
+  md.fall = p->k.budget_fall;
+  md.hold = budget > 0 && p->o.hold_retries && p->k.hold_tau > 0;
+  int it = 0;
+  int st = solve_run(p, prob, m, kind, max_iter, 0, &md, &it);
+  if (st >= 0 && st != VM_WARN_TIME && md.held && it < max_iter) {
+    /* held past its budget (o.hold_retries): on with the vertices of the
+     * prisms that hold each short step back held still in a retry of it
+     * (hold_tau). Only here, so a solve that is not held is what it was: in
+     * every solve of
+     * the single layer the retries changed the demo aircraft's layer at
+     * T = 5 % (faces beyond 70 degrees 914 -> 1,120, plane.stl's 1,173 ->
+     * 1,132), and in the marching's stack solves they took that phase
+     * from 77 to 340 s at T = 20 % */
+    md.base = it;
+    md.hold = 0;
+    int it2 = 0;
+    st = solve_run(p, prob, m, kind, max_iter - it, p->k.hold_tau, &md, &it2);
+    it += it2;
+  }
+  if (iters) *iters = it;
   return st;
 }
 

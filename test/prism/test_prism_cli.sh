@@ -53,6 +53,16 @@ else
   echo "FAIL: the coarse aircraft at 4 layers has no short column with room (reach $reach): --min-reach is not tested"
   fail=1
 fi
+# --hold-retries: at T = 15 % the coarse aircraft's springback is held past
+# its budget (204 iterations): with the option it goes on with held
+# retries (held_steps > 0) and the layer is valid; without, none are taken
+"${prism[@]}" -q -t 0.15 -n 4 --json "$dir/a.stl" "$dir/h0.vmsh" >"$dir/h0.json" 2>/dev/null
+"${prism[@]}" -q -t 0.15 -n 4 --hold-retries --json "$dir/a.stl" "$dir/h1.vmsh" >"$dir/h1.json" 2>/dev/null
+rc=$?
+held=$(grep -o '"held_steps": [0-9]*' "$dir/h1.json" | awk '{print $2}')
+check '[ $rc -eq 0 ] && [ "${held:-0}" -gt 0 ] && grep -q "\"valid\": true" "$dir/h1.json" && grep -q "\"intersecting_pairs\": 0," "$dir/h1.json" && grep -q "\"held_steps\": 0," "$dir/h0.json"' \
+  "--hold-retries at T = 15 %: $held held steps, valid (got $rc; without: $(grep -o '"held_steps": [0-9]*' "$dir/h0.json"))"
+echo "  thickness mean without / with: $(grep -o '"thickness_mean": [0-9.e+-]*' "$dir/h0.json" | awk '{print $2}') / $(grep -o '"thickness_mean": [0-9.e+-]*' "$dir/h1.json" | awk '{print $2}')"
 check 'grep -q "^springback" "$dir/a.err"' "progress on stderr"
 # a solve's iterations carry their functional F, marching's splits their
 # layer heights (marching's solves used to print F under "height": values

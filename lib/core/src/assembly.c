@@ -852,6 +852,20 @@ int vm_problem_value(vm_problem *p, const double *x, double *F) {
   return VM_OK;
 }
 
+int vm_problem_elem_values(vm_problem *p, const double *x, double *fe) {
+  if (!p || !x || !fe)
+    return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_elem_values: NULL argument") : VM_ERR_ARG;
+  int64_t ne = p->m->ne;
+  memset(fe, 0, (size_t)ne * sizeof *fe);
+#pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
+  for (int64_t i = 0; i < p->nae; i++) {
+    if (p->amask && !p->amask[i]) continue;
+    double f = 0;
+    fe[p->ael[i]] = elem_eval(p, i, x, 0, 0, &f, NULL) ? INFINITY : f;
+  }
+  return VM_OK;
+}
+
 /* vm_problem_eval, and with hblk the full blocks (vm_problem_eval_blocks;
  * out->hoff must then be NULL). */
 static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *hblk, int psd) {

@@ -107,6 +107,13 @@ typedef struct vm_prism_opts {
                             goes on, up to 3 times as many, while the accepted
                             steps sum to less than a quarter of it or F still
                             falls by more than 1 % over 10 iterations) */
+  int hold_retries;      /* 1: a springback solve still held past its budget
+                            (the line search cut short by a few prisms that
+                            cannot reach their targets) goes on with held
+                            retries (vm_minimize_options.hold_tau): more
+                            columns reach T on thick layers, in more time,
+                            and the cells are not better everywhere
+                            (docs/prism.md); 0 (default): off */
   int resolve_iter;      /* implicit iterations after each cutting round, around
                             the cut columns only (default 6) */
   int max_cut_rounds;    /* default 400; rounds with few pairs are cheap */
@@ -183,6 +190,9 @@ typedef struct vm_prism_report {
   int64_t first_raised;         /* columns whose first height max_aspect raised */
   double thin_min, thin_max;    /* heights of the thin layer */
   int springback_iter;          /* implicit iterations, all solves */
+  int held_steps;               /* steps of the single layer's solves taken with the
+                                   vertices of the prisms that held the full step
+                                   back held still (vm_minimize_options.hold_tau) */
   int cut_rounds;
   int64_t cut_pairs_first;      /* intersecting pairs found in the first round */
   int64_t intersections;        /* pairs left at the end (0 unless limits hit) */

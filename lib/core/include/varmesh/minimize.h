@@ -51,6 +51,7 @@ typedef struct vm_iter_info {
   int ls_infeasible; /* of those, trial points outside the measure's domain (F = +inf) */
   int pcg_iters;     /* implicit: CG iterations summed over the coordinate systems;
                         newton: CG iterations of the coupled system */
+  int64_t held;      /* vertices held still in the accepted step (hold_tau), else 0 */
   double elapsed;    /* seconds since vm_minimizer_run started */
   int64_t inverted;  /* quadrature nodes with det C <= 0 after the step (-1: not computed) */
   double min_det;    /* min det C over all nodes after the step (NAN: not computed) */
@@ -74,6 +75,22 @@ typedef struct vm_minimize_options {
   double armijo;      /* sufficient decrease constant c1 (default 1e-4) */
   int ls_max_evals;   /* evaluations per line search (default 40) */
   int ls_extrapolate; /* tries of a longer step after tau = 1 passed (default 2) */
+  /* > 0: a step held below this by a few elements is tried again without
+   * them. When the line search accepts a step shorter than hold_tau (or
+   * none), each element's change of F over the full step is measured
+   * (+inf where it turns over); the vertices of those that rise most are
+   * held still, the largest rise first, until the others' changes sum to
+   * at most a quarter of the directional derivative (a twentieth of the
+   * elements at most); the direction is solved again without them (their
+   * gradients and couplings zeroed: a descent direction), up to 3 rounds
+   * each adding the elements that still hold the new full step back; of
+   * the two line searches the lower F is kept. After a retry that did
+   * not pay, the next 2 short steps go without one. Where a few
+   * degenerate elements (slivers at a sharp corner that cannot reach
+   * their targets) cut every vertex's step, the others take theirs.
+   * 0 (default): off. vm_minimize_result.held_steps counts the steps so
+   * taken. */
+  double hold_tau;
   /* implicit and newton minimizers */
   double pcg_rtol;         /* relative residual of the inexact Newton step (default 1e-2) */
   int pcg_maxit;           /* CG iteration cap per system (default 100) */
@@ -109,6 +126,7 @@ typedef struct vm_minimize_result {
   double F;               /* final F */
   double grad_norm;       /* |L grad|_2 at the last evaluation */
   int64_t pcg_iterations; /* total over the run */
+  int held_steps;         /* accepted steps taken with vertices held still (hold_tau) */
   double elapsed;         /* seconds */
   int64_t inverted;       /* final node statistics (computed at the end) */
   double min_det;

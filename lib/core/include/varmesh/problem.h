@@ -139,6 +139,10 @@ int vm_measure_hessian_psd(const vm_measure_ops *ops, const vm_measure_params *p
 /* F only, stopping early at the first node outside the domain (for line
  * searches). Same value as vm_problem_eval's F. */
 int vm_problem_value(vm_problem *p, const double *x, double *F);
+/* Each element's share of F at x: fe[e] for every element e of the mesh
+ * (+INFINITY where it is outside the measure's domain, 0 where it is not
+ * active). Their sum is F up to the order of the additions. */
+int vm_problem_elem_values(vm_problem *p, const double *x, double *fe);
 
 /* The symmetric vertex graph in CSR form without the diagonal: neighbours
  * of v are adj[rowptr[v] .. rowptr[v+1]), sorted; two vertices are
