@@ -109,7 +109,9 @@ int pr_solve_budget(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind
   md.hold = budget > 0 && p->o.hold_retries && p->k.hold_tau > 0;
   int it = 0;
   int st = solve_run(p, prob, m, kind, max_iter, 0, &md, &it);
-  if (st >= 0 && st != VM_WARN_TIME && md.held && it < max_iter) {
+  /* (held only where the budget's callback stopped the run: VM_OK, fewer
+   * than max_iter iterations done) */
+  if (st == VM_OK && md.held) {
     /* held past its budget (o.hold_retries): on with the vertices of the
      * prisms that hold each short step back held still in a retry of it
      * (hold_tau). Only here, so a solve that is not held is what it was: in

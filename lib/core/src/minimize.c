@@ -274,6 +274,11 @@ static int cmp_rise(const void *a, const void *b) {
   return (x->e > y->e) - (x->e < y->e);
 }
 
+/* Can vertex v still be held (neither held yet nor fixed)? */
+static int holdable(const vm_minimizer *m, const run_bufs *b, int32_t v) {
+  return !b->hold[v] && vm_bc_class(m->bc, v) != VM_VERTEX_FIXED;
+}
+
 static int64_t hold_blocking(vm_minimizer *m, const double *x, const double *d, double gd,
                              run_bufs *b) {
   int st = vm_bc_step(m->bc, x, d, 1.0, b->xa);
@@ -288,9 +293,9 @@ static int64_t hold_blocking(vm_minimizer *m, const double *x, const double *d, 
       rest += r;
       continue;
     }
-    int open = 0; /* a vertex of e not yet held, not fixed */
+    int open = 0; /* a vertex of e can still be held */
     for (int64_t k = mesh->eoff[e]; k < mesh->eoff[e + 1] && !open; k++)
-      open = !b->hold[mesh->conn[k]] && vm_bc_class(m->bc, mesh->conn[k]) != VM_VERTEX_FIXED;
+      open = holdable(m, b, mesh->conn[k]);
     if (!open) continue;
     if (isfinite(r)) rest += r;
     b->rise[nc].rise = r;
@@ -305,7 +310,7 @@ static int64_t hold_blocking(vm_minimizer *m, const double *x, const double *d, 
     int64_t e = b->rise[j].e;
     for (int64_t k = mesh->eoff[e]; k < mesh->eoff[e + 1]; k++) {
       int32_t v = mesh->conn[k];
-      if (b->hold[v] || vm_bc_class(m->bc, v) == VM_VERTEX_FIXED) continue;
+      if (!holdable(m, b, v)) continue;
       b->hold[v] = 1;
       n++;
     }
