@@ -563,6 +563,12 @@ static const vm_opt opts[] = {
      "those prisms' vertices held still: more columns reach T on thick layers, in more time, "
      "and the cells are not better everywhere (docs/prism.md; default: off)",
      .ival = 1},
+    {"--slot-clearance", NULL, VM_OPT_DOUBLE, A(o.slot_clearance), "S",
+     "where the layer's outer surface faces another part's closer than S times its local "
+     "outer edge (a slot cutting left between two parts' layers), lower the columns until it "
+     "does not, down to 0.3 of their aim, so the fill's tets across the slot are not flat "
+     "(default 0.5; 0: off, the layers stop where cutting leaves them)",
+     .lo = 0, .hi = 2},
     {"--resolve-iter", NULL, VM_OPT_INT, A(o.resolve_iter), "N",
      "implicit iterations after each cutting round (default 6)", .lo = 0, .hi = 100000000},
     {"--cut-rounds", NULL, VM_OPT_INT, A(o.max_cut_rounds), "N",
@@ -770,9 +776,10 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.medial_fill_rest);
   printf(", \"time\": %.3f}", r.medial_time);
   printf(", \"springback_iterations\": %d, \"held_steps\": %d, \"cut_rounds\": %d, "
-         "\"cut_pairs_first\": %lld, "
+         "\"cut_pairs_first\": %lld, \"slots_lowered\": %lld, "
          "\"time\": {",
-         r.springback_iter, r.held_steps, r.cut_rounds, (long long)r.cut_pairs_first);
+         r.springback_iter, r.held_steps, r.cut_rounds, (long long)r.cut_pairs_first,
+         (long long)r.slots_lowered);
   for (int k = 0; k < VM_PRISM_NPHASES; k++)
     printf("\"%s\": %.3f, ", vm_prism_phase_name((vm_prism_phase)k), r.time[k]);
   printf("\"total\": %.3f}, \"march_time\": {", r.time_total);
@@ -879,9 +886,11 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         "%.3f, %.3f", r.medial_fill, r.medial_fill_rest);
   if (st2 >= 0) st2 = report_fill(cli->ctx, report, res, r.wall_vertices);
   if (st2 >= 0)
-    st2 = vm_report_row(report, "springback iterations, cutting rounds (pairs at first)",
-                        "%d, %d (%lld)", r.springback_iter, r.cut_rounds,
-                        (long long)r.cut_pairs_first);
+    st2 = vm_report_row(report,
+                        "springback iterations, cutting rounds (pairs at first), columns "
+                        "lowered to open slots",
+                        "%d, %d (%lld), %lld", r.springback_iter, r.cut_rounds,
+                        (long long)r.cut_pairs_first, (long long)r.slots_lowered);
   char times[256];
   int len = 0;
   for (int k = 0; k < VM_PRISM_NPHASES && len < (int)sizeof times; k++)

@@ -120,23 +120,28 @@ static bool ball_point(struct RTCPointQueryFunctionArguments *a) {
   return false;
 }
 
-int pr_medial_radius(vm_prism *p, double cap, double *radius) {
+/* The exterior medial radius at every vertex of the closed triangulation
+ * (xyz, tri, fnrm) along its vertex normal vnrm, capped at `cap`; a ball
+ * smaller than k.medial_floor times elen[v] is 0. */
+int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, const double *fnrm,
+                        const double *vnrm, const double *elen, int64_t nv, int64_t nt, double cap,
+                        double *radius, int64_t *hit) {
   vm_ctx *ctx = p->ctx;
   int st;
   if (!p->rt && (st = pr_rt_create(ctx, &p->rt))) return st;
-  int64_t nw = p->nw, nt = p->nt;
-  wall_geom g = {NULL, p->wall, p->tri, p->fnrm};
+  wall_geom g = {NULL, xyz, tri, fnrm};
   g.box = vm_alloc_array(ctx, (size_t)nt * 6, sizeof *g.box);
   if (!g.box) return VM_ERR_NOMEM;
-  RTCScene scene = pr_tri_scene(p->rt, p->wall, p->tri, NULL, nt, 0, g.box, &g, NULL, NULL);
+  RTCScene scene = pr_tri_scene(p->rt, xyz, tri, NULL, nt, 0, g.box, &g, NULL, NULL);
   st = pr_rt_check(ctx, p->rt, "scene build (medial radius)");
   const double cos_sep = cos(p->k.medial_sep_deg * PR_PI / 180);
   const int max_iter = p->k.medial_iter;
   if (st == VM_OK) {
 #pragma omp parallel for schedule(dynamic, 64)
-    for (int64_t v = 0; v < nw; v++) {
-      const double *x = p->wall + 3 * v, *n = p->vnrm + 3 * v;
+    for (int64_t v = 0; v < nv; v++) {
+      const double *x = xyz + 3 * v, *n = vnrm + 3 * v;
       double r = cap;
+      int64_t last = -1;
       for (int it = 0; it < max_iter; it++) {
         double c[3] = {x[0] + r * n[0], x[1] + r * n[1], x[2] + r * n[2]};
         ball_query b = {&g, c, n, cos_sep, INFINITY, -1, {0, 0, 0}};
@@ -160,18 +165,25 @@ int pr_medial_radius(vm_prism *p, double cap, double *radius) {
         double rn = vm_dot3(dq, dq) / (2 * along);
         if (!(rn < r)) break;
         r = rn;
-        if (r <= p->k.medial_floor * p->elen[v]) {
+        last = b.best_t;
+        if (r <= p->k.medial_floor * elen[v]) {
           r = 0;
           break;
         }
       }
       radius[v] = r;
+      if (hit) hit[v] = last;
     }
   }
   rtcReleaseScene(scene);
   if (st == VM_OK) st = pr_rt_check(ctx, p->rt, "point query (medial radius)");
   vm_free(ctx, g.box);
   return st;
+}
+
+int pr_medial_radius(vm_prism *p, double cap, double *radius) {
+  return pr_medial_radius_of(p, p->wall, p->tri, p->fnrm, p->vnrm, p->elen, p->nw, p->nt, cap,
+                             radius, NULL);
 }
 
 int vm_prism_medial_radius(vm_prism *p, const double **radius) {

@@ -166,6 +166,17 @@ typedef struct pr_params {
   double restore_freeze_alpha;  /* 1/64: after six halvings against an
                                    intersection the cap is frozen there */
   int restore_back_rounds;      /* 20: intersection back-off rounds per pass */
+  int slot_rounds;              /* 4: rounds of slot opening (restore.c,
+                                   open_slots; its clearance is
+                                   o.slot_clearance) */
+  double slot_face_deg;         /* 60: "faces": the triangle that stops the
+                                   ball is within this of opposite */
+  double slot_min;              /* 0.3: lowered at most to this share of
+                                   the column's aim */
+  double slot_qshare;           /* 0.5: a lowering may not leave a prism
+                                   below this share of its quality */
+  int slot_halvings;            /* 8: halvings of a lowering against that
+                                   before the column stays where it was */
   double restore_stop_change;   /* 1e-6: the passes stop when no column moved
                                    more than this share of T */
 
@@ -378,6 +389,11 @@ static inline pr_params pr_params_default(void) {
       .restore_min_step = 1e-3,
       .restore_freeze_alpha = 1.0 / 64,
       .restore_back_rounds = 20,
+      .slot_rounds = 4,
+      .slot_face_deg = 60,
+      .slot_min = 0.3,
+      .slot_qshare = 0.5,
+      .slot_halvings = 8,
       .restore_stop_change = 1e-6,
       .split_mul = {1, 0.8, 1.25, 0.64, 1.5},
       .split_max_frac = 0.9,

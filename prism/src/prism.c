@@ -40,6 +40,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.cut_factor = 0.85;
   o.springback_iter = 100;
   o.hold_retries = 0;
+  o.slot_clearance = 0.5;
   o.resolve_iter = 6;
   o.max_cut_rounds = 400;
   o.smooth_iter = 30;
@@ -85,6 +86,8 @@ static int check_opts(vm_ctx *ctx, const vm_prism_opts *o) {
     return vm_error(ctx, VM_ERR_ARG, "prism: theta %g not in (0, 1)", o->theta);
   if (!(o->cut_factor >= 0.5 && o->cut_factor < 1))
     return vm_error(ctx, VM_ERR_ARG, "prism: cut factor %g not in [0.5, 1)", o->cut_factor);
+  if (!(o->slot_clearance >= 0 && o->slot_clearance <= 2))
+    return vm_error(ctx, VM_ERR_ARG, "prism: slot clearance %g (0..2; 0: off)", o->slot_clearance);
   if (o->hold_retries != 0 && o->hold_retries != 1)
     return vm_error(ctx, VM_ERR_ARG, "prism: hold_retries %d (0 or 1)", o->hold_retries);
   if (o->springback_iter < 0 || o->resolve_iter < 0 || o->max_cut_rounds < 0 ||

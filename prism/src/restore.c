@@ -134,6 +134,166 @@ static void mark_zone(const vm_prism *p, int rings, uint8_t *zone, uint8_t *tmp)
   }
 }
 
+/* Does every prism on v keep at least `share` of its quality q0? */
+static int prisms_ok(const vm_prism *p, int64_t v, const double *q0, double share) {
+  const vm_mesh *m = p->layer;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t e = p->vt[j];
+    double x[18];
+    const int32_t *cc = m->conn + 6 * e;
+    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
+    if (!(pr_prism_quality(x) >= share * q0[e])) return 0;
+  }
+  return 1;
+}
+
+/* Slots opened. Where cutting stopped two parts' layers close to each
+ * other (a wing's lower surface over a fuselage, plane.stl at 5 %: outer
+ * surfaces 0.002-0.02 apart under triangles of 0.05-0.3), the fill has to
+ * bridge the slot with flat tets. Each top whose outer surface faces
+ * another part's (the ball touching it from outside is stopped by a
+ * triangle facing back, within k.slot_face_deg of opposite) closer than
+ * o.slot_clearance times its mean outer edge is lowered along its column by
+ * what is missing, in rounds, down to k.slot_min of its aim; a lowering
+ * that leaves a prism below k.slot_qshare of its quality is halved, up to
+ * k.slot_halvings times, then not taken. */
+static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
+  vm_ctx *ctx = p->ctx;
+  int64_t nw = p->nw, nt = p->nt;
+  if (p->k.slot_rounds <= 0 || !(p->o.slot_clearance > 0) || nw <= 0 || nt <= 0) return VM_OK;
+  double *top = p->layer->xyz + 3 * nw;
+  double *fn = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *fn);
+  double *vn = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *vn);
+  double *el = vm_alloc_array(ctx, (size_t)nw, sizeof *el);
+  double *r = vm_alloc_array(ctx, (size_t)nw, sizeof *r);
+  double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
+  double *told = vm_alloc_array(ctx, (size_t)nw, sizeof *told);
+  double *t0 = vm_alloc_array(ctx, (size_t)nw, sizeof *t0);
+  int64_t *hit = vm_alloc_array(ctx, (size_t)nw, sizeof *hit);
+  uint8_t *mark = vm_calloc(ctx, (size_t)nw, 1);
+  int st = VM_OK;
+  if (!fn || !vn || !el || !r || !q0 || !told || !t0 || !hit || !mark) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  const vm_mesh *m = p->layer;
+  for (int64_t e = 0; e < nt; e++) {
+    double x[18];
+    const int32_t *cc = m->conn + 6 * e;
+    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
+    q0[e] = pr_prism_quality(x);
+  }
+  memcpy(t0, t, (size_t)nw * sizeof *t);
+  double cos_face = cos(p->k.slot_face_deg * PR_PI / 180);
+  int64_t first = -1;
+  int round;
+  for (round = 0; round < p->k.slot_rounds; round++) {
+    /* the outer surface's normals and edge lengths */
+    memset(vn, 0, (size_t)(3 * nw) * sizeof *vn);
+    memset(el, 0, (size_t)nw * sizeof *el);
+    for (int64_t e = 0; e < nt; e++) {
+      const int32_t *c = p->tri + 3 * e;
+      double u[3], w[3];
+      for (int k = 0; k < 3; k++) {
+        u[k] = top[3 * (int64_t)c[1] + k] - top[3 * (int64_t)c[0] + k];
+        w[k] = top[3 * (int64_t)c[2] + k] - top[3 * (int64_t)c[0] + k];
+      }
+      vm_cross3(u, w, fn + 3 * e);
+      vm_normalize3(fn + 3 * e);
+      for (int i = 0; i < 3; i++) {
+        const double *a = top + 3 * (int64_t)c[i], *b = top + 3 * (int64_t)c[(i + 1) % 3],
+                     *o = top + 3 * (int64_t)c[(i + 2) % 3];
+        double x1[3], x2[3];
+        for (int k = 0; k < 3; k++) x1[k] = b[k] - a[k], x2[k] = o[k] - a[k];
+        double l1 = vm_norm3(x1), l2 = vm_norm3(x2);
+        double cs = l1 > 0 && l2 > 0 ? vm_dot3(x1, x2) / (l1 * l2) : 1;
+        double ang = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
+        for (int k = 0; k < 3; k++) vn[3 * (int64_t)c[i] + k] += ang * fn[3 * e + k];
+        el[c[i]] += l1;
+      }
+    }
+    double hmax = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      if (vm_normalize3(vn + 3 * v) == 0) vn[3 * v + 2] = 1;
+      int64_t deg = p->vt_off[v + 1] - p->vt_off[v];
+      el[v] = deg ? el[v] / (double)deg : 0;
+      hmax = el[v] > hmax ? el[v] : hmax;
+    }
+    if ((st = pr_medial_radius_of(p, top, p->tri, fn, vn, el, nw, nt, p->o.slot_clearance * hmax, r,
+                                  hit)))
+      goto done;
+    memcpy(told, t, (size_t)nw * sizeof *t);
+    memset(mark, 0, (size_t)nw);
+    int64_t n = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      double want = p->o.slot_clearance * el[v];
+      if (!(r[v] < want) || hit[v] < 0) continue;
+      if (!(vm_dot3(fn + 3 * hit[v], vn + 3 * v) < -cos_face)) continue;
+      double tn = t[v] - (want - r[v]), lo = p->k.slot_min * p->tv[v];
+      if (tn < lo) tn = lo;
+      if (!(tn < t[v])) continue;
+      t[v] = tn;
+      mark[v] = 1;
+      n++;
+    }
+    if (first < 0) first = n;
+    if (!n) break;
+    /* prisms kept above their share: halve the lowering where one is not */
+    for (int half = 0; half < p->k.slot_halvings; half++) {
+      for (int64_t v = 0; v < nw; v++)
+        if (mark[v])
+          for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+      int64_t bad = 0;
+      for (int64_t v = 0; v < nw; v++)
+        if (mark[v] && !prisms_ok(p, v, q0, p->k.slot_qshare)) {
+          t[v] = 0.5 * (t[v] + told[v]);
+          bad++;
+        }
+      if (!bad) break;
+      if (half == p->k.slot_halvings - 1)
+        for (int64_t v = 0; v < nw; v++)
+          if (mark[v] && !prisms_ok(p, v, q0, p->k.slot_qshare)) t[v] = told[v];
+    }
+    for (int64_t v = 0; v < nw; v++)
+      for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+    int64_t np = 0;
+    if ((st = pr_layer_intersections(p, mark, &np))) goto done;
+    if (np > *np_io) { /* cannot happen by lowering alone; be safe */
+      memcpy(t, told, (size_t)nw * sizeof *t);
+      for (int64_t v = 0; v < nw; v++)
+        for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+      if ((st = pr_layer_intersections(p, NULL, &np))) goto done;
+      *np_io = np;
+      break;
+    }
+    *np_io = np;
+  }
+  int64_t lowered = 0;
+  double most = 0;
+  for (int64_t v = 0; v < nw; v++)
+    if (t[v] < t0[v]) {
+      lowered++;
+      most = t0[v] - t[v] > most ? t0[v] - t[v] : most;
+    }
+  p->rep.slots_lowered = lowered;
+  if (first > 0)
+    vm_log(ctx, VM_LOG_INFO,
+           "prism: slots opened: %lld tops faced another part's outer surface closer than %.2f "
+           "of their outer edges; %lld columns lowered in %d rounds, by at most %.3g T",
+           (long long)first, p->o.slot_clearance, (long long)lowered, round, most / p->o.thickness);
+done:
+  vm_free(ctx, fn);
+  vm_free(ctx, vn);
+  vm_free(ctx, el);
+  vm_free(ctx, r);
+  vm_free(ctx, q0);
+  vm_free(ctx, told);
+  vm_free(ctx, t0);
+  vm_free(ctx, hit);
+  vm_free(ctx, mark);
+  return st;
+}
+
 int vm_prism_restore(vm_prism *p) {
   if (!p) return VM_ERR_ARG;
   if (p->done != 3) return vm_error(p->ctx, VM_ERR_ARG, "prism: restoring needs the cut layer");
@@ -244,6 +404,15 @@ int vm_prism_restore(vm_prism *p) {
     }
     pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw, np, 0);
     if (np > np0 || change < p->k.restore_stop_change * T) break;
+  }
+  /* the tops are wall + t d again after it */
+  if (st >= 0) {
+    int so = open_slots(p, t, d, &np);
+    if (so < 0) {
+      st = so;
+      goto done;
+    }
+    memcpy(ts.tq, t, (size_t)nw * sizeof *t);
   }
   /* a sliver the restoration kept positive by pr_prism_quality but that
    * the solver's own rounding judges inverted (det C <= 0 at a node: prisms

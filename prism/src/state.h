@@ -210,6 +210,13 @@ double pr_percentile(double *x, int64_t n, double q);
 /* The exterior medial radius of every wall vertex (radius, nw), at most
  * `cap` (see medial.c). */
 int pr_medial_radius(vm_prism *p, double cap, double *radius);
+/* The same for any closed triangulation (xyz, tri: nv vertices, nt
+ * triangles; fnrm, vnrm unit face and vertex normals; elen a length per
+ * vertex for the floor); hit (may be NULL): the triangle that stopped
+ * each ball last, -1 if none did. */
+int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, const double *fnrm,
+                        const double *vnrm, const double *elen, int64_t nv, int64_t nt, double cap,
+                        double *radius, int64_t *hit);
 
 /* ---- layers ending per region (ends.c) ---- */
 

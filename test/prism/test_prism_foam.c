@@ -380,8 +380,11 @@ int main(void) {
    * degrees: 14 before the relief moved the outer surface, 1 since;
    * prisms with a cell determinant below 0.001: 125 since the relief
    * weighs the determinant (from the STL, vm-prism's defaults: 289 before,
-   * 150 since) */
-  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 5, 10, 0, 0, 160});
+   * 150 since); 165 since the layers stop about an outer edge apart where
+   * two parts' layers meet (open_slots: those columns are lowered, their
+   * cells flatter; the hybrid mesh's cells below 0.001, checkMesh
+   * -allGeometry, 151 -> 135 from the STL) */
+  check_layer(ctx, w, ao.length, "coarse aircraft", (layer_limits){60, 40, 5, 10, 0, 0, 190});
   /* the same wall through the surface stage's defaults, as the pipeline
    * runs it: its remeshing and adaptation leave the trailing edges'
    * triangles about twice as wide across the edge, and OpenFOAM's

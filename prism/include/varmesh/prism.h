@@ -114,6 +114,13 @@ typedef struct vm_prism_opts {
                             columns reach T on thick layers, in more time,
                             and the cells are not better everywhere
                             (docs/prism.md); 0 (default): off */
+  double slot_clearance; /* where the outer surface faces another part's
+                            closer than this share of its local outer edge
+                            (the exterior medial radius of the outer surface:
+                            a slot cutting left between two parts' layers),
+                            the columns are lowered until it does not, down
+                            to 0.3 of their aim: the fill's tets across the
+                            slot are not flat (default 0.5; 0: off) */
   int resolve_iter;      /* implicit iterations after each cutting round, around
                             the cut columns only (default 6) */
   int max_cut_rounds;    /* default 400; rounds with few pairs are cheap */
@@ -196,6 +203,10 @@ typedef struct vm_prism_report {
   int cut_rounds;
   int64_t cut_pairs_first;      /* intersecting pairs found in the first round */
   int64_t intersections;        /* pairs left at the end (0 unless limits hit) */
+  int64_t slots_lowered;        /* columns lowered so the outer surface does not
+                                   face another part's closer than
+                                   slot_clearance times its local edge (the
+                                   fill's tets there would be flat) */
   double full_fraction;         /* columns at full thickness (their own aim T_v) */
   double thick_min, thick_mean; /* achieved thickness / T_v over columns */
   double thick_max;             /* > 1 where springback left a column longer than T */
