@@ -67,19 +67,24 @@ static void sync_top(vm_prism *p, const double *t, const double *d, top_state *t
   }
 }
 
+/* Quality (geometric rule, pr_prism_quality) of the single layer's prism e. */
+static double prism_q(const vm_prism *p, int64_t e) {
+  const vm_mesh *m = p->layer;
+  const int32_t *cc = m->conn + 6 * e;
+  double x[18];
+  for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
+  return pr_prism_quality(x);
+}
+
 /* Quality (geometric rule, pr_prism_quality) of the prisms with a dirty
  * top (all prisms if all is set); clears the marks. */
 static void layer_quality(const vm_prism *p, top_state *ts, int all, double *q) {
-  const vm_mesh *m = p->layer;
   const uint8_t *dt = ts->dirty;
 #pragma omp parallel for schedule(static)
   for (int64_t e = 0; e < p->nt; e++) {
     const int32_t *c = p->tri + 3 * e;
     if (!all && !dt[c[0]] && !dt[c[1]] && !dt[c[2]]) continue;
-    double x[18];
-    const int32_t *cc = m->conn + 6 * e;
-    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
-    q[e] = pr_prism_quality(x);
+    q[e] = prism_q(p, e);
   }
   memset(ts->dirty, 0, (size_t)p->nw);
 }
@@ -136,14 +141,8 @@ static void mark_zone(const vm_prism *p, int rings, uint8_t *zone, uint8_t *tmp)
 
 /* Does every prism on v keep at least `share` of its quality q0? */
 static int prisms_ok(const vm_prism *p, int64_t v, const double *q0, double share) {
-  const vm_mesh *m = p->layer;
-  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-    int64_t e = p->vt[j];
-    double x[18];
-    const int32_t *cc = m->conn + 6 * e;
-    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
-    if (!(pr_prism_quality(x) >= share * q0[e])) return 0;
-  }
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+    if (!(prism_q(p, p->vt[j]) >= share * q0[p->vt[j]])) return 0;
   return 1;
 }
 
@@ -176,13 +175,7 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
     st = VM_ERR_NOMEM;
     goto done;
   }
-  const vm_mesh *m = p->layer;
-  for (int64_t e = 0; e < nt; e++) {
-    double x[18];
-    const int32_t *cc = m->conn + 6 * e;
-    for (int i = 0; i < 6; i++) memcpy(x + 3 * i, m->xyz + 3 * (int64_t)cc[i], 3 * sizeof *x);
-    q0[e] = pr_prism_quality(x);
-  }
+  for (int64_t e = 0; e < nt; e++) q0[e] = prism_q(p, e);
   memcpy(t0, t, (size_t)nw * sizeof *t);
   double cos_face = cos(p->k.slot_face_deg * PR_PI / 180);
   int64_t first = -1;
