@@ -161,8 +161,10 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
   int64_t nw = p->nw, nt = p->nt;
   if (p->k.slot_rounds <= 0 || !(p->o.slot_clearance > 0) || nw <= 0 || nt <= 0) return VM_OK;
   double *top = p->layer->xyz + 3 * nw;
+  const pr_surf ws = pr_wall_surf(p);
   double *fn = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *fn);
   double *vn = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *vn);
+  double *sd = vm_alloc_array(ctx, (size_t)(3 * nw), sizeof *sd);
   double *el = vm_alloc_array(ctx, (size_t)nw, sizeof *el);
   double *r = vm_alloc_array(ctx, (size_t)nw, sizeof *r);
   double *q0 = vm_alloc_array(ctx, (size_t)nt, sizeof *q0);
@@ -171,7 +173,7 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
   int64_t *hit = vm_alloc_array(ctx, (size_t)nw, sizeof *hit);
   uint8_t *mark = vm_calloc(ctx, (size_t)nw, 1);
   int st = VM_OK;
-  if (!fn || !vn || !el || !r || !q0 || !told || !t0 || !hit || !mark) {
+  if (!fn || !vn || !sd || !el || !r || !q0 || !told || !t0 || !hit || !mark) {
     st = VM_ERR_NOMEM;
     goto done;
   }
@@ -181,33 +183,18 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
   int64_t first = -1;
   int round;
   for (round = 0; round < p->k.slot_rounds; round++) {
-    /* the outer surface's normals and edge lengths */
-    memset(vn, 0, (size_t)(3 * nw) * sizeof *vn);
+    /* the outer surface's unit face and angle-weighted vertex normals
+     * (sd: the directions the columns would take there, not used) and
+     * each top's mean outer edge */
+    pr_surface_dirs(ctx, &ws, &p->k.dir, top, fn, vn, sd, 0, NULL);
     memset(el, 0, (size_t)nw * sizeof *el);
-    for (int64_t e = 0; e < nt; e++) {
-      const int32_t *c = p->tri + 3 * e;
-      double u[3], w[3];
-      for (int k = 0; k < 3; k++) {
-        u[k] = top[3 * (int64_t)c[1] + k] - top[3 * (int64_t)c[0] + k];
-        w[k] = top[3 * (int64_t)c[2] + k] - top[3 * (int64_t)c[0] + k];
-      }
-      vm_cross3(u, w, fn + 3 * e);
-      vm_normalize3(fn + 3 * e);
+    for (int64_t e = 0; e < nt; e++)
       for (int i = 0; i < 3; i++) {
-        const double *a = top + 3 * (int64_t)c[i], *b = top + 3 * (int64_t)c[(i + 1) % 3],
-                     *o = top + 3 * (int64_t)c[(i + 2) % 3];
-        double x1[3], x2[3];
-        for (int k = 0; k < 3; k++) x1[k] = b[k] - a[k], x2[k] = o[k] - a[k];
-        double l1 = vm_norm3(x1), l2 = vm_norm3(x2);
-        double cs = l1 > 0 && l2 > 0 ? vm_dot3(x1, x2) / (l1 * l2) : 1;
-        double ang = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs);
-        for (int k = 0; k < 3; k++) vn[3 * (int64_t)c[i] + k] += ang * fn[3 * e + k];
-        el[c[i]] += l1;
+        const int32_t *c = p->tri + 3 * e;
+        el[c[i]] += vm_dist3(top + 3 * (int64_t)c[i], top + 3 * (int64_t)c[(i + 1) % 3]);
       }
-    }
     double hmax = 0;
     for (int64_t v = 0; v < nw; v++) {
-      if (vm_normalize3(vn + 3 * v) == 0) vn[3 * v + 2] = 1;
       int64_t deg = p->vt_off[v + 1] - p->vt_off[v];
       el[v] = deg ? el[v] / (double)deg : 0;
       hmax = el[v] > hmax ? el[v] : hmax;
@@ -277,6 +264,7 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
 done:
   vm_free(ctx, fn);
   vm_free(ctx, vn);
+  vm_free(ctx, sd);
   vm_free(ctx, el);
   vm_free(ctx, r);
   vm_free(ctx, q0);

@@ -256,13 +256,7 @@ static void fallback_direction(const vm_minimizer *m, const double *g, const dou
   vm_bc_apply(m->bc, d);
 }
 
-/* Hold still the vertices of the elements that hold the step x + d
- * back: each element's change of F over the full step (+inf where it
- * turns over), the largest rises first, until the other elements' changes
- * sum to at most gd / 4 (gd < 0: half the decrease a Newton step's model
- * expects), at most a twentieth of the elements (and 16). b->fe0 holds
- * the elements' values at x. Marks them in b->hold; returns how many
- * vertices (free or sliding) were newly marked, or a negative status. */
+/* An element's change of F over a full step, for sorting. */
 typedef struct elem_rise_s {
   double rise;
   int64_t e;
@@ -279,6 +273,13 @@ static int holdable(const vm_minimizer *m, const run_bufs *b, int32_t v) {
   return !b->hold[v] && vm_bc_class(m->bc, v) != VM_VERTEX_FIXED;
 }
 
+/* Hold still the vertices of the elements that hold the step x + d
+ * back: each element's change of F over the full step (+inf where it
+ * turns over), the largest rises first, until the other elements' changes
+ * sum to at most gd / 4 (gd < 0: half the decrease a Newton step's model
+ * expects), at most a twentieth of the elements (and 16). b->fe0 holds
+ * the elements' values at x. Marks them in b->hold; returns how many
+ * vertices (free or sliding) were newly marked, or a negative status. */
 static int64_t hold_blocking(vm_minimizer *m, const double *x, const double *d, double gd,
                              run_bufs *b) {
   int st = vm_bc_step(m->bc, x, d, 1.0, b->xa);
