@@ -5,7 +5,11 @@
 # surface's vertices bit-identical in the output. Bad input (a missing
 # file, an open surface, two overlapping spheres given as one surface, a
 # far field that cuts the model, a hexahedral layer): one line on stderr,
-# exit 1, no output file, no temporary file. Usage errors: exit 2.
+# exit 1, no output file, no temporary file (Gmsh aborting at every try:
+# the two fallbacks' warnings before that line).
+# Usage errors: exit 2. Gmsh aborting at its first two tries (injected by
+# VM_FILL_GMSH_ABORT): the fill meshes again without the points off the
+# envelope, then with the envelope in reverse order, and succeeds.
 set -u
 gen=$1 fill=$2 conv=$3
 dir=$(mktemp -d)
@@ -27,6 +31,16 @@ check '[ -n "$n" ] && diff <(sed -n "/^vertices/,+${n}p" "$dir/s.vmsht" | tail -
 rm -f "$dir/out/"*
 "$fill" -q "$dir/s.vmsh" "$dir/out/f.vmsh" >"$dir/stdout" 2>"$dir/stderr"
 check '[ $? -eq 0 ] && [ ! -s "$dir/stdout" ] && [ ! -s "$dir/stderr" ]' "-q: nothing on stdout or stderr"
+rm -f "$dir/out/"*
+
+# Gmsh's process aborts twice (as its boundary recovery does on some
+# envelopes): the third try, the envelope given in reverse order, meshes
+# it, and the surface is still kept bit for bit
+VM_FILL_GMSH_ABORT=2 "$fill" --farfield 5 "$dir/s.vmsh" "$dir/out/f.vmsh" >/dev/null 2>"$dir/stderr"
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "VM_FILL_GMSH_ABORT: aborted; meshing again without the points off the envelope" "$dir/stderr" && grep -q "VM_FILL_GMSH_ABORT: aborted; meshing again with the envelope given in reverse order" "$dir/stderr" && grep -q "envelope 320 triangles kept exactly" "$dir/stderr"' "Gmsh aborting twice: meshed at the third try, in reverse order (exit $rc)"
+"$conv" "$dir/out/f.vmsh" "$dir/f.vmsht" 2>/dev/null
+check '[ -n "$n" ] && diff <(sed -n "/^vertices/,+${n}p" "$dir/s.vmsht" | tail -n +2 | cut -d" " -f1-3) <(sed -n "/^vertices/,+${n}p" "$dir/f.vmsht" | tail -n +2 | cut -d" " -f1-3) >/dev/null' "... the surface's $n vertices bit-identical there too"
 rm -f "$dir/out/"*
 
 bad() { # name expected-substring args...
@@ -54,6 +68,12 @@ bad "a surface that intersects itself" "intersect" "$dir/two.off"
 bad "a far field that cuts the model" "far field" --farfield 0.5 "$dir/s.vmsh"
 "$gen" rotcube --n 3 "$dir/h.vmsh"
 bad "a hexahedral mesh (one boundary, quadrilaterals)" "quadrilaterals" "$dir/h.vmsh"
+# Gmsh aborting at every try: the two fallbacks said as warnings, then
+# one error line, exit 1, no output
+VM_FILL_GMSH_ABORT=3 "$fill" "$dir/s.vmsh" "$dir/out/f.vmsh" >"$dir/stdout" 2>"$dir/stderr"
+rc=$?
+check '[ $rc -eq 1 ] && [ "$(grep -c "error" "$dir/stderr")" -eq 1 ] && tail -1 "$dir/stderr" | grep -q "error: .*Gmsh crashed (signal 6): VM_FILL_GMSH_ABORT: aborted$" && [ "$(grep -c "warning: fill: Gmsh crashed" "$dir/stderr")" -eq 2 ] && [ ! -s "$dir/stdout" ] && nothing_left' "Gmsh aborting at every try: two fallbacks, then one error line, exit 1, no output (exit $rc: $(tail -1 "$dir/stderr"))"
+rm -f "$dir/out/"* "$dir/out/".* 2>/dev/null
 
 "$fill" --refine 1,2,3 "$dir/s.vmsh" "$dir/out/f.vmsh" 2>/dev/null
 check '[ $? -eq 2 ] && nothing_left' "--refine with 3 numbers: usage error"
