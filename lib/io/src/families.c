@@ -8,37 +8,70 @@
 #include "families_private.h"
 #include "varmesh/topology.h"
 
+/* One warning line naming every loss, grouped by kind ("element fields
+ * 'a', 'b'; vertex fields 'c'; ..."), at most about a line's buffer of
+ * names and then how many more. */
+typedef struct {
+  char buf[900];
+  size_t n;
+  int group, items, more;
+} lost_list;
+
+static void lost_add(lost_list *l, int group, const char *title, const char *name,
+                     const char *value) {
+  char item[320];
+  if (value)
+    snprintf(item, sizeof item, "'%s' ('%s')", name, value);
+  else
+    snprintf(item, sizeof item, "'%s'", name);
+  const char *sep = !l->items ? "" : group != l->group ? "; " : ", ";
+  size_t need = strlen(sep) + (group != l->group ? strlen(title) + 1 : 0) + strlen(item);
+  if (l->more || l->n + need + 1 >= sizeof l->buf - 16) {
+    l->more++;
+    return;
+  }
+  l->n += (size_t)snprintf(l->buf + l->n, sizeof l->buf - l->n, "%s%s%s%s", sep,
+                           group != l->group ? title : "", group != l->group ? " " : "", item);
+  l->group = group;
+  l->items++;
+}
+
 int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt,
                     int cell_fields) {
-  int lossy = 0;
+  lost_list l;
+  memset(&l, 0, sizeof l);
+  l.group = -1;
   /* a surface mesh has no boundary faces: its tags and their names are lost */
   int surface = ex_groups_surface(m);
-  for (int i = 0; i < m->nfield; i++) {
-    const vm_field *f = &m->fields[i];
-    if (!surface && f->location == VM_FIELD_ELEMENT && !strcmp(f->name, "gmsh:physical") &&
-        f->type == VM_FIELD_I32 && f->ncomp == 1)
-      continue;
-    if (cell_fields && f->location == VM_FIELD_ELEMENT && f->ncomp == 1 &&
-        strncmp(f->name, "gmsh:", 5))
-      continue;
-    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store the %s field '%s'; dropped", path, fmt,
-           f->location == VM_FIELD_VERTEX ? "vertex" : "element", f->name);
-    lossy = 1;
-  }
+  for (int loc = 0; loc < 2; loc++)
+    for (int i = 0; i < m->nfield; i++) {
+      const vm_field *f = &m->fields[i];
+      if ((f->location == VM_FIELD_ELEMENT) != (loc == 0)) continue;
+      if (!surface && f->location == VM_FIELD_ELEMENT && !strcmp(f->name, "gmsh:physical") &&
+          f->type == VM_FIELD_I32 && f->ncomp == 1)
+        continue;
+      if (cell_fields && f->location == VM_FIELD_ELEMENT && f->ncomp == 1 &&
+          strncmp(f->name, "gmsh:", 5))
+        continue;
+      lost_add(&l, loc, loc == 0 ? "element fields" : "vertex fields", f->name, NULL);
+    }
   for (int i = 0; i < m->nattr; i++) {
-    if (!surface && !strncmp(m->attrs[i].key, "gmsh:physical_name:2:", 21)) continue;
-    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store the attribute '%s'; dropped", path, fmt,
-           m->attrs[i].key);
-    lossy = 1;
+    const char *k = m->attrs[i].key;
+    if (!surface && !strncmp(k, "gmsh:physical_name:2:", 21)) continue;
+    lost_add(&l, 2, "attributes", k,
+             !strncmp(k, "gmsh:physical_name:", 19) ? m->attrs[i].value : NULL);
   }
   int64_t nflag = 0;
   for (int64_t v = 0; v < m->nv; v++) nflag += m->vflag[v] != VM_VERTEX_FREE;
-  if (nflag) {
-    vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store vertex flags (%lld fixed or slip); dropped", path,
-           fmt, (long long)nflag);
-    lossy = 1;
-  }
-  return lossy;
+  if (!l.items && !l.more && !nflag) return 0;
+  char flags[64] = "";
+  if (nflag)
+    snprintf(flags, sizeof flags, "%svertex flags (%lld fixed or slip)", l.items ? "; " : "",
+             (long long)nflag);
+  char more[48] = "";
+  if (l.more) snprintf(more, sizeof more, " and %d more", l.more);
+  vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store %s%s%s; dropped", path, fmt, l.buf, more, flags);
+  return 1;
 }
 
 int ex_groups_surface(const vm_mesh *m) {
