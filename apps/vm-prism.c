@@ -774,6 +774,8 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.medial_fill);
   printf(", \"fill_rest\": ");
   vm_json_double(stdout, r.medial_fill_rest);
+  printf(", \"narrow_gap\": %lld, \"narrow_gap_min\": ", (long long)r.narrow_gap);
+  vm_json_double(stdout, r.narrow_gap_min);
   printf(", \"time\": %.3f}", r.medial_time);
   printf(", \"springback_iterations\": %d, \"held_steps\": %d, \"cut_rounds\": %d, "
          "\"cut_pairs_first\": %lld, \"slots_lowered\": %lld, "
@@ -884,6 +886,10 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         "fill of the allowed thickness, achieved / min(T, radius): mean, mean "
                         "where there is no room for T",
                         "%.3f, %.3f", r.medial_fill, r.medial_fill_rest);
+  if (st2 >= 0)
+    st2 = vm_report_row(report,
+                        "wall vertices in a gap narrower than half their edges (narrowest gap)",
+                        "%lld (%g)", (long long)r.narrow_gap, r.narrow_gap_min);
   if (st2 >= 0) st2 = report_fill(cli->ctx, report, res, r.wall_vertices);
   if (st2 >= 0)
     st2 = vm_report_row(report,

@@ -181,9 +181,36 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
   return st;
 }
 
-int pr_medial_radius(vm_prism *p, double cap, double *radius) {
-  return pr_medial_radius_of(p, p->wall, p->tri, p->fnrm, p->vnrm, p->elen, p->nw, p->nt, cap,
-                             radius, NULL);
+/* The wall vertices in a gap narrower than half their triangles' edges:
+ * the ball (half the gap) stopped closer than k.gap_share of the vertex's
+ * mean edge by a triangle
+ * facing back (within k.slot_face_deg of opposite; a concave fold's
+ * triangles stand across, not opposite). A slot between two parts (a strut
+ * against a wing, a flap's gap on a published model) that the wall's
+ * triangles do not resolve: the columns on both sides end nearly at once,
+ * the cells there are flat, and so are the fill's tets across what is
+ * left, whatever the stage does; a solver may fail there (simpleFoam did,
+ * on such a Cessna). Counted in the report, said once as a warning. */
+static void narrow_gaps(vm_prism *p, const double *r, const int64_t *hit) {
+  const double cf = -cos(p->k.slot_face_deg * PR_PI / 180);
+  int64_t n = 0, at = -1;
+  for (int64_t v = 0; v < p->nw; v++) {
+    if (hit[v] < 0 || !(r[v] < p->k.gap_share * p->elen[v])) continue;
+    if (!(vm_dot3(p->fnrm + 3 * hit[v], p->vnrm + 3 * v) < cf)) continue;
+    n++;
+    if (at < 0 || r[v] * p->elen[at] < r[at] * p->elen[v]) at = v;
+  }
+  p->rep.narrow_gap = n;
+  if (!n) return;
+  p->rep.narrow_gap_min = 2 * r[at];
+  memcpy(p->rep.narrow_gap_at, p->wall + 3 * at, sizeof p->rep.narrow_gap_at);
+  const double *x = p->wall + 3 * at;
+  vm_log(p->ctx, VM_LOG_WARN,
+         "prism: at %lld wall vertices the wall comes closer to itself than half its edges' "
+         "length (a gap its triangles do not resolve); the narrowest, %g against edges of %g, "
+         "near (%g, %g, %g): the layer's cells and the fill's tets there will be flat and a "
+         "solver may fail on them; refine the wall there or close the gap",
+         (long long)n, 2 * r[at], p->elen[at], x[0], x[1], x[2]);
 }
 
 int vm_prism_medial_radius(vm_prism *p, const double **radius) {
@@ -191,12 +218,21 @@ int vm_prism_medial_radius(vm_prism *p, const double **radius) {
   *radius = NULL;
   if (!p->medial) {
     double *r = vm_alloc_array(p->ctx, (size_t)p->nw, sizeof *r);
-    if (!r) return VM_ERR_NOMEM;
-    int st = pr_medial_radius(p, p->k.medial_cap * p->o.thickness, r);
+    int64_t *hit = vm_alloc_array(p->ctx, (size_t)p->nw, sizeof *hit);
+    if (!r || !hit) {
+      vm_free(p->ctx, r);
+      vm_free(p->ctx, hit);
+      return VM_ERR_NOMEM;
+    }
+    int st = pr_medial_radius_of(p, p->wall, p->tri, p->fnrm, p->vnrm, p->elen, p->nw, p->nt,
+                                 p->k.medial_cap * p->o.thickness, r, hit);
     if (st < 0) {
       vm_free(p->ctx, r);
+      vm_free(p->ctx, hit);
       return st;
     }
+    narrow_gaps(p, r, hit);
+    vm_free(p->ctx, hit);
     p->medial = r;
   }
   *radius = p->medial;

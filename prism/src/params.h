@@ -336,6 +336,11 @@ typedef struct pr_params {
                             is 0 (a concave fold's vertex) */
   double medial_room;    /* 1.05: a column has room for T where its radius is
                             at least 1.05 T */
+  double gap_share;      /* 0.25: a wall vertex is in a gap narrower than half
+                            its triangles' edges where its ball (half the gap)
+                            is stopped closer than this share of its mean edge
+                            by a triangle facing back (within slot_face_deg of
+                            opposite) */
 
   pr_isect_params isect;
 } pr_params;
@@ -407,6 +412,7 @@ static inline pr_params pr_params_default(void) {
       .medial_rel_tol = 1e-10,
       .medial_floor = 1e-6,
       .medial_room = 1.05,
+      .gap_share = 0.25,
       .ortho_qmin = 0.3,
       .ortho_round_share = 0.5,
       .ortho_alone_share = 0.25,

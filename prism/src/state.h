@@ -207,10 +207,8 @@ double pr_percentile(double *x, int64_t n, double q);
 
 /* ---- the room the geometry leaves (medial.c) ---- */
 
-/* The exterior medial radius of every wall vertex (radius, nw), at most
- * `cap` (see medial.c). */
-int pr_medial_radius(vm_prism *p, double cap, double *radius);
-/* The same for any closed triangulation (xyz, tri: nv vertices, nt
+/* The exterior medial radius (see medial.c) of every vertex of a closed
+ * triangulation (xyz, tri: nv vertices, nt
  * triangles; fnrm, vnrm unit face and vertex normals; elen a length per
  * vertex for the floor); hit (may be NULL): the triangle that stopped
  * each ball last, -1 if none did. */

@@ -203,6 +203,14 @@ typedef struct vm_prism_report {
   int cut_rounds;
   int64_t cut_pairs_first;      /* intersecting pairs found in the first round */
   int64_t intersections;        /* pairs left at the end (0 unless limits hit) */
+  int64_t narrow_gap;           /* wall vertices in a gap narrower than half
+                                   their triangles' edges (facing back: not a
+                                   concave fold): the layer's cells and the
+                                   fill's tets are flat there whatever the
+                                   stage does */
+  double narrow_gap_min;        /* the narrowest such gap (twice the radius), 0
+                                   if none */
+  double narrow_gap_at[3];      /* where: its wall vertex */
   int64_t slots_lowered;        /* columns lowered so the outer surface does not
                                    face another part's closer than
                                    slot_clearance times its local edge (the
