@@ -183,14 +183,14 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
 
 /* The wall vertices in a gap narrower than half their triangles' edges:
  * the ball (half the gap) stopped closer than k.gap_share of the vertex's
- * mean edge by a triangle
- * facing back (within k.slot_face_deg of opposite; a concave fold's
- * triangles stand across, not opposite). A slot between two parts (a strut
- * against a wing, a flap's gap on a published model) that the wall's
- * triangles do not resolve: the columns on both sides end nearly at once,
- * the cells there are flat, and so are the fill's tets across what is
- * left, whatever the stage does; a solver may fail there (simpleFoam did,
- * on such a Cessna). Counted in the report, said once as a warning. */
+ * mean edge by a triangle facing back (within k.slot_face_deg of
+ * opposite; a concave fold's triangles stand across, not opposite). A
+ * slot between two parts (a strut against a wing, a flap's gap on a
+ * published model) that the wall's triangles do not resolve: the columns
+ * on both sides end nearly at once, the cells there are flat, and so are
+ * the fill's tets across what is left, whatever the stage does; a solver
+ * may fail there (simpleFoam did, on such a Cessna). Counted in the
+ * report, said once as a warning. */
 static void narrow_gaps(vm_prism *p, const double *r, const int64_t *hit) {
   const double cf = -cos(p->k.slot_face_deg * PR_PI / 180);
   int64_t n = 0, at = -1;

@@ -2388,10 +2388,11 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   /* Gmsh; if its process crashes (its boundary recovery aborts on some
    * envelopes) with the points off the envelope, once more without them,
    * then with the envelope's triangles in the reverse order (the recovery
-   * depends on the order: a layer of the demo aircraft at T = 20 % that it
-   * aborted on with and without the points it meshed so); then again with a point in each sliver of
-   * envelope vertices, kept only if Gmsh succeeds. An error Gmsh reports (the envelope intersects
-   * itself) ends the run. */
+   * depends on the order: a layer of the demo aircraft at T = 20 % it had
+   * aborted on, with and without the points, meshed so); then again with
+   * a point in each sliver of envelope vertices, kept only if Gmsh
+   * succeeds. An error Gmsh reports (the envelope intersects itself) ends
+   * the run. */
   int crashed = 0, reverse = 0;
   st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, reverse, &R, &crashed);
   if (st == VM_ERR_BACKEND && crashed && nq > F.nv) {
