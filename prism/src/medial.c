@@ -181,6 +181,10 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
   return st;
 }
 
+int pr_ball_faces_back(const vm_prism *p, int64_t hit, const double *fnrm, const double *n) {
+  return hit >= 0 && vm_dot3(fnrm + 3 * hit, n) < -cos(p->k.slot_face_deg * PR_PI / 180);
+}
+
 /* The wall vertices in a gap narrower than half their triangles' edges:
  * the ball (half the gap) stopped closer than k.gap_share of the vertex's
  * mean edge by a triangle facing back (within k.slot_face_deg of
@@ -192,11 +196,10 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
  * may fail there (simpleFoam did, on such a Cessna). Counted in the
  * report, said once as a warning. */
 static void narrow_gaps(vm_prism *p, const double *r, const int64_t *hit) {
-  const double cf = -cos(p->k.slot_face_deg * PR_PI / 180);
   int64_t n = 0, at = -1;
   for (int64_t v = 0; v < p->nw; v++) {
-    if (hit[v] < 0 || !(r[v] < p->k.gap_share * p->elen[v])) continue;
-    if (!(vm_dot3(p->fnrm + 3 * hit[v], p->vnrm + 3 * v) < cf)) continue;
+    if (!(r[v] < p->k.gap_share * p->elen[v])) continue;
+    if (!pr_ball_faces_back(p, hit[v], p->fnrm, p->vnrm + 3 * v)) continue;
     n++;
     if (at < 0 || r[v] * p->elen[at] < r[at] * p->elen[v]) at = v;
   }

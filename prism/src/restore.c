@@ -156,7 +156,7 @@ static int prisms_ok(const vm_prism *p, int64_t v, const double *q0, double shar
  * what is missing, in rounds, down to k.slot_min of its aim; a lowering
  * that leaves a prism below k.slot_qshare of its quality is halved, up to
  * k.slot_halvings times, then not taken. */
-static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
+static int open_slots(vm_prism *p, double *t, const double *d, top_state *ts, int64_t *np_io) {
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
   if (p->k.slot_rounds <= 0 || !(p->o.slot_clearance > 0) || nw <= 0 || nt <= 0) return VM_OK;
@@ -179,7 +179,6 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
   }
   for (int64_t e = 0; e < nt; e++) q0[e] = prism_q(p, e);
   memcpy(t0, t, (size_t)nw * sizeof *t);
-  double cos_face = cos(p->k.slot_face_deg * PR_PI / 180);
   int64_t first = -1;
   int round;
   for (round = 0; round < p->k.slot_rounds; round++) {
@@ -207,8 +206,7 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
     int64_t n = 0;
     for (int64_t v = 0; v < nw; v++) {
       double want = p->o.slot_clearance * el[v];
-      if (!(r[v] < want) || hit[v] < 0) continue;
-      if (!(vm_dot3(fn + 3 * hit[v], vn + 3 * v) < -cos_face)) continue;
+      if (!(r[v] < want) || !pr_ball_faces_back(p, hit[v], fn, vn + 3 * v)) continue;
       double tn = t[v] - (want - r[v]), lo = p->k.slot_min * p->tv[v];
       if (tn < lo) tn = lo;
       if (!(tn < t[v])) continue;
@@ -220,9 +218,7 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
     if (!n) break;
     /* prisms kept above their share: halve the lowering where one is not */
     for (int half = 0; half < p->k.slot_halvings; half++) {
-      for (int64_t v = 0; v < nw; v++)
-        if (mark[v])
-          for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+      sync_top(p, t, d, ts);
       int64_t bad = 0;
       for (int64_t v = 0; v < nw; v++)
         if (mark[v] && !prisms_ok(p, v, q0, p->k.slot_qshare)) {
@@ -234,14 +230,12 @@ static int open_slots(vm_prism *p, double *t, const double *d, int64_t *np_io) {
         for (int64_t v = 0; v < nw; v++)
           if (mark[v] && !prisms_ok(p, v, q0, p->k.slot_qshare)) t[v] = told[v];
     }
-    for (int64_t v = 0; v < nw; v++)
-      for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+    sync_top(p, t, d, ts);
     int64_t np = 0;
     if ((st = pr_layer_intersections(p, mark, &np))) goto done;
     if (np > *np_io) { /* cannot happen by lowering alone; be safe */
       memcpy(t, told, (size_t)nw * sizeof *t);
-      for (int64_t v = 0; v < nw; v++)
-        for (int k = 0; k < 3; k++) top[3 * v + k] = p->wall[3 * v + k] + t[v] * d[3 * v + k];
+      sync_top(p, t, d, ts);
       if ((st = pr_layer_intersections(p, NULL, &np))) goto done;
       *np_io = np;
       break;
@@ -386,14 +380,13 @@ int vm_prism_restore(vm_prism *p) {
     pr_progress(p, VM_PRISM_PHASE_RESTORE, pass, mean / (double)nw, np, 0);
     if (np > np0 || change < p->k.restore_stop_change * T) break;
   }
-  /* the tops are wall + t d again after it */
+  /* slots opened (the tops set from t through ts, as above) */
   if (st >= 0) {
-    int so = open_slots(p, t, d, &np);
+    int so = open_slots(p, t, d, &ts, &np);
     if (so < 0) {
       st = so;
       goto done;
     }
-    memcpy(ts.tq, t, (size_t)nw * sizeof *t);
   }
   /* a sliver the restoration kept positive by pr_prism_quality but that
    * the solver's own rounding judges inverted (det C <= 0 at a node: prisms

@@ -208,13 +208,17 @@ double pr_percentile(double *x, int64_t n, double q);
 /* ---- the room the geometry leaves (medial.c) ---- */
 
 /* The exterior medial radius (see medial.c) of every vertex of a closed
- * triangulation (xyz, tri: nv vertices, nt
- * triangles; fnrm, vnrm unit face and vertex normals; elen a length per
- * vertex for the floor); hit (may be NULL): the triangle that stopped
- * each ball last, -1 if none did. */
+ * triangulation (xyz, tri: nv vertices, nt triangles; fnrm, vnrm unit face
+ * and vertex normals; elen a length per vertex for the floor); hit (may be
+ * NULL): the triangle that stopped each ball last, -1 if none did. */
 int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, const double *fnrm,
                         const double *vnrm, const double *elen, int64_t nv, int64_t nt, double cap,
                         double *radius, int64_t *hit);
+/* Does the triangle that stopped a ball (hit, from pr_medial_radius_of;
+ * fnrm its unit normals) face back at the ball's vertex normal n (within
+ * k.slot_face_deg of opposite: another part, the far side of a slot; a
+ * concave fold's triangles stand across)? */
+int pr_ball_faces_back(const vm_prism *p, int64_t hit, const double *fnrm, const double *n);
 
 /* ---- layers ending per region (ends.c) ---- */
 

@@ -100,6 +100,18 @@ static void run(vm_ctx *ctx, const vm_mesh *w, int64_t na, double clearance, slo
   vm_mesh_destroy(&layer);
 }
 
+/* Two unit spheres of the given level `gap` apart along x, as one wall;
+ * *na: the first sphere's vertex count. */
+static vm_mesh *two_spheres(vm_ctx *ctx, double gap, int level, int64_t *na) {
+  vm_mesh *w = NULL;
+  vm_mesh_create(ctx, &w);
+  const double ca[3] = {-1 - gap / 2, 0, 0}, cb[3] = {1 + gap / 2, 0, 0};
+  CHECK(vm_gen_icosphere(w, ca, 1.0, level, 0, NULL) == 0, "sphere");
+  *na = w->nv;
+  CHECK(vm_gen_icosphere(w, cb, 1.0, level, 0, NULL) == 0, "sphere");
+  return w;
+}
+
 /* The narrow-gap figures of the wall w before any phase runs. */
 static vm_prism_report gaps(vm_ctx *ctx, const vm_mesh *w) {
   vm_prism_report r;
@@ -120,23 +132,15 @@ int main(void) {
   vm_ctx *ctx = NULL;
   vm_ctx_create(&ctx);
   vm_ctx_set_threads(ctx, 1);
-  vm_mesh *w = NULL;
-  vm_mesh_create(ctx, &w);
-  const double ca[3] = {-1.3, 0, 0}, cb[3] = {1.3, 0, 0};
-  CHECK(vm_gen_icosphere(w, ca, 1.0, 3, 0, NULL) == 0, "sphere");
-  int64_t na = w->nv;
-  CHECK(vm_gen_icosphere(w, cb, 1.0, 3, 0, NULL) == 0, "sphere");
+  int64_t na = 0;
+  vm_mesh *w = two_spheres(ctx, 0.6, 3, &na);
   vm_prism_report g = gaps(ctx, w);
   CHECK(g.narrow_gap == 0 && g.narrow_gap_min == 0,
         "0.6 apart: %lld vertices in a narrow gap (narrowest %g)", (long long)g.narrow_gap,
         g.narrow_gap_min);
   {
-    vm_mesh *n = NULL;
-    vm_mesh_create(ctx, &n);
-    const double na_[3] = {-1.01, 0, 0}, nb_[3] = {1.01, 0, 0};
-    CHECK(vm_gen_icosphere(n, na_, 1.0, 3, 0, NULL) == 0 &&
-              vm_gen_icosphere(n, nb_, 1.0, 3, 0, NULL) == 0,
-          "spheres 0.02 apart");
+    int64_t nn = 0;
+    vm_mesh *n = two_spheres(ctx, 0.02, 3, &nn);
     vm_prism_report h = gaps(ctx, n);
     fprintf(stderr,
             "0.02 apart: %lld wall vertices in a narrow gap, narrowest %.4f at (%.3f, %.3f, "

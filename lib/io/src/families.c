@@ -6,41 +6,13 @@
 #include <strings.h>
 
 #include "families_private.h"
+#include "formats_private.h"
 #include "varmesh/topology.h"
-
-/* One warning line naming every loss, grouped by kind ("element fields
- * 'a', 'b'; vertex fields 'c'; ..."), at most about a line's buffer of
- * names and then how many more. */
-typedef struct {
-  char buf[900];
-  size_t n;
-  int group, items, more;
-} lost_list;
-
-static void lost_add(lost_list *l, int group, const char *title, const char *name,
-                     const char *value) {
-  char item[320];
-  if (value)
-    snprintf(item, sizeof item, "'%s' ('%s')", name, value);
-  else
-    snprintf(item, sizeof item, "'%s'", name);
-  const char *sep = !l->items ? "" : group != l->group ? "; " : ", ";
-  size_t need = strlen(sep) + (group != l->group ? strlen(title) + 1 : 0) + strlen(item);
-  if (l->more || l->n + need + 1 >= sizeof l->buf - 16) {
-    l->more++;
-    return;
-  }
-  l->n += (size_t)snprintf(l->buf + l->n, sizeof l->buf - l->n, "%s%s%s%s", sep,
-                           group != l->group ? title : "", group != l->group ? " " : "", item);
-  l->group = group;
-  l->items++;
-}
 
 int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char *fmt,
                     int cell_fields) {
-  lost_list l;
-  memset(&l, 0, sizeof l);
-  l.group = -1;
+  vm_lost_list l;
+  vm_lost_init(&l);
   /* a surface mesh has no boundary faces: its tags and their names are lost */
   int surface = ex_groups_surface(m);
   for (int loc = 0; loc < 2; loc++)
@@ -53,24 +25,28 @@ int ex_groups_lossy(vm_ctx *ctx, const vm_mesh *m, const char *path, const char 
       if (cell_fields && f->location == VM_FIELD_ELEMENT && f->ncomp == 1 &&
           strncmp(f->name, "gmsh:", 5))
         continue;
-      lost_add(&l, loc, loc == 0 ? "element fields" : "vertex fields", f->name, NULL);
+      char item[320];
+      snprintf(item, sizeof item, "'%s'", f->name);
+      vm_lost_add(&l, loc, loc == 0 ? "element fields" : "vertex fields", item);
     }
   for (int i = 0; i < m->nattr; i++) {
     const char *k = m->attrs[i].key;
     if (!surface && !strncmp(k, "gmsh:physical_name:2:", 21)) continue;
-    lost_add(&l, 2, "attributes", k,
-             !strncmp(k, "gmsh:physical_name:", 19) ? m->attrs[i].value : NULL);
+    char item[320];
+    if (!strncmp(k, "gmsh:physical_name:", 19))
+      snprintf(item, sizeof item, "'%s' ('%s')", k, m->attrs[i].value);
+    else
+      snprintf(item, sizeof item, "'%s'", k);
+    vm_lost_add(&l, 2, "attributes", item);
   }
   int64_t nflag = 0;
   for (int64_t v = 0; v < m->nv; v++) nflag += m->vflag[v] != VM_VERTEX_FREE;
   if (!l.items && !l.more && !nflag) return 0;
   char flags[64] = "";
   if (nflag)
-    snprintf(flags, sizeof flags, "%svertex flags (%lld fixed or slip)", l.items ? "; " : "",
-             (long long)nflag);
-  char more[48] = "";
-  if (l.more) snprintf(more, sizeof more, " and %d more", l.more);
-  vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store %s%s%s; dropped", path, fmt, l.buf, more, flags);
+    snprintf(flags, sizeof flags, "%svertex flags (%lld fixed or slip)",
+             l.items || l.more ? "; " : "", (long long)nflag);
+  vm_log(ctx, VM_LOG_WARN, "%s: %s cannot store %s%s; dropped", path, fmt, vm_lost_text(&l), flags);
   return 1;
 }
 

@@ -63,4 +63,18 @@ void vm_io_tmp_register(char *path);
 char *vm_io_temp_name(vm_ctx *ctx, const char *path, const char *pre, const char *tag);
 void vm_io_tmp_unregister(const char *path);
 
+/* The list in a writer's one warning line of what its format cannot
+ * store: items appended as "title 'a', 'b'; title2 'c'" (a new group
+ * starts with its title, if not NULL), as many as fit, the rest counted
+ * (vm_lost_text then ends it with " and N more"). */
+typedef struct {
+  char buf[900];
+  size_t n;
+  int group, items, more;
+} vm_lost_list;
+void vm_lost_init(vm_lost_list *l);
+void vm_lost_add(vm_lost_list *l, int group, const char *title, const char *item);
+/* The list's text (its items, then " and N more" if some did not fit). */
+const char *vm_lost_text(vm_lost_list *l);
+
 #endif

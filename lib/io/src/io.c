@@ -7,6 +7,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -541,4 +542,33 @@ int vm_error_name_prefix(vm_ctx *ctx, int st, const char *name) {
     vm_error(ctx, st, "%s: %s", name, msg);
   }
   return st;
+}
+
+void vm_lost_init(vm_lost_list *l) {
+  memset(l, 0, sizeof *l);
+  l->group = -1;
+}
+
+void vm_lost_add(vm_lost_list *l, int group, const char *title, const char *item) {
+  int fresh = group != l->group && title;
+  const char *sep = !l->items ? "" : group != l->group ? "; " : ", ";
+  size_t need = strlen(sep) + (fresh ? strlen(title) + 1 : 0) + strlen(item);
+  /* room kept for " and N more" */
+  if (l->more || l->n + need + 1 >= sizeof l->buf - 32) {
+    l->more++;
+    return;
+  }
+  l->n += (size_t)snprintf(l->buf + l->n, sizeof l->buf - l->n, "%s%s%s%s", sep, fresh ? title : "",
+                           fresh ? " " : "", item);
+  l->group = group;
+  l->items++;
+}
+
+const char *vm_lost_text(vm_lost_list *l) {
+  if (l->more) {
+    snprintf(l->buf + l->n, sizeof l->buf - l->n, " and %d more", l->more);
+    l->more = 0;
+    l->n = strlen(l->buf);
+  }
+  return l->buf;
 }

@@ -147,45 +147,31 @@ int vm_vtk_field_written(const vm_field *f, int flags) {
   return strcmp(f->name, VM_VTK_FLAG_NAME) != 0 && strcmp(f->name, VM_VTK_SURF_NAME) != 0;
 }
 
-/* Appends "sep item" to b (size bs, n used), or counts it in *more when
- * b is full. */
-static void lost_append(char *b, size_t bs, size_t *n, int *more, const char *item) {
-  const char *sep = *n ? ", " : "";
-  if (*more || *n + strlen(sep) + strlen(item) + 1 >= bs) {
-    ++*more;
-    return;
-  }
-  *n += (size_t)snprintf(b + *n, bs - *n, "%s%s", sep, item);
-}
-
 int vm_vtk_report_lost(vm_ctx *ctx, const vm_mesh *m, const char *path, int flags) {
   int lost = 0;
   /* one line for the group names (their tags stay), one for the other
    * attributes, one per shadowed field */
-  char names[700] = "", other[700] = "";
-  size_t nn = 0, no = 0;
-  int mn = 0, mo = 0;
+  vm_lost_list names, other;
+  vm_lost_init(&names);
+  vm_lost_init(&other);
   for (int i = 0; i < m->nattr; i++, lost++) {
     const char *k = m->attrs[i].key, *tag = NULL;
     char item[320];
     if (!strncmp(k, "gmsh:physical_name:", 19) && (tag = strchr(k + 19, ':'))) {
       snprintf(item, sizeof item, "'%s' of tag %s (attribute '%s')", m->attrs[i].value, tag + 1, k);
-      lost_append(names, sizeof names, &nn, &mn, item);
+      vm_lost_add(&names, 0, NULL, item);
     } else {
       snprintf(item, sizeof item, "'%s'", k);
-      lost_append(other, sizeof other, &no, &mo, item);
+      vm_lost_add(&other, 0, NULL, item);
     }
   }
-  char more[2][40] = {"", ""};
-  if (mn) snprintf(more[0], sizeof more[0], " and %d more", mn);
-  if (mo) snprintf(more[1], sizeof more[1], " and %d more", mo);
-  if (nn || mn)
+  if (names.items || names.more)
     vm_log(ctx, VM_LOG_WARN,
-           "%s: VTK cannot carry the group names %s%s (the tags stay in the cell data "
+           "%s: VTK cannot carry the group names %s (the tags stay in the cell data "
            "gmsh:physical)",
-           path, names, more[0]);
-  if (no || mo)
-    vm_log(ctx, VM_LOG_WARN, "%s: VTK cannot carry the attributes %s%s", path, other, more[1]);
+           path, vm_lost_text(&names));
+  if (other.items || other.more)
+    vm_log(ctx, VM_LOG_WARN, "%s: VTK cannot carry the attributes %s", path, vm_lost_text(&other));
   for (int i = 0; i < m->nfield; i++)
     if (!vm_vtk_field_written(&m->fields[i], flags)) {
       vm_log(ctx, VM_LOG_WARN, "%s: point field '%s' is shadowed by the vertex flags", path,
