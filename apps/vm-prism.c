@@ -445,6 +445,10 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
          in, why, keep_ok ? " (--keep-wall: as it is)" : "");
   vm_surface_opts so = vm_surface_opts_default();
   so.soup = vm_cli_soup_format(in);
+  /* a model no repair can close is refused here, its message naming
+   * vm-surface --wrap: wrapping changes the shape, which the user decides
+   * (vm-surface wraps such a model by default, saying so) */
+  so.wrap = 0;
   vm_mesh_apply_fixed_field(m);
   int64_t ne = m->ne;
   vm_surface_summary s;
@@ -455,11 +459,15 @@ static int surface_stage(vm_cli *cli, const char *in, vm_mesh *m, const char *wh
     return VM_EXIT_INTERRUPTED;
   }
   if (st < 0) {
-    /* an open wall is refused either way: no advice then */
+    /* an open wall is refused either way, and so is one that is not a
+     * manifold or crosses itself (the message names vm-surface --wrap):
+     * no --keep-wall advice then */
+    int closed_only =
+        s.repair.refused == VM_REPAIR_NONMANIFOLD || s.repair.refused == VM_REPAIR_CROSSING;
     vm_cli_error(cli, "%s: the surface stage: %s%s", in, vm_ctx_error(cli->ctx),
-                 s.open    ? " (the layer needs a closed wall)"
-                 : keep_ok ? " (--keep-wall extrudes the wall as it is)"
-                           : "");
+                 s.open                    ? " (the layer needs a closed wall)"
+                 : keep_ok && !closed_only ? " (--keep-wall extrudes the wall as it is)"
+                                           : "");
     return VM_EXIT_INPUT;
   }
   if (s.adapted && s.adapt.flipped > 0)

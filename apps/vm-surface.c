@@ -130,6 +130,14 @@ static const vm_opt opts[] = {
      "slide on the surface where the line joining two triangles' centroids leans from their "
      "edge's normal, as a prism layer's side faces inherit it; default 8; 0: measured only)",
      .lo = 0, .hi = 1000},
+    {"--wrap", NULL, VM_OPT_DOUBLE, A(so.wrap), "F",
+     "first put a closed, manifold surface around the input (CGAL's alpha wrapping: no ball "
+     "of F times the bounding box's diagonal passes between it and the input; it lies F/30 of "
+     "the diagonal outside); by default only a model the repair refuses as non-manifold or "
+     "crossing itself, or left with needles, is wrapped (F 0.005), said on stderr; 0: never (such "
+     "a model is "
+     "refused)",
+     .lo = 0, .hi = 1},
     VM_CLI_OPT_THREADS,
     {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format", .fn = vm_cli_opt_format},
     {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",
@@ -301,6 +309,18 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
     printf(", \"held_back_vertices\": %lld", (long long)s->angle_restored);
     printf(", \"time\": ");
     vm_json_double(stdout, ar->elapsed);
+    printf("}");
+  }
+  if (s->wrapped) {
+    printf(", \"wrap\": {\"auto\": %s, \"faces_in\": %lld, \"faces\": %lld, \"vertices\": %lld, "
+           "\"alpha\": ",
+           s->wrap_auto ? "true" : "false", (long long)s->wrap.nf_in, (long long)s->wrap.nf,
+           (long long)s->wrap.nv);
+    vm_json_double(stdout, s->wrap.alpha);
+    printf(", \"offset\": ");
+    vm_json_double(stdout, s->wrap.offset);
+    printf(", \"time\": ");
+    vm_json_double(stdout, s->wrap.elapsed);
     printf("}");
   }
   if (s->ortho_ran) {

@@ -26,6 +26,7 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.remesh_opts = vm_remesh_opts_default();
   o.adapt = vm_adapt_opts_default();
   o.ortho = vm_ortho2d_opts_default();
+  o.wrap = -1;
   return o;
 }
 
@@ -71,11 +72,33 @@ static int border_edge(vm_ctx *ctx, const vm_mesh *m, int32_t *a, int32_t *b) {
   return found;
 }
 
+/* Is a model the repair refused for `why` wrapped instead (by default, a
+ * non-manifold one, or one crossing itself where the union and the healing
+ * were allowed and could not help: a user who turned either off asked for
+ * the refusal)? */
+static int wraps_refused(const vm_surface_opts *o, int why) {
+  return o->wrap < 0 &&
+         (why == VM_REPAIR_NONMANIFOLD ||
+          (why == VM_REPAIR_CROSSING && o->repair_opts.union_overlaps && o->repair_opts.heal_self));
+}
+
 static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s) {
   vm_repair_report *rr = &s->repair;
   int st = vm_surface_repair(m, &o->repair_opts, rr);
   if (st < 0) {
     s->open = rr->border_edges > 0;
+    /* a model the repair cannot close can still be wrapped: said where the
+     * refusal stands (an open surface; with wrap 0, --no-union or --no-heal
+     * also a non-manifold or crossing one, which are wrapped by default) */
+    int why = rr->refused;
+    if (st == VM_ERR_FORMAT && !s->wrapped && m->ne > 0 &&
+        (why == VM_REPAIR_OPEN || why == VM_REPAIR_NONMANIFOLD || why == VM_REPAIR_CROSSING) &&
+        !wraps_refused(o, why)) {
+      char msg[1024];
+      snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
+      vm_error(ctx, st, "%s (vm-surface --wrap 0.005 puts a closed surface around such a model)",
+               msg);
+    }
     return st;
   }
   s->repaired = 1;
@@ -829,6 +852,28 @@ static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *rest
   return VM_OK;
 }
 
+/* m replaced by its alpha wrap (vm_surface_wrap): alpha F times its
+ * bounding box's diagonal, offset alpha / 30; said on stderr. */
+static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
+  double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi), alpha = F * diag;
+  int nfields = m->nfield;
+  int st = vm_surface_wrap(m, alpha, alpha / 30, &s->wrap);
+  if (st < 0) return st;
+  s->wrapped = 1;
+  vm_log(ctx, VM_LOG_INFO,
+         "wrap: %lld faces wrapped in a closed surface of %lld triangles, %lld vertices (alpha "
+         "%g, %g of the diagonal: gaps narrower than about twice that closed over; the wrap "
+         "lies %g outside the input); %.2f s",
+         (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
+         alpha / 30, s->wrap.elapsed);
+  if (nfields > 0)
+    vm_log(ctx, VM_LOG_WARN,
+           "wrap: the input's %d fields are dropped (the wrap has new vertices "
+           "and faces)",
+           nfields);
+  return VM_OK;
+}
+
 /* The wall's finite-volume orthogonality relief (step all, last), its
  * vertices kept on ref (the surface before the adaptation) and its feature
  * lines; undone if the result intersects itself where the surface before
@@ -924,8 +969,7 @@ static int unblind(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s) {
   return VM_OK;
 }
 
-int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
-                   vm_surface_summary *summary) {
+static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_summary *summary) {
   vm_surface_summary local;
   vm_surface_summary *s = summary ? summary : &local;
   memset(s, 0, sizeof *s);
@@ -941,7 +985,28 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
   int do_repair = o.step == VM_SURFACE_REPAIR || o.repair == VM_SURFACE_YES ||
                   (o.repair == VM_SURFACE_AUTO &&
                    (o.soup || o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_REMESH));
-  int st = do_repair ? repair(ctx, m, &o, s) : VM_OK;
+  int st = o.wrap > 0 ? wrap(ctx, m, o.wrap, s) : VM_OK;
+  if (st >= 0 && do_repair) {
+    st = repair(ctx, m, &o, s);
+    /* by default a model no repair can make a closed, manifold surface of
+     * (an edge on three or more faces, a pinched vertex, crossings the
+     * union and the healing cannot take out) is wrapped instead, said on
+     * stderr; an open one is refused (a border can be meant: --open-ok),
+     * its message naming --wrap (m is as it came after a refusal;
+     * wraps_refused) */
+    if (st == VM_ERR_FORMAT && m->ne > 0 && wraps_refused(&o, s->repair.refused)) {
+      char msg[1024];
+      snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
+      vm_ctx_clear_error(ctx);
+      vm_log(ctx, VM_LOG_WARN,
+             "repair: %s; wrapping the model in a closed surface instead (--wrap F sets its "
+             "detail, --wrap 0 refuses such a model)",
+             msg);
+      s->wrap_auto = 1;
+      st = wrap(ctx, m, VM_SURFACE_WRAP_DEFAULT, s);
+      if (st >= 0) st = repair(ctx, m, &o, s);
+    }
+  }
   if (st < 0) return st;
   /* the repair and the remeshing (CGAL) cannot stop half-way: an interrupt
    * during them ends the run after them, with the mesh they made */
@@ -1088,5 +1153,60 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
     int b = unblind(ctx, m, s);
     if (b < 0) st = b;
   }
+  return st;
+}
+
+int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
+                   vm_surface_summary *summary) {
+  vm_surface_summary local;
+  vm_surface_summary *s = summary ? summary : &local;
+  vm_surface_opts o = opts ? *opts : vm_surface_opts_default();
+  /* by default (wrap < 0) a surface the whole stage leaves with needles
+   * (triangles under needle_angle that neither the sliver removal nor the
+   * curvature-sized remeshing took out: the union of crossing parts, a
+   * remeshing refused for its intersections) is made again from the
+   * input, wrapped; kept if that leaves fewer needles */
+  int fallback =
+      o.wrap < 0 && o.step == VM_SURFACE_ALL && o.needle_angle > 0 && m && all_triangles(m);
+  vm_mesh *orig = NULL;
+  if (fallback) {
+    int b = vm_mesh_clone(m, &orig);
+    if (b < 0) return b;
+  }
+  int st = run(ctx, m, &o, s);
+  int64_t left = st >= 0 && orig && !s->wrapped && s->needles_in > 0 && all_triangles(m)
+                     ? needles(m, o.needle_angle)
+                     : 0;
+  if (left > 0 && !vm_ctx_interrupted(ctx)) {
+    double amin = vm_surface_min_angle(m);
+    vm_log(ctx, VM_LOG_WARN,
+           "the surface keeps %lld triangles under %g deg (smallest %.3g) after the repair and "
+           "the remeshing; making it again from the input wrapped in a closed surface (--wrap 0 "
+           "keeps it as it is)",
+           (long long)left, o.needle_angle, amin);
+    vm_surface_opts o2 = o;
+    o2.wrap = VM_SURFACE_WRAP_DEFAULT;
+    vm_surface_summary s2;
+    int st2 = run(ctx, orig, &o2, &s2);
+    int64_t left2 = st2 >= 0 && all_triangles(orig) ? needles(orig, o.needle_angle) : -1;
+    if (st2 >= 0 && left2 >= 0 && left2 < left) {
+      vm_mesh tmp = *m;
+      *m = *orig;
+      *orig = tmp;
+      *s = s2;
+      s->wrap_auto = 1;
+      st = st2;
+      vm_log(ctx, VM_LOG_INFO, "wrap: kept: %lld triangles under %g deg left (smallest %.3g)",
+             (long long)left2, o.needle_angle, vm_surface_min_angle(m));
+    } else if (st2 == VM_ERR_INTERRUPTED) {
+      st = st2; /* m: the stage's result without the wrap */
+    } else {
+      if (st2 < 0) vm_ctx_clear_error(ctx);
+      vm_log(ctx, VM_LOG_WARN,
+             "wrap: not kept (%s); the surface as the stage made it without the wrap",
+             st2 < 0 ? "it failed" : "no fewer needles");
+    }
+  }
+  vm_mesh_destroy(&orig);
   return st;
 }

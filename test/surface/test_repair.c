@@ -1,7 +1,8 @@
 /* test/surface/test_repair.c: the CGAL/OpenMesh side of the surface stage:
  * repair of good and bad surfaces (open, non-manifold, zero-area faces,
  * inconsistent orientation, self-intersections, empty), the union of
- * overlapping and nested closed parts, a part crossing itself healed,
+ * overlapping and nested closed parts, a part crossing itself healed, a
+ * model no repair can close wrapped,
  * features,
  * isotropic remeshing with protected features, the projector, Hausdorff. */
 #include <math.h>
@@ -112,7 +113,8 @@ static void test_refusals(vm_ctx *ctx) {
   m->ne--;
   int64_t nv = m->nv, ne = m->ne;
   double x0 = m->xyz[0];
-  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT, "open surface refused");
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_OPEN,
+        "open surface refused (refused %d)", r.refused);
   CHECK(strstr(vm_ctx_error(ctx), "open surface") && strstr(vm_ctx_error(ctx), "3 border edges"),
         "message: %s", vm_ctx_error(ctx));
   CHECK(m->nv == nv && m->ne == ne && m->xyz[0] == x0, "refused mesh unchanged");
@@ -130,7 +132,8 @@ static void test_refusals(vm_ctx *ctx) {
   vm_mesh_add_vertex(m, 0.5, -1, 0.5, &fin);
   int32_t t[3] = {m->conn[0], m->conn[1], (int32_t)fin};
   vm_mesh_add_element(m, VM_TRI, t);
-  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT, "non-manifold edge refused");
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_NONMANIFOLD,
+        "non-manifold edge refused (refused %d)", r.refused);
   CHECK(strstr(vm_ctx_error(ctx), "non-manifold") != NULL, "message: %s", vm_ctx_error(ctx));
   vm_mesh_destroy(&m);
 
@@ -148,7 +151,8 @@ static void test_refusals(vm_ctx *ctx) {
     for (int k = 0; k < 3; k++) tt[k] = (int32_t)(b->conn[3 * e + k] + base);
     vm_mesh_add_element(a, VM_TRI, tt);
   }
-  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "non-manifold vertex refused");
+  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_NONMANIFOLD,
+        "non-manifold vertex refused (refused %d)", r.refused);
   CHECK(strstr(vm_ctx_error(ctx), "(1, 1, 1)") != NULL, "names the vertex: %s", vm_ctx_error(ctx));
   vm_mesh_destroy(&a);
   vm_mesh_destroy(&b);
@@ -177,7 +181,8 @@ static void test_refusals(vm_ctx *ctx) {
   CHECK(sorted && pairs[0] < pairs[1], "pairs sorted");
   vm_free(ctx, pairs);
   o.union_overlaps = 0;
-  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT, "self-intersecting refused without union");
+  CHECK(vm_surface_repair(a, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_CROSSING,
+        "self-intersecting refused without union (refused %d)", r.refused);
   CHECK(strstr(vm_ctx_error(ctx), "self-intersecting") != NULL, "message: %s", vm_ctx_error(ctx));
   o.require_closed = 0;
   CHECK(vm_surface_repair(a, &o, &r) == 0 && r.self_intersections == count && r.components == 2,
@@ -196,7 +201,8 @@ static void test_refusals(vm_ctx *ctx) {
 
   /* empty, volume elements, all degenerate */
   vm_mesh_create(ctx, &m);
-  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT, "empty surface refused");
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_EMPTY,
+        "empty surface refused (refused %d)", r.refused);
   for (int i = 0; i < 4; i++) vm_mesh_add_vertex(m, i == 1, i == 2, i == 3, NULL);
   int32_t tet[4] = {0, 1, 2, 3};
   vm_mesh_add_element(m, VM_TET, tet);
@@ -206,7 +212,8 @@ static void test_refusals(vm_ctx *ctx) {
   for (int i = 0; i < 3; i++) vm_mesh_add_vertex(m, i, 0, 0, NULL);
   int32_t t0[3] = {0, 1, 1};
   vm_mesh_add_element(m, VM_TRI, t0);
-  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT, "all-degenerate refused");
+  CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && r.refused == VM_REPAIR_EMPTY,
+        "all-degenerate refused (refused %d)", r.refused);
   vm_mesh_destroy(&m);
 }
 
@@ -575,8 +582,9 @@ static void test_heal(vm_ctx *ctx) {
   o.heal_self = 0;
   double x0 = x[0];
   CHECK(vm_surface_repair(m, &o, &r) == VM_ERR_FORMAT && m->nv == nv0 && m->xyz[3 * top] == x0 &&
-            strstr(vm_ctx_error(ctx), "self-intersecting surface"),
-        "the fold refused with heal_self 0: %s", vm_ctx_error(ctx));
+            strstr(vm_ctx_error(ctx), "self-intersecting surface") &&
+            r.refused == VM_REPAIR_CROSSING,
+        "the fold refused with heal_self 0: %s (refused %d)", vm_ctx_error(ctx), r.refused);
   o.heal_self = 1;
 
   CHECK(vm_surface_repair(m, &o, &r) == 0 && r.healed == 1 && r.heal_pairs == pairs &&
@@ -610,6 +618,107 @@ static void test_heal(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The distance from p to the triangle (a, b, c) (closest point by regions). */
+static double point_tri(const double p[3], const double a[3], const double b[3],
+                        const double c[3]) {
+  double ab[3], ac[3], ap[3], q[3];
+  for (int k = 0; k < 3; k++) ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
+#define DOT(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
+  double d1 = DOT(ab, ap), d2 = DOT(ac, ap);
+  if (d1 <= 0 && d2 <= 0) {
+    memcpy(q, a, sizeof q);
+  } else {
+    double bp[3], cp[3];
+    for (int k = 0; k < 3; k++) bp[k] = p[k] - b[k], cp[k] = p[k] - c[k];
+    double d3 = DOT(ab, bp), d4 = DOT(ac, bp), d5 = DOT(ab, cp), d6 = DOT(ac, cp);
+    double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+    if (d3 >= 0 && d4 <= d3) {
+      memcpy(q, b, sizeof q);
+    } else if (d6 >= 0 && d5 <= d6) {
+      memcpy(q, c, sizeof q);
+    } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+      double v = d1 / (d1 - d3);
+      for (int k = 0; k < 3; k++) q[k] = a[k] + v * ab[k];
+    } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+      double w = d2 / (d2 - d6);
+      for (int k = 0; k < 3; k++) q[k] = a[k] + w * ac[k];
+    } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+      double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+      for (int k = 0; k < 3; k++) q[k] = b[k] + w * (c[k] - b[k]);
+    } else {
+      double den = 1 / (va + vb + vc), v = vb * den, w = vc * den;
+      for (int k = 0; k < 3; k++) q[k] = a[k] + v * ab[k] + w * ac[k];
+    }
+  }
+#undef DOT
+  return sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+              (p[2] - q[2]) * (p[2] - q[2]));
+}
+
+/* A model no repair can close: a unit cube and a box touching it along an
+ * edge (an edge of four faces), and a third box 3 away with a triangle
+ * missing (a hole). Refused by the repair; wrapped (alpha 0.5, offset
+ * 0.01) it is closed, manifold and consistently oriented, in two parts
+ * (the ball of radius alpha neither bridges the gap nor enters the hole,
+ * whose inscribed circle's radius is 0.29), free of intersections, every
+ * vertex of the wrap at the offset from the input, and its volume the
+ * input's 3, grown by the offset and the two concave corners the ball
+ * cannot reach (at most 2 x 0.5^2 (1 - pi / 4) each). */
+static void test_wrap(vm_ctx *ctx) {
+  vm_mesh *m = NULL;
+  const double c0[3] = {0, 0, 0}, c1[3] = {1, 1, 1}, e0[3] = {1, 1, 0}, e1[3] = {2, 2, 1},
+               h0[3] = {5, 0, 0}, h1[3] = {6, 1, 1};
+  vm_mesh_create(ctx, &m);
+  add_box(m, c0, c1);
+  add_box(m, e0, e1);
+  add_box(m, h0, h1);
+  vm_mesh *in = NULL;
+  vm_mesh_clone(m, &in);
+  in->ne--; /* (the input as given, for the distances) */
+  m->ne--;  /* the hole: the third box's last triangle dropped */
+  vm_repair_report r;
+  vm_repair_opts o = vm_repair_opts_default();
+  vm_mesh *tmp = NULL;
+  vm_mesh_clone(m, &tmp);
+  CHECK(vm_surface_repair(tmp, &o, &r) == VM_ERR_FORMAT, "the soup is refused by the repair (%s)",
+        vm_ctx_error(ctx));
+  vm_mesh_destroy(&tmp);
+  vm_wrap_report w;
+  double alpha = 0.5, offset = 0.01;
+  int st = vm_surface_wrap(m, alpha, offset, &w);
+  CHECK(st == VM_OK && w.nf_in == 35 && w.nf == m->ne && w.nv == m->nv && m->ne > 35,
+        "wrapped: %d, %lld faces in, %lld triangles out (%s)", st, (long long)w.nf_in,
+        (long long)m->ne, vm_ctx_error(ctx));
+  double far = 0, near = INFINITY;
+  for (int64_t v = 0; v < m->nv; v++) {
+    double d = INFINITY;
+    for (int64_t e = 0; e < in->ne; e++) {
+      const int32_t *c = in->conn + in->eoff[e];
+      double t = point_tri(m->xyz + 3 * v, in->xyz + 3 * (int64_t)c[0], in->xyz + 3 * (int64_t)c[1],
+                           in->xyz + 3 * (int64_t)c[2]);
+      d = t < d ? t : d;
+    }
+    far = d > far ? d : far;
+    near = d < near ? d : near;
+  }
+  CHECK(far <= offset * 1.01 && near >= 0.99 * offset,
+        "every vertex of the wrap %.4g to %.4g from the input (offset %g)", near, far, offset);
+  st = vm_surface_repair(m, &o, &r);
+  CHECK(st == VM_OK && r.border_edges == 0 && r.components == 2 && r.self_intersections == 0 &&
+            r.merged_vertices == 0 && r.removed_degenerate == 0 && r.united == 0,
+        "the wrap is closed, manifold, in 2 parts, free of intersections (%d: %lld border edges, "
+        "%lld parts, %lld pairs; %s)",
+        st, (long long)r.border_edges, (long long)r.components, (long long)r.self_intersections,
+        vm_ctx_error(ctx));
+  CHECK(r.volume > 3 && r.volume < 3 + 18 * offset * 1.2 + 4 * 0.25 * (1 - 3.14159265358979 / 4),
+        "the wrap's volume %.6g (3 inside)", r.volume);
+  CHECK(vm_surface_wrap(m, 0, offset, NULL) == VM_ERR_ARG &&
+            vm_surface_wrap(m, alpha, NAN, NULL) == VM_ERR_ARG,
+        "alpha and offset must be positive and finite");
+  vm_mesh_destroy(&in);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
@@ -618,6 +727,7 @@ int main(void) {
   test_refusals(ctx);
   test_union(ctx);
   test_heal(ctx);
+  test_wrap(ctx);
   test_zero_area(ctx);
   test_features(ctx);
   test_remesh(ctx);

@@ -1,6 +1,7 @@
 // lib/geom/src/repair_cgal.cpp: CGAL adapter: repair of an imported surface
-// (Polygon_mesh_processing), self-intersection detection, isotropic
-// remeshing with protected features.
+// (Polygon_mesh_processing), a closed wrap around one no repair can close
+// (3D alpha wrapping), self-intersection detection, isotropic remeshing
+// with protected features.
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -24,8 +25,10 @@
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/alpha_wrap_3.h>
 
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <cstdint>
 #include <set>
@@ -274,6 +277,42 @@ int replace_mesh(vm_mesh *m, const SMesh &sm, bool map) {
 fail:
   vm_mesh_destroy(&n);
   return st;
+}
+
+// sm with its vertices in the order of their coordinates and its faces in
+// the order of their vertices (each starting at its least, its orientation
+// kept): CGAL's corefinement and hole filling return the faces in an order
+// that follows the heap's layout (the same input gave different files in
+// different environments), and this order is the input's alone.
+void canonical_order(SMesh &sm) {
+  std::vector<vertex_descriptor> vs(sm.vertices().begin(), sm.vertices().end());
+  std::sort(vs.begin(), vs.end(), [&](vertex_descriptor a, vertex_descriptor b) {
+    const Point &p = sm.point(a), &q = sm.point(b);
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  });
+  std::vector<std::size_t> rank(sm.number_of_vertices() + sm.number_of_removed_vertices());
+  std::vector<Point> pts;
+  pts.reserve(vs.size());
+  for (std::size_t i = 0; i < vs.size(); i++) {
+    rank[vs[i].idx()] = i;
+    pts.push_back(sm.point(vs[i]));
+  }
+  std::vector<Polygon> polys;
+  polys.reserve(sm.number_of_faces());
+  for (face_descriptor f : sm.faces()) {
+    Polygon p;
+    for (vertex_descriptor v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      p.push_back(rank[v.idx()]);
+    std::rotate(p.begin(), std::min_element(p.begin(), p.end()), p.end());
+    polys.push_back(std::move(p));
+  }
+  std::sort(polys.begin(), polys.end());
+  SMesh out;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, out);
+  sm = std::move(out);
 }
 
 // A triangle mesh from m (triangles only); false if a face cannot be added.
@@ -653,6 +692,11 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   std::memset(&r, 0, sizeof r);
   r.self_intersections = -1;
   if (rep) *rep = r;
+  /* a refusal's reason, in the report the caller gets */
+  auto refuse = [&](int why) {
+    r.refused = why;
+    if (rep) *rep = r;
+  };
   VM_CXX_BEGIN
   std::vector<Point> pts;
   std::vector<Polygon> polys;
@@ -660,7 +704,10 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     return vm_error(ctx, VM_ERR_ARG, "repair: the mesh has volume elements");
   r.nv_in = m->nv;
   r.nf_in = static_cast<int64_t>(polys.size());
-  if (polys.empty()) return vm_error(ctx, VM_ERR_FORMAT, "repair: the surface has no faces");
+  if (polys.empty()) {
+    refuse(VM_REPAIR_EMPTY);
+    return vm_error(ctx, VM_ERR_FORMAT, "repair: the surface has no faces");
+  }
 
   r.merged_vertices = static_cast<int64_t>(PMP::merge_duplicate_points_in_polygon_soup(pts, polys));
   r.removed_polygons = static_cast<int64_t>(remove_invalid(polys));
@@ -669,7 +716,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   r.removed_isolated =
       static_cast<int64_t>(PMP::remove_isolated_points_in_polygon_soup(pts, polys));
   if (polys.empty())
-    return vm_error(ctx, VM_ERR_FORMAT, "repair: no valid face left (all %lld were degenerate)",
+    return refuse(VM_REPAIR_EMPTY),
+           vm_error(ctx, VM_ERR_FORMAT, "repair: no valid face left (all %lld were degenerate)",
                     static_cast<long long>(r.nf_in));
 
   const std::size_t npts = pts.size();
@@ -678,6 +726,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   r.reoriented = static_cast<int64_t>(vis.reversed);
   if (vis.nm_edges) {
     const Point &a = pts[vis.edge_a], &b = pts[vis.edge_b];
+    refuse(VM_REPAIR_NONMANIFOLD);
     return vm_error(ctx, VM_ERR_FORMAT,
                     "non-manifold surface: %zu edges are shared by more than two faces; the "
                     "first, (%g, %g, %g)-(%g, %g, %g), by %zu",
@@ -685,6 +734,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   }
   if (vis.nm_vertices || !ok || pts.size() != npts) {
     const Point &p = pts[std::min(vis.vertex, npts - 1)];
+    refuse(VM_REPAIR_NONMANIFOLD);
     return vm_error(ctx, VM_ERR_FORMAT,
                     "the surface cannot be made manifold and consistently oriented without "
                     "cutting it at %zu vertices (non-manifold vertex, or a non-orientable "
@@ -700,6 +750,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     face_descriptor big = overflowing_face(sm);
     if (big != SMesh::null_face()) {
       Point c = face_centroid(sm, big);
+      refuse(VM_REPAIR_RANGE);
       return vm_error(ctx, VM_ERR_FORMAT,
                       "repair: the area of the face near (%g, %g, %g) overflows double "
                       "precision (coordinates too large); scale the surface down",
@@ -717,7 +768,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   auto fcc = sm.add_property_map<face_descriptor, std::size_t>("f:vm_cc").first;
   r.components = static_cast<int64_t>(PMP::connected_components(sm, fcc));
   if (r.border_edges > 0 && o.require_closed) {
-    if (rep) *rep = r; // the caller can tell an open surface from other errors
+    refuse(VM_REPAIR_OPEN); // the caller can tell an open surface from other errors
     halfedge_descriptor h = cycles.front();
     const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h));
     return vm_error(ctx, VM_ERR_FORMAT,
@@ -749,8 +800,10 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
       int64_t healed = 0, hpairs = 0;
       double moved = 0;
       if ((st = heal_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),
-                                &healed, &hpairs, &moved)))
+                                &healed, &hpairs, &moved))) {
+        if (st == VM_ERR_FORMAT) refuse(VM_REPAIR_CROSSING);
         return st;
+      }
       if (healed) {
         r.healed = healed;
         r.heal_pairs = hpairs;
@@ -767,8 +820,10 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     if (o.union_overlaps && r.border_edges == 0 && r.components > 1) {
       int64_t united = 0, cavities = 0;
       if ((st = unite_components(ctx, sm, pairs, fcc, static_cast<std::size_t>(r.components),
-                                 &united, &cavities)))
+                                 &united, &cavities))) {
+        if (st == VM_ERR_FORMAT) refuse(VM_REPAIR_CROSSING);
         return st;
+      }
       if (united) {
         r.united = united;
         r.union_pairs = static_cast<int64_t>(pairs.size());
@@ -784,7 +839,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
                static_cast<long long>(cavities), left);
         r.components = static_cast<int64_t>(left);
         if (r.border_edges > 0)
-          return vm_error(ctx, VM_ERR_FORMAT,
+          return refuse(VM_REPAIR_CROSSING),
+                 vm_error(ctx, VM_ERR_FORMAT,
                           "repair: the union of the overlapping components is open (%lld border "
                           "edges)",
                           static_cast<long long>(r.border_edges));
@@ -794,7 +850,8 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
       std::sort(pairs.begin(), pairs.end());
       Point c = face_centroid(sm, pairs.front().first);
       if (o.require_closed)
-        return vm_error(ctx, VM_ERR_FORMAT,
+        return refuse(VM_REPAIR_CROSSING),
+               vm_error(ctx, VM_ERR_FORMAT,
                         "self-intersecting surface: %zu pairs of faces intersect; e.g. near "
                         "(%g, %g, %g)",
                         pairs.size(), c.x(), c.y(), c.z());
@@ -817,6 +874,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
     r.volume = PMP::volume(sm);
   }
   sm.remove_property_map(fcc);
+  if (r.united || r.healed) canonical_order(sm);
 
   r.nv = static_cast<int64_t>(sm.number_of_vertices());
   r.nf = static_cast<int64_t>(sm.number_of_faces());
@@ -825,6 +883,44 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   if (rep) *rep = r;
   return VM_OK;
   VM_CXX_END(ctx, "repair")
+}
+
+extern "C" int vm_surface_wrap(vm_mesh *m, double alpha, double offset, vm_wrap_report *rep) {
+  if (!m) return VM_ERR_ARG;
+  vm_ctx *ctx = m->ctx;
+  vm_wrap_report r;
+  std::memset(&r, 0, sizeof r);
+  r.alpha = alpha;
+  r.offset = offset;
+  if (rep) *rep = r;
+  if (!(alpha > 0) || !(offset > 0) || !std::isfinite(alpha) || !std::isfinite(offset))
+    return vm_error(ctx, VM_ERR_ARG, "wrap: alpha %g and offset %g must be positive", alpha,
+                    offset);
+  VM_CXX_BEGIN
+  auto t0 = std::chrono::steady_clock::now();
+  std::vector<Point> pts;
+  std::vector<Polygon> polys;
+  if (!to_soup(m, pts, polys))
+    return vm_error(ctx, VM_ERR_ARG, "wrap: the mesh has volume elements");
+  r.nv_in = m->nv;
+  r.nf_in = static_cast<int64_t>(polys.size());
+  std::vector<std::array<std::size_t, 3>> tris;
+  tris.reserve(polys.size());
+  for (const Polygon &p : polys)
+    for (std::size_t k = 1; k + 1 < p.size(); k++) tris.push_back({p[0], p[k], p[k + 1]});
+  if (tris.empty()) return vm_error(ctx, VM_ERR_ARG, "wrap: the surface has no faces");
+  SMesh wrap;
+  CGAL::alpha_wrap_3(pts, tris, alpha, offset, wrap);
+  if (wrap.number_of_faces() == 0)
+    return vm_error(ctx, VM_ERR_BACKEND, "wrap: alpha wrapping gave no surface");
+  int st = replace_mesh(m, wrap, false);
+  if (st) return st;
+  r.nv = m->nv;
+  r.nf = m->ne;
+  r.elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (rep) *rep = r;
+  return VM_OK;
+  VM_CXX_END(ctx, "wrap")
 }
 
 extern "C" int vm_surface_self_intersections(const vm_mesh *m, int64_t *count, int32_t **pairs) {

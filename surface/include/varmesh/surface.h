@@ -73,7 +73,18 @@ typedef struct vm_surface_opts {
   vm_ortho2d_opts ortho;      /* step all, last: the wall's finite-volume
                                  orthogonality relief (varmesh/ortho2d.h; its feature
                                  angles are adapt's; sweeps 0: measured only) */
+  double wrap;                /* > 0: before anything else the input is replaced by a
+                                 closed, manifold wrap around it (vm_surface_wrap,
+                                 varmesh/repair.h), alpha = wrap times the bounding
+                                 box's diagonal, offset alpha / 30; < 0 (default):
+                                 only a model the repair refuses as non-manifold or
+                                 crossing itself is wrapped, at
+                                 VM_SURFACE_WRAP_DEFAULT; 0: never */
 } vm_surface_opts;
+
+/* The wrap's alpha over the bounding box's diagonal where the stage wraps
+ * a model on its own (opts wrap < 0). */
+#define VM_SURFACE_WRAP_DEFAULT 0.005
 
 vm_surface_opts vm_surface_opts_default(void);
 
@@ -105,6 +116,9 @@ typedef struct vm_surface_summary {
   int adapted;
   int ortho_ran;           /* the orthogonality relief ran (step all) */
   vm_ortho2d_result ortho; /* its figures */
+  int wrapped;             /* the input was wrapped (opts wrap) */
+  int wrap_auto;           /* ... because the repair refused it (opts wrap < 0) */
+  vm_wrap_report wrap;     /* its figures */
   int ortho_undone;        /* 1: its result intersected itself and was undone (the
                               figures after are then those before, nothing moved) */
   vm_adapt_result adapt;

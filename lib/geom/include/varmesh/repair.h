@@ -60,7 +60,19 @@ typedef struct vm_repair_report {
   double heal_moved;          /* the largest distance between a healed
                                  component and its input */
   double volume;              /* enclosed volume (closed surfaces; else 0) */
+  int refused;                /* on a refusal, why (VM_REPAIR_*), else 0 */
 } vm_repair_report;
+
+/* Why vm_surface_repair refused a surface (vm_repair_report.refused). */
+enum {
+  VM_REPAIR_EMPTY = 1,       /* no face, or none left */
+  VM_REPAIR_OPEN = 2,        /* border edges left (require_closed) */
+  VM_REPAIR_NONMANIFOLD = 3, /* an edge on three or more faces, a pinched vertex, or a
+                                surface that cannot be oriented consistently */
+  VM_REPAIR_CROSSING = 4,    /* faces that intersect and that neither the union nor
+                                the healing took out */
+  VM_REPAIR_RANGE = 5        /* coordinates too large for double precision */
+};
 
 /* Repair the surface m in place (its 2D elements; volume elements are an
  * error): merge duplicate points, drop faces with a repeated vertex and
@@ -84,8 +96,30 @@ typedef struct vm_repair_report {
  *    checked and o->require_closed; nothing left after repair;
  *  - VM_ERR_ARG, VM_ERR_NOMEM, VM_ERR_BACKEND.
  * rep may be NULL (zeros on refusal, except an open surface's
- * border_edges and holes); o NULL means defaults. */
+ * border_edges and holes, and `refused`, which says why); o NULL means
+ * defaults. */
 int vm_surface_repair(vm_mesh *m, const vm_repair_opts *o, vm_repair_report *rep);
+
+/* What vm_surface_wrap made. */
+typedef struct vm_wrap_report {
+  int64_t nv_in, nf_in; /* the input's vertices and faces */
+  int64_t nv, nf;       /* the wrap's (triangles) */
+  double alpha, offset; /* as given */
+  double elapsed;       /* seconds */
+} vm_wrap_report;
+
+/* Replace the surface m (its 2D elements, read as a triangle soup:
+ * polygons split into fans; volume elements are an error) by a closed,
+ * 2-manifold, consistently oriented triangle surface that contains it and
+ * does not intersect itself (CGAL's 3D alpha wrapping): no ball of radius
+ * alpha passes between the wrap and the input, and the wrap lies about
+ * `offset` away from the input everywhere. For a model no repair can
+ * close: holes, edges on three or more faces, parts that touch or cross,
+ * faces inside. Attributes are kept; fields, flags and slip surfaces are
+ * dropped (the caller says so). rep may be NULL. Returns VM_OK, VM_ERR_ARG
+ * (volume elements, no face, alpha or offset not positive and finite),
+ * VM_ERR_NOMEM, VM_ERR_BACKEND. */
+int vm_surface_wrap(vm_mesh *m, double alpha, double offset, vm_wrap_report *rep);
 
 /* Pairs of intersecting triangles of a triangle mesh m (faces sharing a
  * vertex or an edge intersect only if they overlap beyond that). Writes
