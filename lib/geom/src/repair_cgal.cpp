@@ -28,8 +28,8 @@
 #include <CGAL/alpha_wrap_3.h>
 
 #include <algorithm>
-#include <chrono>
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <set>
 #include <cmath>
@@ -692,7 +692,7 @@ extern "C" int vm_surface_repair(vm_mesh *m, const vm_repair_opts *opts, vm_repa
   std::memset(&r, 0, sizeof r);
   r.self_intersections = -1;
   if (rep) *rep = r;
-  /* a refusal's reason, in the report the caller gets */
+  // a refusal's reason, in the report the caller gets
   auto refuse = [&](int why) {
     r.refused = why;
     if (rep) *rep = r;
