@@ -857,6 +857,8 @@ static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *rest
 static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
   double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi), alpha = F * diag;
   int nfields = m->nfield;
+  int64_t flagged = 0;
+  for (int64_t v = 0; m->vflag && v < m->nv; v++) flagged += m->vflag[v] != VM_VERTEX_FREE;
   int st = vm_surface_wrap(m, alpha, alpha / 30, &s->wrap);
   if (st < 0) return st;
   s->wrapped = 1;
@@ -866,11 +868,11 @@ static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
          "lies %g outside the input); %.2f s",
          (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
          alpha / 30, s->wrap.elapsed);
-  if (nfields > 0)
+  if (nfields > 0 || flagged > 0)
     vm_log(ctx, VM_LOG_WARN,
-           "wrap: the input's %d fields are dropped (the wrap has new vertices "
-           "and faces)",
-           nfields);
+           "wrap: the input's %d fields and the flags of its %lld fixed or slip vertices are "
+           "dropped (the wrap has new vertices and faces)",
+           nfields, (long long)flagged);
   return VM_OK;
 }
 

@@ -21,6 +21,16 @@ int main(int argc, char **argv) {
     return 1;
   }
   const char *k = argv[1];
+  static const char *const known[] = {"lens",    "sphere", "cube",   "open",    "fin",
+                                      "flipped", "inward", "needle", "spindle", "assembly"};
+  int found = 0;
+  for (size_t i = 0; i < sizeof known / sizeof *known; i++) found |= !strcmp(k, known[i]);
+  if (!found) {
+    fprintf(stderr, "gen_shape: unknown shape '%s'\n", k);
+    vm_mesh_destroy(&m);
+    vm_ctx_destroy(&ctx);
+    return 2;
+  }
   int st = 0;
   if (!strcmp(k, "lens")) {
     st = vm_gen_lens(m, 1.0, 0.5, 0.1);
