@@ -72,6 +72,30 @@ static int border_edge(vm_ctx *ctx, const vm_mesh *m, int32_t *a, int32_t *b) {
   return found;
 }
 
+/* m replaced by its alpha wrap (vm_surface_wrap): alpha F times its
+ * bounding box's diagonal, offset alpha / 30; said on stderr. */
+static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
+  double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi), alpha = F * diag;
+  int nfields = m->nfield;
+  int64_t flagged = 0;
+  for (int64_t v = 0; m->vflag && v < m->nv; v++) flagged += m->vflag[v] != VM_VERTEX_FREE;
+  int st = vm_surface_wrap(m, alpha, alpha / 30, &s->wrap);
+  if (st < 0) return st;
+  s->wrapped = 1;
+  vm_log(ctx, VM_LOG_INFO,
+         "wrap: %lld faces wrapped in a closed surface of %lld triangles, %lld vertices (alpha "
+         "%g, %g of the diagonal: gaps narrower than about twice that closed over; the wrap "
+         "lies %g outside the input); %.2f s",
+         (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
+         alpha / 30, s->wrap.elapsed);
+  if (nfields > 0 || flagged > 0)
+    vm_log(ctx, VM_LOG_WARN,
+           "wrap: the input's %d fields and the flags of its %lld fixed or slip vertices are "
+           "dropped (the wrap has new vertices and faces)",
+           nfields, (long long)flagged);
+  return VM_OK;
+}
+
 /* Is a model the repair refused for `why` wrapped instead (by default, a
  * non-manifold one, or one crossing itself where the union and the healing
  * were allowed and could not help: a user who turned either off asked for
@@ -82,23 +106,34 @@ static int wraps_refused(const vm_surface_opts *o, int why) {
           (why == VM_REPAIR_CROSSING && o->repair_opts.union_overlaps && o->repair_opts.heal_self));
 }
 
+/* The repair; a model it refuses as not closable (open, non-manifold,
+ * crossing itself) and not wrapped yet is wrapped instead where
+ * wraps_refused says so (said on stderr; m is as it came after a
+ * refusal) and repaired again, else the refusal's message names --wrap. */
 static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_summary *s) {
   vm_repair_report *rr = &s->repair;
   int st = vm_surface_repair(m, &o->repair_opts, rr);
-  if (st < 0) {
-    s->open = rr->border_edges > 0;
-    /* a model the repair cannot close can still be wrapped: said where the
-     * refusal stands (an open surface; with wrap 0, --no-union or --no-heal
-     * also a non-manifold or crossing one, which are wrapped by default) */
-    int why = rr->refused;
-    if (st == VM_ERR_FORMAT && !s->wrapped && m->ne > 0 &&
-        (why == VM_REPAIR_OPEN || why == VM_REPAIR_NONMANIFOLD || why == VM_REPAIR_CROSSING) &&
-        !wraps_refused(o, why)) {
-      char msg[1024];
-      snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
+  int why = rr->refused;
+  if (st == VM_ERR_FORMAT && !s->wrapped && m->ne > 0 &&
+      (why == VM_REPAIR_OPEN || why == VM_REPAIR_NONMANIFOLD || why == VM_REPAIR_CROSSING)) {
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
+    if (!wraps_refused(o, why)) {
       vm_error(ctx, st, "%s (vm-surface --wrap 0.005 puts a closed surface around such a model)",
                msg);
+    } else {
+      vm_ctx_clear_error(ctx);
+      vm_log(ctx, VM_LOG_WARN,
+             "repair: %s; wrapping the model in a closed surface instead (--wrap F sets its "
+             "detail, --wrap 0 refuses such a model)",
+             msg);
+      s->wrap_auto = 1;
+      st = wrap(ctx, m, VM_SURFACE_WRAP_DEFAULT, s);
+      if (st >= 0) st = vm_surface_repair(m, &o->repair_opts, rr);
     }
+  }
+  if (st < 0) {
+    s->open = rr->border_edges > 0;
     return st;
   }
   s->repaired = 1;
@@ -852,30 +887,6 @@ static int keep_angles(vm_mesh *m, const double *x0, double floor, int64_t *rest
   return VM_OK;
 }
 
-/* m replaced by its alpha wrap (vm_surface_wrap): alpha F times its
- * bounding box's diagonal, offset alpha / 30; said on stderr. */
-static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
-  double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi), alpha = F * diag;
-  int nfields = m->nfield;
-  int64_t flagged = 0;
-  for (int64_t v = 0; m->vflag && v < m->nv; v++) flagged += m->vflag[v] != VM_VERTEX_FREE;
-  int st = vm_surface_wrap(m, alpha, alpha / 30, &s->wrap);
-  if (st < 0) return st;
-  s->wrapped = 1;
-  vm_log(ctx, VM_LOG_INFO,
-         "wrap: %lld faces wrapped in a closed surface of %lld triangles, %lld vertices (alpha "
-         "%g, %g of the diagonal: gaps narrower than about twice that closed over; the wrap "
-         "lies %g outside the input); %.2f s",
-         (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
-         alpha / 30, s->wrap.elapsed);
-  if (nfields > 0 || flagged > 0)
-    vm_log(ctx, VM_LOG_WARN,
-           "wrap: the input's %d fields and the flags of its %lld fixed or slip vertices are "
-           "dropped (the wrap has new vertices and faces)",
-           nfields, (long long)flagged);
-  return VM_OK;
-}
-
 /* The wall's finite-volume orthogonality relief (step all, last), its
  * vertices kept on ref (the surface before the adaptation) and its feature
  * lines; undone if the result intersects itself where the surface before
@@ -988,27 +999,7 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
                   (o.repair == VM_SURFACE_AUTO &&
                    (o.soup || o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_REMESH));
   int st = o.wrap > 0 ? wrap(ctx, m, o.wrap, s) : VM_OK;
-  if (st >= 0 && do_repair) {
-    st = repair(ctx, m, &o, s);
-    /* by default a model no repair can make a closed, manifold surface of
-     * (an edge on three or more faces, a pinched vertex, crossings the
-     * union and the healing cannot take out) is wrapped instead, said on
-     * stderr; an open one is refused (a border can be meant: --open-ok),
-     * its message naming --wrap (m is as it came after a refusal;
-     * wraps_refused) */
-    if (st == VM_ERR_FORMAT && m->ne > 0 && wraps_refused(&o, s->repair.refused)) {
-      char msg[1024];
-      snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
-      vm_ctx_clear_error(ctx);
-      vm_log(ctx, VM_LOG_WARN,
-             "repair: %s; wrapping the model in a closed surface instead (--wrap F sets its "
-             "detail, --wrap 0 refuses such a model)",
-             msg);
-      s->wrap_auto = 1;
-      st = wrap(ctx, m, VM_SURFACE_WRAP_DEFAULT, s);
-      if (st >= 0) st = repair(ctx, m, &o, s);
-    }
-  }
+  if (st >= 0 && do_repair) st = repair(ctx, m, &o, s);
   if (st < 0) return st;
   /* the repair and the remeshing (CGAL) cannot stop half-way: an interrupt
    * during them ends the run after them, with the mesh they made */

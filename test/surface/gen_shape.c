@@ -21,16 +21,6 @@ int main(int argc, char **argv) {
     return 1;
   }
   const char *k = argv[1];
-  static const char *const known[] = {"lens",    "sphere", "cube",   "open",    "fin",
-                                      "flipped", "inward", "needle", "spindle", "assembly"};
-  int found = 0;
-  for (size_t i = 0; i < sizeof known / sizeof *known; i++) found |= !strcmp(k, known[i]);
-  if (!found) {
-    fprintf(stderr, "gen_shape: unknown shape '%s'\n", k);
-    vm_mesh_destroy(&m);
-    vm_ctx_destroy(&ctx);
-    return 2;
-  }
   int st = 0;
   if (!strcmp(k, "lens")) {
     st = vm_gen_lens(m, 1.0, 0.5, 0.1);
@@ -65,7 +55,8 @@ int main(int argc, char **argv) {
       int32_t t[3] = {m->conn[0], m->conn[1], (int32_t)v};
       st = vm_mesh_add_element(m, VM_TRI, t);
     }
-  } else {
+  } else if (!strcmp(k, "sphere") || !strcmp(k, "open") || !strcmp(k, "inward") ||
+             !strcmp(k, "flipped") || !strcmp(k, "needle")) {
     st = vm_gen_icosphere(m, NULL, 1.0, 3, 0, NULL);
     if (!st && !strcmp(k, "open")) m->ne -= 2;
     if (!st && !strcmp(k, "inward")) /* every triangle reversed */
@@ -91,6 +82,11 @@ int main(int argc, char **argv) {
       st = vm_mesh_add_element(m, VM_TRI, t2);
       if (!st) st = vm_mesh_add_element(m, VM_TRI, deg);
     }
+  } else {
+    fprintf(stderr, "gen_shape: unknown shape '%s'\n", k);
+    vm_mesh_destroy(&m);
+    vm_ctx_destroy(&ctx);
+    return 2;
   }
   if (!st) st = vm_mesh_write(ctx, m, argv[2], VM_FMT_AUTO, NULL);
   if (st < 0) fprintf(stderr, "gen_shape: %s\n", vm_ctx_error(ctx));

@@ -618,43 +618,6 @@ static void test_heal(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
-/* The distance from p to the triangle (a, b, c) (closest point by regions). */
-static double point_tri(const double p[3], const double a[3], const double b[3],
-                        const double c[3]) {
-  double ab[3], ac[3], ap[3], q[3];
-  for (int k = 0; k < 3; k++) ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
-#define DOT(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
-  double d1 = DOT(ab, ap), d2 = DOT(ac, ap);
-  if (d1 <= 0 && d2 <= 0) {
-    memcpy(q, a, sizeof q);
-  } else {
-    double bp[3], cp[3];
-    for (int k = 0; k < 3; k++) bp[k] = p[k] - b[k], cp[k] = p[k] - c[k];
-    double d3 = DOT(ab, bp), d4 = DOT(ac, bp), d5 = DOT(ab, cp), d6 = DOT(ac, cp);
-    double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-    if (d3 >= 0 && d4 <= d3) {
-      memcpy(q, b, sizeof q);
-    } else if (d6 >= 0 && d5 <= d6) {
-      memcpy(q, c, sizeof q);
-    } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-      double v = d1 / (d1 - d3);
-      for (int k = 0; k < 3; k++) q[k] = a[k] + v * ab[k];
-    } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-      double w = d2 / (d2 - d6);
-      for (int k = 0; k < 3; k++) q[k] = a[k] + w * ac[k];
-    } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-      double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-      for (int k = 0; k < 3; k++) q[k] = b[k] + w * (c[k] - b[k]);
-    } else {
-      double den = 1 / (va + vb + vc), v = vb * den, w = vc * den;
-      for (int k = 0; k < 3; k++) q[k] = a[k] + v * ab[k] + w * ac[k];
-    }
-  }
-#undef DOT
-  return sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-              (p[2] - q[2]) * (p[2] - q[2]));
-}
-
 /* A model no repair can close: a unit cube and a box touching it along an
  * edge (an edge of four faces), and a third box 3 away with a triangle
  * missing (a hole). Refused by the repair; wrapped (alpha 0.5, offset
@@ -690,17 +653,17 @@ static void test_wrap(vm_ctx *ctx) {
         "wrapped: %d, %lld faces in, %lld triangles out (%s)", st, (long long)w.nf_in,
         (long long)m->ne, vm_ctx_error(ctx));
   double far = 0, near = INFINITY;
-  for (int64_t v = 0; v < m->nv; v++) {
-    double d = INFINITY;
-    for (int64_t e = 0; e < in->ne; e++) {
-      const int32_t *c = in->conn + in->eoff[e];
-      double t = point_tri(m->xyz + 3 * v, in->xyz + 3 * (int64_t)c[0], in->xyz + 3 * (int64_t)c[1],
-                           in->xyz + 3 * (int64_t)c[2]);
-      d = t < d ? t : d;
-    }
-    far = d > far ? d : far;
-    near = d < near ? d : near;
+  vm_surface_projector *pr = NULL;
+  double *dist = malloc(sizeof *dist * (size_t)m->nv);
+  CHECK(dist && vm_surface_projector_create(ctx, in, NULL, &pr) == 0 &&
+            vm_surface_projector_distance(pr, m->nv, m->xyz, dist) == 0,
+        "the wrap's distances to the input (%s)", vm_ctx_error(ctx));
+  for (int64_t v = 0; dist && pr && v < m->nv; v++) {
+    far = dist[v] > far ? dist[v] : far;
+    near = dist[v] < near ? dist[v] : near;
   }
+  vm_surface_projector_destroy(&pr);
+  free(dist);
   CHECK(far <= offset * 1.01 && near >= 0.99 * offset,
         "every vertex of the wrap %.4g to %.4g from the input (offset %g)", near, far, offset);
   st = vm_surface_repair(m, &o, &r);

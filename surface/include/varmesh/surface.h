@@ -78,7 +78,8 @@ typedef struct vm_surface_opts {
                                  varmesh/repair.h), alpha = wrap times the bounding
                                  box's diagonal, offset alpha / 30; < 0 (default):
                                  only a model the repair refuses as non-manifold or
-                                 crossing itself is wrapped, at
+                                 crossing itself, or that step all leaves with
+                                 needles under needle_angle, is wrapped, at
                                  VM_SURFACE_WRAP_DEFAULT; 0: never */
 } vm_surface_opts;
 
@@ -117,7 +118,8 @@ typedef struct vm_surface_summary {
   int ortho_ran;           /* the orthogonality relief ran (step all) */
   vm_ortho2d_result ortho; /* its figures */
   int wrapped;             /* the input was wrapped (opts wrap) */
-  int wrap_auto;           /* ... because the repair refused it (opts wrap < 0) */
+  int wrap_auto;           /* ... on the stage's own (opts wrap < 0: refused by the
+                              repair, or needles left) */
   vm_wrap_report wrap;     /* its figures */
   int ortho_undone;        /* 1: its result intersected itself and was undone (the
                               figures after are then those before, nothing moved) */
