@@ -132,12 +132,16 @@ static const vm_opt opts[] = {
      .lo = 0, .hi = 1000},
     {"--wrap", NULL, VM_OPT_DOUBLE, A(so.wrap), "F",
      "first put a closed, manifold surface around the input (CGAL's alpha wrapping: no ball "
-     "of F times the bounding box's diagonal passes between it and the input; it lies F/30 of "
-     "the diagonal outside); by default only a model the repair refuses as non-manifold or "
-     "crossing itself, or left with needles, is wrapped (F 0.005), said on stderr; 0: never (such "
-     "a model is "
-     "refused)",
+     "of F times the bounding box's diagonal passes between it and the input; it lies R F of "
+     "the diagonal outside, R the --wrap-offset); by default only a model the repair refuses as "
+     "non-manifold or crossing itself, or left with needles, is wrapped (F 0.005), said on "
+     "stderr; 0: never (such a model is refused)",
      .lo = 0, .hi = 1},
+    {"--wrap-offset", NULL, VM_OPT_DOUBLE, A(so.wrap_offset), "R",
+     "how far outside the input the wrap lies, a fraction of its alpha (default 0.2: the wrap's "
+     "triangles stay well shaped where it rounds a sharp edge or the rim of a thin sheet; "
+     "smaller follows the input more closely, with caps and needles there)",
+     .lo = 1e-6, .hi = 1},
     VM_CLI_OPT_THREADS,
     {"--format", NULL, VM_OPT_CALL, A(fout), "F", "output format", .fn = vm_cli_opt_format},
     {"--binary", NULL, VM_OPT_FLAG, A(wo.binary), NULL, "binary output where the format has both",

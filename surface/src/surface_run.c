@@ -27,6 +27,7 @@ vm_surface_opts vm_surface_opts_default(void) {
   o.adapt = vm_adapt_opts_default();
   o.ortho = vm_ortho2d_opts_default();
   o.wrap = -1;
+  o.wrap_offset = VM_SURFACE_WRAP_OFFSET;
   return o;
 }
 
@@ -73,13 +74,13 @@ static int border_edge(vm_ctx *ctx, const vm_mesh *m, int32_t *a, int32_t *b) {
 }
 
 /* m replaced by its alpha wrap (vm_surface_wrap): alpha F times its
- * bounding box's diagonal, offset alpha / 30; said on stderr. */
-static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
+ * bounding box's diagonal, offset R times alpha; said on stderr. */
+static int wrap(vm_ctx *ctx, vm_mesh *m, double F, double R, vm_surface_summary *s) {
   double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi), alpha = F * diag;
   int nfields = m->nfield;
   int64_t flagged = 0;
   for (int64_t v = 0; m->vflag && v < m->nv; v++) flagged += m->vflag[v] != VM_VERTEX_FREE;
-  int st = vm_surface_wrap(m, alpha, alpha / 30, &s->wrap);
+  int st = vm_surface_wrap(m, alpha, R * alpha, &s->wrap);
   if (st < 0) return st;
   s->wrapped = 1;
   vm_log(ctx, VM_LOG_INFO,
@@ -87,7 +88,7 @@ static int wrap(vm_ctx *ctx, vm_mesh *m, double F, vm_surface_summary *s) {
          "%g, %g of the diagonal: gaps narrower than about twice that closed over; the wrap "
          "lies %g outside the input); %.2f s",
          (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
-         alpha / 30, s->wrap.elapsed);
+         R * alpha, s->wrap.elapsed);
   if (nfields > 0 || flagged > 0)
     vm_log(ctx, VM_LOG_WARN,
            "wrap: the input's %d fields and the flags of its %lld fixed or slip vertices are "
@@ -128,7 +129,7 @@ static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
              "detail, --wrap 0 refuses such a model)",
              msg);
       s->wrap_auto = 1;
-      st = wrap(ctx, m, VM_SURFACE_WRAP_DEFAULT, s);
+      st = wrap(ctx, m, VM_SURFACE_WRAP_DEFAULT, o->wrap_offset, s);
       if (st >= 0) st = vm_surface_repair(m, &o->repair_opts, rr);
     }
   }
@@ -995,10 +996,13 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
                     "and nothing else)");
   if ((unsigned)o.step > VM_SURFACE_ADAPT)
     return vm_error(ctx, VM_ERR_ARG, "vm_surface_run: unknown step %d", (int)o.step);
+  if (!(o.wrap_offset > 0 && o.wrap_offset <= 1))
+    return vm_error(ctx, VM_ERR_ARG, "vm_surface_run: wrap offset %g is not in (0, 1]",
+                    o.wrap_offset);
   int do_repair = o.step == VM_SURFACE_REPAIR || o.repair == VM_SURFACE_YES ||
                   (o.repair == VM_SURFACE_AUTO &&
                    (o.soup || o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_REMESH));
-  int st = o.wrap > 0 ? wrap(ctx, m, o.wrap, s) : VM_OK;
+  int st = o.wrap > 0 ? wrap(ctx, m, o.wrap, o.wrap_offset, s) : VM_OK;
   if (st >= 0 && do_repair) st = repair(ctx, m, &o, s);
   if (st < 0) return st;
   /* the repair and the remeshing (CGAL) cannot stop half-way: an interrupt
