@@ -94,7 +94,7 @@ static void amg_clear(vm_ctx *ctx, amg_impl *M) {
 static void mat_mv(vm_ctx *ctx, const mat *M, const double *x, double *y, int acc) {
   int nt = vm_nthreads(ctx);
   const int64_t n = M->nr;
-#pragma omp parallel for num_threads(nt) schedule(static) if (n >= VM_PAR_MIN / 8)
+#pragma omp parallel for num_threads(nt) schedule(static) if (n >= VM_PAR_MIN_MV)
   for (int64_t i = 0; i < n; i++) {
     double s = 0;
     for (int64_t k = M->rp[i]; k < M->rp[i + 1]; k++) s += M->v[k] * x[M->ci[k]];

@@ -33,6 +33,16 @@ int vm_nthreads(const vm_ctx *ctx);
 /* Below this length vector kernels run on one thread (no fork overhead). */
 #define VM_PAR_MIN 8192
 
+/* Below this many rows a sparse matrix-vector product runs on one thread.
+ * The threads wait passively (apps/cli.c), so a parallel region costs
+ * their wake-up, tens of microseconds, more than a product of a few
+ * thousand rows: at 1,024 rows the coarse levels of the AMG cycles made
+ * the prism stage's springback on the demo aircraft slower on two threads
+ * than on one (7.96 s against 7.1 s, a sixth of the samples in the
+ * kernel's scheduler); at 16,384 it takes 5.0 s. Rows are independent, so
+ * the threshold changes no result. */
+#define VM_PAR_MIN_MV 16384
+
 /* Inner product summed in fixed blocks whose size depends only on n, then
  * the block sums in order: the same bits for any thread count. */
 double vm_dot(const vm_ctx *ctx, int64_t n, const double *a, const double *b);

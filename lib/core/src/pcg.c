@@ -64,7 +64,7 @@ void vm_csr_free(vm_ctx *ctx, vm_csr *A) {
 void vm_csr_matvec(vm_ctx *ctx, const vm_csr *A, const double *x, double *y) {
   int nt = vm_nthreads(ctx);
   const int64_t n = A->n;
-#pragma omp parallel for num_threads(nt) schedule(static) if (n >= VM_PAR_MIN / 8)
+#pragma omp parallel for num_threads(nt) schedule(static) if (n >= VM_PAR_MIN_MV)
   for (int64_t i = 0; i < n; i++) {
     double s = 0;
     for (int64_t k = A->rowptr[i]; k < A->rowptr[i + 1]; k++) s += A->val[k] * x[A->col[k]];
