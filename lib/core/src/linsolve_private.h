@@ -38,9 +38,9 @@ int vm_nthreads(const vm_ctx *ctx);
  * their wake-up, tens of microseconds, more than a product of a few
  * thousand rows: at 1,024 rows the coarse levels of the AMG cycles made
  * the prism stage's springback on the demo aircraft slower on two threads
- * than on one (7.96 s against 7.1 s, a sixth of the samples in the
- * kernel's scheduler); at 16,384 it takes 5.0 s. Rows are independent, so
- * the threshold changes no result. */
+ * than on one (7.2 to 8.0 s against 7.1 s, a sixth of the samples in the
+ * kernel's scheduler); at 16,384 it takes 4.9 to 5.0 s. Rows are
+ * independent, so the threshold changes no result. */
 #define VM_PAR_MIN_MV 16384
 
 /* Inner product summed in fixed blocks whose size depends only on n, then
