@@ -87,8 +87,8 @@ static int wrap(vm_ctx *ctx, vm_mesh *m, double F, double R, vm_surface_summary 
          "wrap: %lld faces wrapped in a closed surface of %lld triangles, %lld vertices (alpha "
          "%g, %g of the diagonal: gaps narrower than about twice that closed over; the wrap "
          "lies %g outside the input); %.2f s",
-         (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, alpha, F,
-         R * alpha, s->wrap.elapsed);
+         (long long)s->wrap.nf_in, (long long)s->wrap.nf, (long long)s->wrap.nv, s->wrap.alpha, F,
+         s->wrap.offset, s->wrap.elapsed);
   if (nfields > 0 || flagged > 0)
     vm_log(ctx, VM_LOG_WARN,
            "wrap: the input's %d fields and the flags of its %lld fixed or slip vertices are "
