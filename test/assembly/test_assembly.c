@@ -2,7 +2,7 @@
  * Hessian blocks against finite differences for every element type, rule
  * and measure; invariances, known values, node statistics, subsets, errors
  * and bit-identical results for 1 and 2 threads and for node targets kept
- * or computed at evaluation. */
+ * or computed at evaluation; the kept F of all-fixed elements. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -984,6 +984,86 @@ static void test_errors(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* Elements all of whose vertices are fixed: their F kept between
+ * evaluations (the same bits as computed afresh, whatever changed: the
+ * measure's parameters, node eps, a fixed vertex moved) and, with
+ * vm_problem_set_fixed_derivatives(p, 0), their derivatives left out of
+ * the rows of fixed vertices only. */
+static void test_fixed_cache(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 21);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 4, 4, 4, 1.0);
+  mg_jitter(ctx, m, 0.1);
+  size_t nv = (size_t)m->nv, n3 = 3 * nv;
+  /* the reference: a problem that saw no fixed vertex at its first
+   * evaluation, so it keeps nothing */
+  vm_problem *pr = NULL, *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &pr) == 0, "create");
+  double Fr, F;
+  CHECK(vm_problem_value(pr, m->xyz, &Fr) == 0, "value");
+  /* half the block fixed: x < 2 (nodes at 0..4 before the jitter) */
+  int64_t nfix = 0;
+  for (size_t v = 0; v < nv; v++)
+    if (m->xyz[3 * v] < 1.5) {
+      m->vflag[v] = VM_VERTEX_FIXED;
+      nfix++;
+    }
+  CHECK(nfix > 0 && nfix < (int64_t)nv, "fixed %lld of %zu", (long long)nfix, nv);
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  double *g = malloc(n3 * sizeof *g), *gr = malloc(n3 * sizeof *gr);
+  double *h = malloc(3 * n3 * sizeof *h), *hr = malloc(3 * n3 * sizeof *hr);
+  double *x = dup(m->xyz, n3);
+  vm_measure_params q = vm_measure_params_default();
+  for (int round = 0; round < 6; round++) {
+    /* what changes between rounds: nothing, eps, the measure, node eps, a
+     * fixed vertex moved, a free one */
+    if (round == 1 || round == 2) {
+      q.eps = round == 1 ? 0.3 : 0.05;
+      CHECK(vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q) == 0, "measure");
+      CHECK(vm_problem_set_measure(pr, VM_MEASURE_PENALTY, &q) == 0, "measure");
+    } else if (round == 3) {
+      int64_t nn = vm_problem_num_nodes(p);
+      double *eps = malloc((size_t)nn * sizeof *eps);
+      for (int64_t k = 0; k < nn; k++) eps[k] = 0.01 + 0.001 * (double)(k % 7);
+      CHECK(vm_problem_set_node_eps(p, eps) == 0 && vm_problem_set_node_eps(pr, eps) == 0,
+            "node eps");
+      free(eps);
+    } else if (round == 4) {
+      x[0] += 1e-3; /* vertex 0, at the corner: fixed */
+      CHECK(m->vflag[0] == VM_VERTEX_FIXED, "vertex 0 fixed");
+    } else if (round == 5) {
+      x[3 * (nv - 1) + 1] -= 1e-3;
+    }
+    for (int rep = 0; rep < 2; rep++) {
+      CHECK(vm_problem_value(pr, x, &Fr) == 0 && vm_problem_value(p, x, &F) == 0, "value");
+      CHECK(F == Fr, "round %d: kept F %.17g vs %.17g", round, F, Fr);
+      vm_eval er = {&Fr, gr, hr, NULL}, e = {&F, g, h, NULL};
+      CHECK(vm_problem_eval(pr, x, &er) == 0 && vm_problem_eval(p, x, &e) == 0, "eval");
+      CHECK(F == Fr && same_bits(g, gr, n3) && same_bits(h, hr, 3 * n3),
+            "round %d: complete derivatives differ", round);
+      CHECK(vm_problem_set_fixed_derivatives(p, 0) == 0, "skip");
+      CHECK(vm_problem_eval(p, x, &e) == 0, "eval");
+      CHECK(F == Fr, "round %d: F without the fixed derivatives %.17g vs %.17g", round, F, Fr);
+      int free_same = 1, fixed_differ = 0;
+      for (size_t v = 0; v < nv; v++) {
+        int same = same_bits(g + 3 * v, gr + 3 * v, 3) && same_bits(h + 9 * v, hr + 9 * v, 9);
+        if (m->vflag[v] != VM_VERTEX_FIXED && !same) free_same = 0;
+        if (m->vflag[v] == VM_VERTEX_FIXED && !same) fixed_differ = 1;
+      }
+      CHECK(free_same, "round %d: a free vertex's row changed", round);
+      CHECK(fixed_differ, "round %d: the fixed elements' derivatives were computed", round);
+      CHECK(vm_problem_set_fixed_derivatives(p, 1) == 0, "complete");
+    }
+  }
+  free(g);
+  free(gr);
+  free(h);
+  free(hr);
+  free(x);
+  vm_problem_destroy(&p);
+  vm_problem_destroy(&pr);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
@@ -997,6 +1077,7 @@ int main(void) {
   test_subsets(ctx);
   test_node_weights(ctx);
   test_bernstein(ctx);
+  test_fixed_cache(ctx);
   test_errors(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("assembly");

@@ -686,6 +686,75 @@ static int elem_eval(const vm_problem *p, int64_t i, const double *x, int order,
   return 0;
 }
 
+/* Are all of active element i's vertices fixed (the mesh's vflag)? */
+static int elem_all_fixed(const vm_problem *p, int64_t i) {
+  const vm_mesh *m = p->m;
+  if (!m->vflag) return 0;
+  int32_t e = p->ael[i];
+  for (int64_t k = m->eoff[e]; k < m->eoff[e + 1]; k++)
+    if (m->vflag[m->conn[k]] != VM_VERTEX_FIXED) return 0;
+  return 1;
+}
+
+/* The slots of the cache of all-fixed elements' F (problem_private.h),
+ * assigned once, at the first evaluation, to the elements all-fixed then;
+ * without memory for them there is no cache (the same values, computed). */
+static void fix_build(vm_problem *p) {
+  if (p->fix_built) return;
+  p->fix_built = 1;
+  int64_t n = 0;
+  for (int64_t i = 0; i < p->nae; i++) n += elem_all_fixed(p, i);
+  if (!n) return;
+  vm_ctx *ctx = p->ctx;
+  p->fix_of = vm_alloc_array(ctx, (size_t)p->nae, sizeof *p->fix_of);
+  p->fix_x = vm_alloc_array(ctx, (size_t)n * 3 * VM_MAX_ELEM_VERTS, sizeof *p->fix_x);
+  p->fix_F = vm_alloc_array(ctx, (size_t)n, sizeof *p->fix_F);
+  p->fix_gen = vm_calloc(ctx, (size_t)n, sizeof *p->fix_gen);
+  if (!p->fix_of || !p->fix_x || !p->fix_F || !p->fix_gen) {
+    vm_free(ctx, p->fix_of);
+    vm_free(ctx, p->fix_x);
+    vm_free(ctx, p->fix_F);
+    vm_free(ctx, p->fix_gen);
+    p->fix_of = NULL;
+    p->fix_x = p->fix_F = NULL;
+    p->fix_gen = NULL;
+    return;
+  }
+  int64_t k = 0;
+  for (int64_t i = 0; i < p->nae; i++) p->fix_of[i] = elem_all_fixed(p, i) ? (int32_t)k++ : -1;
+}
+
+/* F of active element i, which has cache slot `slot`, at x: the cached
+ * value when it is for the problem's present state and the element's
+ * vertices are where they were (bit for bit), else evaluated and kept.
+ * Each element is read and written by one thread only. */
+static int fix_value(vm_problem *p, int64_t i, int32_t slot, const double *x, double *Fe) {
+  const vm_mesh *m = p->m;
+  int32_t e = p->ael[i];
+  const int32_t *cv = m->conn + m->eoff[e];
+  int nv = (int)(m->eoff[e + 1] - m->eoff[e]);
+  double *cx = p->fix_x + (int64_t)slot * 3 * VM_MAX_ELEM_VERTS;
+  int same = p->fix_gen[slot] == p->gen;
+  for (int a = 0; a < nv && same; a++)
+    same = memcmp(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x) == 0;
+  if (same) {
+    *Fe = p->fix_F[slot];
+    return 0;
+  }
+  p->fix_gen[slot] = 0;
+  if (elem_eval(p, i, x, 0, 0, Fe, NULL)) return 1;
+  for (int a = 0; a < nv; a++) memcpy(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x);
+  p->fix_F[slot] = *Fe;
+  p->fix_gen[slot] = p->gen;
+  return 0;
+}
+
+/* F of active element i at x, through the cache for all-fixed elements. */
+static int elem_value(vm_problem *p, int64_t i, const double *x, double *Fe) {
+  int32_t slot = p->fix_of ? p->fix_of[i] : -1;
+  return slot >= 0 ? fix_value(p, i, slot, x, Fe) : elem_eval(p, i, x, 0, 0, Fe, NULL);
+}
+
 static int elem_kernel(const vm_problem *p, const elem_ctx *ec, int order, int offd, double *Fe,
                        elem_acc *acc) {
   if (p->tdim == 3) {
@@ -820,6 +889,7 @@ static double block_sum(const vm_problem *p, int64_t b) {
 int vm_problem_value(vm_problem *p, const double *x, double *F) {
   if (!p || !x || !F)
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_value: NULL argument") : VM_ERR_ARG;
+  fix_build(p);
   int bad = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(vm_problem_threads(p))
   for (int64_t b = 0; b < p->nblock; b++) {
@@ -833,7 +903,7 @@ int vm_problem_value(vm_problem *p, const double *x, double *F) {
     for (int64_t i = i0; i < i1; i++) {
       if (p->amask && !p->amask[i]) continue;
       double fe;
-      if (elem_eval(p, i, x, 0, 0, &fe, NULL)) {
+      if (elem_value(p, i, x, &fe)) {
 #pragma omp atomic write
         bad = 1;
         break;
@@ -857,11 +927,12 @@ int vm_problem_elem_values(vm_problem *p, const double *x, double *fe) {
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_elem_values: NULL argument") : VM_ERR_ARG;
   int64_t ne = p->m->ne;
   memset(fe, 0, (size_t)ne * sizeof *fe);
+  fix_build(p);
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
   for (int64_t i = 0; i < p->nae; i++) {
     if (p->amask && !p->amask[i]) continue;
     double f = 0;
-    fe[p->ael[i]] = elem_eval(p, i, x, 0, 0, &f, NULL) ? INFINITY : f;
+    fe[p->ael[i]] = elem_value(p, i, x, &f) ? INFINITY : f;
   }
   return VM_OK;
 }
@@ -876,6 +947,7 @@ static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *
     int st = build_ppos(p);
     if (st) return st;
   }
+  fix_build(p);
   int bad = 0;
 #pragma omp parallel num_threads(vm_problem_threads(p))
   {
@@ -908,6 +980,15 @@ static int assemble(vm_problem *p, const double *x, const vm_eval *out, double *
           stop = bad;
           if (stop) break;
           if (p->amask && !p->amask[i]) continue;
+          if (p->skip_fixed && p->fix_of && p->fix_of[i] >= 0 && elem_all_fixed(p, i)) {
+            /* F only: its derivatives reach fixed rows alone */
+            if (fix_value(p, i, p->fix_of[i], x, &p->Fe[i])) {
+#pragma omp atomic write
+              bad = 1;
+              break;
+            }
+            continue;
+          }
           if (elem_eval(p, i, x, order, out->hoff != NULL, &p->Fe[i], &acc)) {
 #pragma omp atomic write
             bad = 1;

@@ -429,6 +429,9 @@ int vm_minimizer_run(vm_minimizer *m, double *x, vm_minimize_result *res) {
   vm_bc_destroy(&m->bc);
   int st = vm_bc_create(ctx, mesh, m->has_surf ? &m->surf : NULL, &m->bc);
   if (st) return st;
+  /* the fixed vertices' rows are discarded (vm_bc_apply, the members'
+   * unknowns): the elements that reach only them add F alone */
+  vm_problem_set_fixed_derivatives(m->prob, 0);
   const size_t n3 = (size_t)(3 * m->nv > 0 ? 3 * m->nv : 1);
   if (m->ops->needs_hoff) {
     const int64_t *rp;
@@ -584,6 +587,7 @@ done:
   m->ops->end(m);
   free_bufs(ctx, &b);
   vm_bc_destroy(&m->bc);
+  vm_problem_set_fixed_derivatives(m->prob, 1);
   r.elapsed = omp_get_wtime() - t0;
   if (res) *res = r;
   return st;

@@ -309,6 +309,7 @@ static int compute_targets(vm_problem *p) {
 }
 
 int vm_problem_set_target_store(vm_problem *p, int64_t max_bytes) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (max_bytes < 0)
     return vm_error(p->ctx, VM_ERR_ARG, "target store of %lld bytes", (long long)max_bytes);
@@ -389,6 +390,7 @@ static int auto_size(vm_problem *p, double *size) {
 }
 
 int vm_problem_set_target_ideal(vm_problem *p, double size) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!isfinite(size)) return vm_error(p->ctx, VM_ERR_ARG, "target size %g is not finite", size);
   if (size <= 0) {
@@ -425,6 +427,7 @@ static int set_target_data(vm_problem *p, int kind, double *ref, double *fld) {
 }
 
 int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!xyz_ref) return vm_error(p->ctx, VM_ERR_ARG, "reference coordinates are NULL");
   size_t n = (size_t)p->m->nv * 3;
@@ -435,6 +438,7 @@ int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref) {
 }
 
 int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   const vm_mesh *m = p->m;
   const vm_field *f = field_name ? vm_mesh_find_field(m, field_name, VM_FIELD_ELEMENT) : NULL;
@@ -459,6 +463,7 @@ int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
 }
 
 int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
     return vm_error(p->ctx, VM_ERR_ARG, "unknown quadrature rule %d", (int)rule);
@@ -512,6 +517,7 @@ static int check_params(vm_ctx *ctx, const vm_measure_params *q) {
 }
 
 int vm_problem_set_measure(vm_problem *p, vm_measure_kind kind, const vm_measure_params *prm) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   const vm_measure_ops *ops = vm_measure_get(kind);
   if (!ops) return vm_error(p->ctx, VM_ERR_ARG, "unknown measure %d", (int)kind);
@@ -524,6 +530,7 @@ int vm_problem_set_measure(vm_problem *p, vm_measure_kind kind, const vm_measure
 }
 
 int vm_problem_set_params(vm_problem *p, const vm_measure_params *prm) {
+  vm_problem_touch(p);
   if (!p || !prm) return p ? vm_error(p->ctx, VM_ERR_ARG, "parameters are NULL") : VM_ERR_ARG;
   int st = check_params(p->ctx, prm);
   if (st) return st;
@@ -542,6 +549,7 @@ static void free_metric(vm_problem *p) {
 }
 
 int vm_problem_set_metric_scalar(vm_problem *p, const double *g) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!g) {
     free_metric(p);
@@ -579,6 +587,7 @@ int vm_problem_set_metric_scalar(vm_problem *p, const double *g) {
 }
 
 int vm_problem_set_metric_tensor(vm_problem *p, const double *G) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!G) {
     free_metric(p);
@@ -623,6 +632,7 @@ int vm_problem_set_metric_tensor(vm_problem *p, const double *G) {
 }
 
 int vm_problem_set_weights(vm_problem *p, const double *w) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (w)
     for (int64_t i = 0; i < p->nae; i++)
@@ -635,6 +645,7 @@ int vm_problem_set_weights(vm_problem *p, const double *w) {
 }
 
 int vm_problem_update_normals(vm_problem *p, const double *vertex_normals) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (p->kind != VM_PK_SURF) return VM_OK;
   double *nrm = vm_alloc_array(p->ctx, (size_t)p->nae * 3, sizeof *nrm);
@@ -848,6 +859,7 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
   p->prm = vm_measure_params_default();
   p->rule = VM_RULE_CORNER;
   p->tgt_store = VM_PROBLEM_TARGET_STORE;
+  p->gen = 1;
   for (int t = 0; t < VM_NTYPES; t++) p->qr[t] = vm_qrule_get(t, VM_RULE_CORNER);
   build_patterns(p);
   int st = VM_OK;
@@ -937,6 +949,10 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->bern_eps);
   vm_free(ctx, p->Fe);
   vm_free(ctx, p->part);
+  vm_free(ctx, p->fix_of);
+  vm_free(ctx, p->fix_x);
+  vm_free(ctx, p->fix_F);
+  vm_free(ctx, p->fix_gen);
   vm_free(ctx, p);
   *pp = NULL;
 }
@@ -957,6 +973,7 @@ void vm_problem_graph(const vm_problem *p, const int64_t **rowptr, const int32_t
 const int32_t *vm_problem_node_elements(const vm_problem *p) { return p ? p->nelem : NULL; }
 
 int vm_problem_set_active(vm_problem *p, const uint8_t *mask) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   uint8_t *am = NULL;
   if (mask) {
@@ -970,6 +987,7 @@ int vm_problem_set_active(vm_problem *p, const uint8_t *mask) {
 }
 
 int vm_problem_set_node_eps(vm_problem *p, const double *eps_node) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!eps_node) {
     vm_free(p->ctx, p->eps_node);
@@ -989,6 +1007,7 @@ int vm_problem_set_node_eps(vm_problem *p, const double *eps_node) {
 }
 
 int vm_problem_set_node_weights(vm_problem *p, const double *w_node) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   if (!w_node) {
     vm_free(p->ctx, p->node_w);
@@ -1009,6 +1028,7 @@ int vm_problem_set_node_weights(vm_problem *p, const double *w_node) {
 
 int vm_problem_set_bernstein(vm_problem *p, const double *w_elem, const double *eps_coef,
                              double scale) {
+  vm_problem_touch(p);
   if (!p) return VM_ERR_ARG;
   vm_free(p->ctx, p->bern_w);
   vm_free(p->ctx, p->bern_eps);
@@ -1047,5 +1067,11 @@ int vm_problem_set_bernstein(vm_problem *p, const double *w_elem, const double *
   p->bern_w = w;
   p->bern_eps = e;
   p->bern_scale = scale;
+  return VM_OK;
+}
+
+int vm_problem_set_fixed_derivatives(vm_problem *p, int want) {
+  if (!p) return VM_ERR_ARG;
+  p->skip_fixed = !want;
   return VM_OK;
 }

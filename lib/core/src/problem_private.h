@@ -121,7 +121,30 @@ struct vm_problem {
   double *Fe;   /* nae */
   double *part; /* blocks of VM_PROBLEM_FBLOCK elements */
   int64_t nblock;
+
+  /* F of the elements all of whose vertices are fixed (vflag, when the
+   * slots were assigned at the first evaluation), kept for the problem's
+   * state `gen` at the vertex positions it was computed at: a minimizer
+   * evaluates such an element once per state (its eps changes every
+   * iteration) instead of at every trial point. Every setter that can
+   * change an element's F calls vm_problem_touch. With skip_fixed
+   * (vm_problem_set_fixed_derivatives) their derivatives, which reach only
+   * the rows of fixed vertices, are not computed at all. */
+  uint64_t gen;
+  int fix_built;     /* slots assigned (fix_of NULL then: none, or no memory) */
+  int skip_fixed;    /* derivatives of all-fixed elements left out */
+  int32_t *fix_of;   /* nae: the element's slot, -1 for none */
+  double *fix_x;     /* per slot, 3 VM_MAX_ELEM_VERTS: its vertices' positions */
+  double *fix_F;     /* per slot */
+  uint64_t *fix_gen; /* per slot: the state fix_F is for, 0 for none */
 };
+
+/* The problem's state changed (targets, rule, measure, parameters, weights,
+ * metric, normals, node eps or weights, Bernstein terms): the cached F of
+ * all-fixed elements is stale. */
+static inline void vm_problem_touch(vm_problem *p) {
+  if (p) p->gen++;
+}
 
 /* Node targets above this many bytes are by default not stored but
  * computed from the element's target coordinates whenever it is evaluated

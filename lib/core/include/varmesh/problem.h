@@ -171,6 +171,16 @@ const int32_t *vm_problem_node_elements(const vm_problem *p);
  * The graph is unchanged; vertices outside the subset get zero rows. */
 int vm_problem_set_active(vm_problem *p, const uint8_t *mask);
 
+/* Whether vm_problem_eval and vm_problem_eval_blocks compute the
+ * derivatives of the elements all of whose vertices are fixed (the mesh's
+ * vflag VM_VERTEX_FIXED): want != 0, the default, gives complete gradient
+ * and Hessian rows; want = 0 leaves those elements' derivatives out (they
+ * reach only the rows of fixed vertices, which the minimizers discard).
+ * F is the same bits either way. The minimizers set 0 for their run and
+ * restore it. (Such elements' F is computed once per state of the problem
+ * and kept while their vertices stay where they were, either way.) */
+int vm_problem_set_fixed_derivatives(vm_problem *p, int want);
+
 /* Per-node epsilon for the one-way penalty variant: if eps_node != NULL
  * (num_nodes values, copied), node q uses eps_node[q] instead of params.eps. */
 int vm_problem_set_node_eps(vm_problem *p, const double *eps_node);
