@@ -1013,9 +1013,9 @@ static void test_fixed_cache(vm_ctx *ctx) {
   double *h = malloc(3 * n3 * sizeof *h), *hr = malloc(3 * n3 * sizeof *hr);
   double *x = dup(m->xyz, n3);
   vm_measure_params q = vm_measure_params_default();
-  for (int round = 0; round < 6; round++) {
+  for (int round = 0; round < 8; round++) {
     /* what changes between rounds: nothing, eps, the measure, node eps, a
-     * fixed vertex moved, a free one */
+     * fixed vertex moved, a free one, the rule, the targets */
     if (round == 1 || round == 2) {
       q.eps = round == 1 ? 0.3 : 0.05;
       CHECK(vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q) == 0, "measure");
@@ -1032,7 +1032,16 @@ static void test_fixed_cache(vm_ctx *ctx) {
       CHECK(m->vflag[0] == VM_VERTEX_FIXED, "vertex 0 fixed");
     } else if (round == 5) {
       x[3 * (nv - 1) + 1] -= 1e-3;
+    } else if (round == 6) {
+      CHECK(vm_problem_set_rule(p, VM_RULE_GEOMETRIC) == 0 &&
+                vm_problem_set_rule(pr, VM_RULE_GEOMETRIC) == 0,
+            "rule");
+    } else if (round == 7) {
+      CHECK(vm_problem_set_target_ideal(p, 0.9) == 0 && vm_problem_set_target_ideal(pr, 0.9) == 0,
+            "targets");
     }
+    int64_t nn = vm_problem_num_nodes(p);
+    double *d = malloc((size_t)nn * sizeof *d), *dr = malloc((size_t)nn * sizeof *dr);
     for (int rep = 0; rep < 2; rep++) {
       CHECK(vm_problem_value(pr, x, &Fr) == 0 && vm_problem_value(p, x, &F) == 0, "value");
       CHECK(F == Fr, "round %d: kept F %.17g vs %.17g", round, F, Fr);
@@ -1052,7 +1061,18 @@ static void test_fixed_cache(vm_ctx *ctx) {
       CHECK(free_same, "round %d: a free vertex's row changed", round);
       CHECK(fixed_differ, "round %d: the fixed elements' derivatives were computed", round);
       CHECK(vm_problem_set_fixed_derivatives(p, 1) == 0, "complete");
+      /* the nodes' determinants and statistics, kept the same way */
+      CHECK(vm_problem_node_dets(p, x, d) == 0 && vm_problem_node_dets(pr, x, dr) == 0, "dets");
+      CHECK(same_bits(d, dr, (size_t)nn), "round %d: kept node dets differ", round);
+      vm_node_stats ns, nsr;
+      CHECK(vm_problem_node_stats(p, x, &ns) == 0 && vm_problem_node_stats(pr, x, &nsr) == 0,
+            "stats");
+      CHECK(ns.inverted == nsr.inverted && ns.min_det == nsr.min_det && ns.phi_min == nsr.phi_min &&
+                ns.psi_min == nsr.psi_min,
+            "round %d: kept node statistics differ", round);
     }
+    free(d);
+    free(dr);
   }
   free(g);
   free(gr);

@@ -707,7 +707,7 @@ static void fix_build(vm_problem *p) {
   if (!n) return;
   vm_ctx *ctx = p->ctx;
   p->fix_of = vm_alloc_array(ctx, (size_t)p->nae, sizeof *p->fix_of);
-  p->fix_x = vm_alloc_array(ctx, (size_t)n * 3 * VM_MAX_ELEM_VERTS, sizeof *p->fix_x);
+  p->fix_x = vm_calloc(ctx, (size_t)n * 3 * VM_MAX_ELEM_VERTS, sizeof *p->fix_x);
   p->fix_F = vm_alloc_array(ctx, (size_t)n, sizeof *p->fix_F);
   p->fix_gen = vm_calloc(ctx, (size_t)n, sizeof *p->fix_gen);
   if (!p->fix_of || !p->fix_x || !p->fix_F || !p->fix_gen) {
@@ -722,6 +722,26 @@ static void fix_build(vm_problem *p) {
   }
   int64_t k = 0;
   for (int64_t i = 0; i < p->nae; i++) p->fix_of[i] = elem_all_fixed(p, i) ? (int32_t)k++ : -1;
+  p->nslot = n;
+}
+
+/* Are active element i's vertices (slot `slot`) where the slot's values
+ * were computed, bit for bit? If not, they are recorded there and both
+ * kept values dropped. */
+static int fix_at(vm_problem *p, int64_t i, int32_t slot, const double *x) {
+  const vm_mesh *m = p->m;
+  int32_t e = p->ael[i];
+  const int32_t *cv = m->conn + m->eoff[e];
+  int nv = (int)(m->eoff[e + 1] - m->eoff[e]);
+  double *cx = p->fix_x + (int64_t)slot * 3 * VM_MAX_ELEM_VERTS;
+  int same = 1;
+  for (int a = 0; a < nv && same; a++)
+    same = memcmp(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x) == 0;
+  if (same) return 1;
+  for (int a = 0; a < nv; a++) memcpy(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x);
+  p->fix_gen[slot] = 0;
+  if (p->fix_sgen) p->fix_sgen[slot] = 0;
+  return 0;
 }
 
 /* F of active element i, which has cache slot `slot`, at x: the cached
@@ -729,21 +749,12 @@ static void fix_build(vm_problem *p) {
  * vertices are where they were (bit for bit), else evaluated and kept.
  * Each element is read and written by one thread only. */
 static int fix_value(vm_problem *p, int64_t i, int32_t slot, const double *x, double *Fe) {
-  const vm_mesh *m = p->m;
-  int32_t e = p->ael[i];
-  const int32_t *cv = m->conn + m->eoff[e];
-  int nv = (int)(m->eoff[e + 1] - m->eoff[e]);
-  double *cx = p->fix_x + (int64_t)slot * 3 * VM_MAX_ELEM_VERTS;
-  int same = p->fix_gen[slot] == p->gen;
-  for (int a = 0; a < nv && same; a++)
-    same = memcmp(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x) == 0;
-  if (same) {
+  if (fix_at(p, i, slot, x) && p->fix_gen[slot] == p->gen) {
     *Fe = p->fix_F[slot];
     return 0;
   }
   p->fix_gen[slot] = 0;
   if (elem_eval(p, i, x, 0, 0, Fe, NULL)) return 1;
-  for (int a = 0; a < nv; a++) memcpy(cx + 3 * a, x + 3 * (int64_t)cv[a], 3 * sizeof *x);
   p->fix_F[slot] = *Fe;
   p->fix_gen[slot] = p->gen;
   return 0;
@@ -1073,17 +1084,75 @@ static void elem_sd(const vm_problem *p, int64_t i, const double *x, double *s, 
   }
 }
 
+/* The kept nodes' s and det C of the all-fixed elements sized for the
+ * present rule (their node counts change with it); without memory, none. */
+static void fix_sd_size(vm_problem *p) {
+  fix_build(p);
+  if (!p->fix_of || p->fix_sd_rule == p->rule) return;
+  vm_ctx *ctx = p->ctx;
+  vm_free(ctx, p->fix_noff);
+  vm_free(ctx, p->fix_sd);
+  vm_free(ctx, p->fix_sgen);
+  p->fix_sd = NULL;
+  p->fix_sgen = NULL;
+  p->fix_noff = vm_alloc_array(ctx, (size_t)p->nslot + 1, sizeof *p->fix_noff);
+  p->fix_sgen = vm_calloc(ctx, (size_t)p->nslot, sizeof *p->fix_sgen);
+  if (p->fix_noff && p->fix_sgen) {
+    int64_t n = 0;
+    p->fix_noff[0] = 0;
+    for (int64_t i = 0; i < p->nae; i++)
+      if (p->fix_of[i] >= 0) p->fix_noff[p->fix_of[i] + 1] = n += p->noff[i + 1] - p->noff[i];
+    p->fix_sd = vm_alloc_array(ctx, 2 * (size_t)(n ? n : 1), sizeof *p->fix_sd);
+  }
+  if (!p->fix_noff || !p->fix_sgen || !p->fix_sd) {
+    vm_free(ctx, p->fix_noff);
+    vm_free(ctx, p->fix_sd);
+    vm_free(ctx, p->fix_sgen);
+    p->fix_noff = NULL;
+    p->fix_sd = NULL;
+    p->fix_sgen = NULL;
+    p->fix_sd_rule = -1;
+    return;
+  }
+  p->fix_sd_rule = p->rule;
+}
+
+/* elem_sd, through the kept values for all-fixed elements. */
+static void elem_sd_kept(vm_problem *p, int64_t i, const double *x, double *s, double *det) {
+  int32_t slot = p->fix_sd && p->fix_of ? p->fix_of[i] : -1;
+  if (slot < 0) {
+    elem_sd(p, i, x, s, det);
+    return;
+  }
+  int nn = (int)(p->noff[i + 1] - p->noff[i]);
+  double *kd = p->fix_sd + 2 * p->fix_noff[slot];
+  if (fix_at(p, i, slot, x) && p->fix_sgen[slot] == p->ggen) {
+    for (int j = 0; j < nn; j++) {
+      s[j] = kd[2 * j];
+      det[j] = kd[2 * j + 1];
+    }
+    return;
+  }
+  elem_sd(p, i, x, s, det);
+  for (int j = 0; j < nn; j++) {
+    kd[2 * j] = s[j];
+    kd[2 * j + 1] = det[j];
+  }
+  p->fix_sgen[slot] = p->ggen;
+}
+
 int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
   if (!p || !x)
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_stats: NULL argument") : VM_ERR_ARG;
   int64_t inv = 0;
   double mind = INFINITY, phimin = INFINITY, psimin = INFINITY;
   int d = p->tdim;
+  fix_sd_size(p);
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p)) \
     reduction(+ : inv) reduction(min : mind, phimin, psimin)
   for (int64_t i = 0; i < p->nae; i++) {
     double s[VM_QRULE_MAX_NODES], det[VM_QRULE_MAX_NODES];
-    elem_sd(p, i, x, s, det);
+    elem_sd_kept(p, i, x, s, det);
     int nn = (int)(p->noff[i + 1] - p->noff[i]);
     for (int j = 0; j < nn; j++) {
       if (p->node_w && p->node_w[p->noff[i] + j] == 0) continue; /* left out */
@@ -1109,10 +1178,11 @@ int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
 int vm_problem_node_dets(vm_problem *p, const double *x, double *det) {
   if (!p || !x || !det)
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_dets: NULL argument") : VM_ERR_ARG;
+  fix_sd_size(p);
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
   for (int64_t i = 0; i < p->nae; i++) {
     double s[VM_QRULE_MAX_NODES];
-    elem_sd(p, i, x, s, det + p->noff[i]);
+    elem_sd_kept(p, i, x, s, det + p->noff[i]);
   }
   return VM_OK;
 }

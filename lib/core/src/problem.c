@@ -309,7 +309,7 @@ static int compute_targets(vm_problem *p) {
 }
 
 int vm_problem_set_target_store(vm_problem *p, int64_t max_bytes) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (max_bytes < 0)
     return vm_error(p->ctx, VM_ERR_ARG, "target store of %lld bytes", (long long)max_bytes);
@@ -390,7 +390,7 @@ static int auto_size(vm_problem *p, double *size) {
 }
 
 int vm_problem_set_target_ideal(vm_problem *p, double size) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (!isfinite(size)) return vm_error(p->ctx, VM_ERR_ARG, "target size %g is not finite", size);
   if (size <= 0) {
@@ -427,7 +427,7 @@ static int set_target_data(vm_problem *p, int kind, double *ref, double *fld) {
 }
 
 int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (!xyz_ref) return vm_error(p->ctx, VM_ERR_ARG, "reference coordinates are NULL");
   size_t n = (size_t)p->m->nv * 3;
@@ -438,7 +438,7 @@ int vm_problem_set_target_reference(vm_problem *p, const double *xyz_ref) {
 }
 
 int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   const vm_mesh *m = p->m;
   const vm_field *f = field_name ? vm_mesh_find_field(m, field_name, VM_FIELD_ELEMENT) : NULL;
@@ -463,7 +463,7 @@ int vm_problem_set_target_field(vm_problem *p, const char *field_name) {
 }
 
 int vm_problem_set_rule(vm_problem *p, vm_rule rule) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (rule < VM_RULE_CORNER || rule > VM_RULE_GEOMETRIC_SPLIT)
     return vm_error(p->ctx, VM_ERR_ARG, "unknown quadrature rule %d", (int)rule);
@@ -549,7 +549,7 @@ static void free_metric(vm_problem *p) {
 }
 
 int vm_problem_set_metric_scalar(vm_problem *p, const double *g) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (!g) {
     free_metric(p);
@@ -587,7 +587,7 @@ int vm_problem_set_metric_scalar(vm_problem *p, const double *g) {
 }
 
 int vm_problem_set_metric_tensor(vm_problem *p, const double *G) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (!G) {
     free_metric(p);
@@ -645,7 +645,7 @@ int vm_problem_set_weights(vm_problem *p, const double *w) {
 }
 
 int vm_problem_update_normals(vm_problem *p, const double *vertex_normals) {
-  vm_problem_touch(p);
+  vm_problem_touch_geometry(p);
   if (!p) return VM_ERR_ARG;
   if (p->kind != VM_PK_SURF) return VM_OK;
   double *nrm = vm_alloc_array(p->ctx, (size_t)p->nae * 3, sizeof *nrm);
@@ -860,6 +860,8 @@ int vm_problem_create(vm_ctx *ctx, vm_mesh *m, vm_problem **out) {
   p->rule = VM_RULE_CORNER;
   p->tgt_store = VM_PROBLEM_TARGET_STORE;
   p->gen = 1;
+  p->ggen = 1;
+  p->fix_sd_rule = -1;
   for (int t = 0; t < VM_NTYPES; t++) p->qr[t] = vm_qrule_get(t, VM_RULE_CORNER);
   build_patterns(p);
   int st = VM_OK;
@@ -953,6 +955,9 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->fix_x);
   vm_free(ctx, p->fix_F);
   vm_free(ctx, p->fix_gen);
+  vm_free(ctx, p->fix_noff);
+  vm_free(ctx, p->fix_sd);
+  vm_free(ctx, p->fix_sgen);
   vm_free(ctx, p);
   *pp = NULL;
 }

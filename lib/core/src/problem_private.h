@@ -137,6 +137,16 @@ struct vm_problem {
   double *fix_x;     /* per slot, 3 VM_MAX_ELEM_VERTS: its vertices' positions */
   double *fix_F;     /* per slot */
   uint64_t *fix_gen; /* per slot: the state fix_F is for, 0 for none */
+  /* and their nodes' s and det C (vm_problem_node_dets, _node_stats),
+   * which change only with the geometry state `ggen` (targets, rule,
+   * metric, normals): 2 per node from fix_noff[slot], sized for the rule
+   * fix_sd_rule (-1: not sized; fix_sd NULL then: no memory) */
+  uint64_t ggen;
+  int64_t nslot;
+  int fix_sd_rule;
+  int64_t *fix_noff;  /* nslot + 1 */
+  double *fix_sd;     /* s, det per node */
+  uint64_t *fix_sgen; /* per slot: the geometry state fix_sd is for, 0 for none */
 };
 
 /* The problem's state changed (targets, rule, measure, parameters, weights,
@@ -144,6 +154,14 @@ struct vm_problem {
  * all-fixed elements is stale. */
 static inline void vm_problem_touch(vm_problem *p) {
   if (p) p->gen++;
+}
+
+/* ... and what the nodes' s and det C depend on changed too (targets,
+ * rule, metric, normals). */
+static inline void vm_problem_touch_geometry(vm_problem *p) {
+  if (!p) return;
+  p->gen++;
+  p->ggen++;
 }
 
 /* Node targets above this many bytes are by default not stored but
