@@ -1084,17 +1084,24 @@ static void elem_sd(const vm_problem *p, int64_t i, const double *x, double *s, 
   }
 }
 
+/* The kept nodes' values dropped (the rule changed, or no memory). */
+static void fix_sd_drop(vm_problem *p) {
+  vm_free(p->ctx, p->fix_noff);
+  vm_free(p->ctx, p->fix_sd);
+  vm_free(p->ctx, p->fix_sgen);
+  p->fix_noff = NULL;
+  p->fix_sd = NULL;
+  p->fix_sgen = NULL;
+  p->fix_sd_rule = -1;
+}
+
 /* The kept nodes' s and det C of the all-fixed elements sized for the
  * present rule (their node counts change with it); without memory, none. */
 static void fix_sd_size(vm_problem *p) {
   fix_build(p);
   if (!p->fix_of || p->fix_sd_rule == p->rule) return;
   vm_ctx *ctx = p->ctx;
-  vm_free(ctx, p->fix_noff);
-  vm_free(ctx, p->fix_sd);
-  vm_free(ctx, p->fix_sgen);
-  p->fix_sd = NULL;
-  p->fix_sgen = NULL;
+  fix_sd_drop(p);
   p->fix_noff = vm_alloc_array(ctx, (size_t)p->nslot + 1, sizeof *p->fix_noff);
   p->fix_sgen = vm_calloc(ctx, (size_t)p->nslot, sizeof *p->fix_sgen);
   if (p->fix_noff && p->fix_sgen) {
@@ -1105,13 +1112,7 @@ static void fix_sd_size(vm_problem *p) {
     p->fix_sd = vm_alloc_array(ctx, 2 * (size_t)(n ? n : 1), sizeof *p->fix_sd);
   }
   if (!p->fix_noff || !p->fix_sgen || !p->fix_sd) {
-    vm_free(ctx, p->fix_noff);
-    vm_free(ctx, p->fix_sd);
-    vm_free(ctx, p->fix_sgen);
-    p->fix_noff = NULL;
-    p->fix_sd = NULL;
-    p->fix_sgen = NULL;
-    p->fix_sd_rule = -1;
+    fix_sd_drop(p);
     return;
   }
   p->fix_sd_rule = p->rule;
