@@ -176,9 +176,10 @@ int vm_problem_set_active(vm_problem *p, const uint8_t *mask);
  * vflag VM_VERTEX_FIXED): want != 0, the default, gives complete gradient
  * and Hessian rows; want = 0 leaves those elements' derivatives out (they
  * reach only the rows of fixed vertices, which the minimizers discard).
- * F is the same bits either way. The minimizers set 0 for their run and
- * restore it. (Such elements' F is computed once per state of the problem
- * and kept while their vertices stay where they were, either way.) */
+ * F is the same bits either way. vm_minimizer_run sets 0 for its run and
+ * 1 when it ends. (Such elements' F, and their nodes' determinants, are
+ * computed once per state of the problem and kept while their vertices
+ * stay where they were, either way.) */
 int vm_problem_set_fixed_derivatives(vm_problem *p, int want);
 
 /* Per-node epsilon for the one-way penalty variant: if eps_node != NULL
