@@ -696,6 +696,29 @@ static int elem_all_fixed(const vm_problem *p, int64_t i) {
   return 1;
 }
 
+/* The kept nodes' values dropped (the rule changed, or no memory). */
+static void fix_sd_drop(vm_problem *p) {
+  vm_free(p->ctx, p->fix_noff);
+  vm_free(p->ctx, p->fix_sd);
+  vm_free(p->ctx, p->fix_sgen);
+  p->fix_noff = NULL;
+  p->fix_sd = NULL;
+  p->fix_sgen = NULL;
+  p->fix_sd_rule = -1;
+}
+
+void vm_problem_fix_free(vm_problem *p) {
+  fix_sd_drop(p);
+  vm_free(p->ctx, p->fix_of);
+  vm_free(p->ctx, p->fix_x);
+  vm_free(p->ctx, p->fix_F);
+  vm_free(p->ctx, p->fix_gen);
+  p->fix_of = NULL;
+  p->fix_x = p->fix_F = NULL;
+  p->fix_gen = NULL;
+  p->nslot = 0;
+}
+
 /* The slots of the cache of all-fixed elements' F (problem_private.h),
  * assigned once, at the first evaluation, to the elements all-fixed then;
  * without memory for them there is no cache (the same values, computed). */
@@ -711,13 +734,7 @@ static void fix_build(vm_problem *p) {
   p->fix_F = vm_alloc_array(ctx, (size_t)n, sizeof *p->fix_F);
   p->fix_gen = vm_calloc(ctx, (size_t)n, sizeof *p->fix_gen);
   if (!p->fix_of || !p->fix_x || !p->fix_F || !p->fix_gen) {
-    vm_free(ctx, p->fix_of);
-    vm_free(ctx, p->fix_x);
-    vm_free(ctx, p->fix_F);
-    vm_free(ctx, p->fix_gen);
-    p->fix_of = NULL;
-    p->fix_x = p->fix_F = NULL;
-    p->fix_gen = NULL;
+    vm_problem_fix_free(p);
     return;
   }
   int64_t k = 0;
@@ -753,7 +770,6 @@ static int fix_value(vm_problem *p, int64_t i, int32_t slot, const double *x, do
     *Fe = p->fix_F[slot];
     return 0;
   }
-  p->fix_gen[slot] = 0;
   if (elem_eval(p, i, x, 0, 0, Fe, NULL)) return 1;
   p->fix_F[slot] = *Fe;
   p->fix_gen[slot] = p->gen;
@@ -1082,17 +1098,6 @@ static void elem_sd(const vm_problem *p, int64_t i, const double *x, double *s, 
       det[j] = v.det;
     }
   }
-}
-
-/* The kept nodes' values dropped (the rule changed, or no memory). */
-static void fix_sd_drop(vm_problem *p) {
-  vm_free(p->ctx, p->fix_noff);
-  vm_free(p->ctx, p->fix_sd);
-  vm_free(p->ctx, p->fix_sgen);
-  p->fix_noff = NULL;
-  p->fix_sd = NULL;
-  p->fix_sgen = NULL;
-  p->fix_sd_rule = -1;
 }
 
 /* The kept nodes' s and det C of the all-fixed elements sized for the

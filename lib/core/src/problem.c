@@ -951,13 +951,7 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->bern_eps);
   vm_free(ctx, p->Fe);
   vm_free(ctx, p->part);
-  vm_free(ctx, p->fix_of);
-  vm_free(ctx, p->fix_x);
-  vm_free(ctx, p->fix_F);
-  vm_free(ctx, p->fix_gen);
-  vm_free(ctx, p->fix_noff);
-  vm_free(ctx, p->fix_sd);
-  vm_free(ctx, p->fix_sgen);
+  vm_problem_fix_free(p);
   vm_free(ctx, p);
   *pp = NULL;
 }

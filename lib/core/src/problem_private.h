@@ -149,6 +149,9 @@ struct vm_problem {
   uint64_t *fix_sgen; /* per slot: the geometry state fix_sd is for, 0 for none */
 };
 
+/* The kept values of all-fixed elements freed (assembly.c): no cache. */
+void vm_problem_fix_free(vm_problem *p);
+
 /* The problem's state changed (targets, rule, measure, parameters, weights,
  * metric, normals, node eps or weights, Bernstein terms): the cached F of
  * all-fixed elements is stale. */
