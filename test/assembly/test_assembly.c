@@ -1084,6 +1084,62 @@ static void test_fixed_cache(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The kept node values (the second statistics pass at a point reads the
+ * first's): every answer is the same bits as a new problem's, which keeps
+ * nothing yet, with the same rule and targets, through a hit at the same
+ * array, a hit at another array with the same contents, a moved vertex,
+ * new targets and a new rule at the same positions, and a new eps. */
+static void node_cache_check(vm_ctx *ctx, vm_mesh *m, vm_problem *p, const double *x, int rule,
+                             double target, const char *what) {
+  vm_problem *f = NULL;
+  CHECK(vm_problem_create(ctx, m, &f) == 0 && vm_problem_set_rule(f, rule) == 0, "fresh");
+  if (target > 0) CHECK(vm_problem_set_target_ideal(f, target) == 0, "fresh targets");
+  int64_t nn = vm_problem_num_nodes(p);
+  CHECK(nn == vm_problem_num_nodes(f), "%s: node counts", what);
+  double *d = malloc((size_t)nn * sizeof *d), *df = malloc((size_t)nn * sizeof *df);
+  vm_node_stats ns, nf;
+  for (int rep = 0; rep < 2; rep++) {
+    CHECK(vm_problem_node_dets(p, x, d) == 0 && vm_problem_node_dets(f, x, df) == 0, "dets");
+    CHECK(same_bits(d, df, (size_t)nn), "%s (pass %d): node dets differ from a new problem's", what,
+          rep);
+    CHECK(vm_problem_node_stats(p, x, &ns) == 0 && vm_problem_node_stats(f, x, &nf) == 0, "stats");
+    CHECK(ns.inverted == nf.inverted && ns.min_det == nf.min_det && ns.phi_min == nf.phi_min &&
+              ns.psi_min == nf.psi_min,
+          "%s (pass %d): node statistics differ from a new problem's", what, rep);
+  }
+  free(d);
+  free(df);
+  vm_problem_destroy(&f);
+}
+
+static void test_node_cache(vm_ctx *ctx) {
+  vm_ctx_seed(ctx, 22);
+  vm_mesh *m = mg_build(ctx, VM_HEX, 0, 4, 4, 4, 1.0);
+  mg_jitter(ctx, m, 0.2);
+  size_t n3 = 3 * (size_t)m->nv;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->xyz[3 * v + 2] < 0.5) m->vflag[v] = VM_VERTEX_FIXED;
+  vm_problem *p = NULL;
+  CHECK(vm_problem_create(ctx, m, &p) == 0, "create");
+  double *x = dup(m->xyz, n3), *y = dup(m->xyz, n3);
+  node_cache_check(ctx, m, p, x, VM_RULE_CORNER, 0, "same array");
+  node_cache_check(ctx, m, p, y, VM_RULE_CORNER, 0, "another array, the same positions");
+  x[3 * (m->nv - 1)] += 0.05; /* a free vertex (z = 4) */
+  node_cache_check(ctx, m, p, x, VM_RULE_CORNER, 0, "a vertex moved");
+  CHECK(vm_problem_set_target_ideal(p, 0.8) == 0, "targets");
+  node_cache_check(ctx, m, p, x, VM_RULE_CORNER, 0.8, "new targets");
+  CHECK(vm_problem_set_rule(p, VM_RULE_GEOMETRIC) == 0, "rule");
+  node_cache_check(ctx, m, p, x, VM_RULE_GEOMETRIC, 0.8, "a new rule");
+  vm_measure_params q = vm_measure_params_default();
+  q.eps = 0.2;
+  CHECK(vm_problem_set_measure(p, VM_MEASURE_PENALTY, &q) == 0, "measure");
+  node_cache_check(ctx, m, p, x, VM_RULE_GEOMETRIC, 0.8, "a new eps");
+  free(x);
+  free(y);
+  vm_problem_destroy(&p);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   if (vm_ctx_create(&ctx)) return 1;
@@ -1098,6 +1154,7 @@ int main(void) {
   test_node_weights(ctx);
   test_bernstein(ctx);
   test_fixed_cache(ctx);
+  test_node_cache(ctx);
   test_errors(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("assembly");

@@ -1147,6 +1147,67 @@ static void elem_sd_kept(vm_problem *p, int64_t i, const double *x, double *s, d
   p->fix_sgen[slot] = p->ggen;
 }
 
+void vm_problem_nsd_free(vm_problem *p) {
+  vm_free(p->ctx, p->nsd);
+  vm_free(p->ctx, p->nsd_x);
+  p->nsd = p->nsd_x = NULL;
+  p->nsd_n = 0;
+  p->nsd_nx = 0;
+  p->nsd_ggen = 0;
+}
+
+/* The kept node values for x: 1 if they are for x (bit for bit) and the
+ * present geometry; 0 if not, and then p->nsd, when there is room for it,
+ * is where the pass about to run keeps its values (nsd_done says they are
+ * complete). */
+static int nsd_lookup(vm_problem *p, const double *x) {
+  int64_t n = p->noff[p->nae];
+  size_t nx = (size_t)p->m->nv * 3;
+  if (p->nsd && p->nsd_n == n && p->nsd_nx == nx && p->nsd_ggen == p->ggen &&
+      memcmp(p->nsd_x, x, nx * sizeof *x) == 0)
+    return 1;
+  p->nsd_ggen = 0;
+  if (p->nsd && p->nsd_n == n && p->nsd_nx == nx) return 0;
+  vm_problem_nsd_free(p);
+  if ((double)n * 2 * sizeof(double) + (double)nx * sizeof(double) > (double)VM_PROBLEM_NSD_MAX)
+    return 0;
+  p->nsd = vm_alloc_array(p->ctx, 2 * (size_t)(n ? n : 1), sizeof *p->nsd);
+  p->nsd_x = vm_alloc_array(p->ctx, nx ? nx : 1, sizeof *p->nsd_x);
+  if (!p->nsd || !p->nsd_x) {
+    vm_problem_nsd_free(p);
+    return 0;
+  }
+  p->nsd_n = n;
+  p->nsd_nx = nx;
+  return 0;
+}
+
+static void nsd_done(vm_problem *p, const double *x) {
+  if (!p->nsd) return;
+  memcpy(p->nsd_x, x, p->nsd_nx * sizeof *x);
+  p->nsd_ggen = p->ggen;
+}
+
+/* s and det C of active element i's nodes at x: the kept ones (hit), else
+ * computed and, when p->nsd is there, kept. */
+static void elem_sd_at(vm_problem *p, int64_t i, const double *x, int hit, double *s, double *det) {
+  int nn = (int)(p->noff[i + 1] - p->noff[i]);
+  double *k = p->nsd ? p->nsd + 2 * p->noff[i] : NULL;
+  if (hit) {
+    for (int j = 0; j < nn; j++) {
+      s[j] = k[2 * j];
+      det[j] = k[2 * j + 1];
+    }
+    return;
+  }
+  elem_sd_kept(p, i, x, s, det);
+  if (k)
+    for (int j = 0; j < nn; j++) {
+      k[2 * j] = s[j];
+      k[2 * j + 1] = det[j];
+    }
+}
+
 int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
   if (!p || !x)
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_stats: NULL argument") : VM_ERR_ARG;
@@ -1154,11 +1215,12 @@ int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
   double mind = INFINITY, phimin = INFINITY, psimin = INFINITY;
   int d = p->tdim;
   fix_sd_size(p);
+  int hit = nsd_lookup(p, x);
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p)) \
     reduction(+ : inv) reduction(min : mind, phimin, psimin)
   for (int64_t i = 0; i < p->nae; i++) {
     double s[VM_QRULE_MAX_NODES], det[VM_QRULE_MAX_NODES];
-    elem_sd_kept(p, i, x, s, det);
+    elem_sd_at(p, i, x, hit, s, det);
     int nn = (int)(p->noff[i + 1] - p->noff[i]);
     for (int j = 0; j < nn; j++) {
       if (p->node_w && p->node_w[p->noff[i] + j] == 0) continue; /* left out */
@@ -1172,6 +1234,7 @@ int vm_problem_node_stats(vm_problem *p, const double *x, vm_node_stats *st) {
       if (psi < psimin) psimin = psi;
     }
   }
+  if (!hit) nsd_done(p, x);
   if (st) {
     st->inverted = inv;
     st->min_det = mind;
@@ -1185,10 +1248,12 @@ int vm_problem_node_dets(vm_problem *p, const double *x, double *det) {
   if (!p || !x || !det)
     return p ? vm_error(p->ctx, VM_ERR_ARG, "vm_problem_node_dets: NULL argument") : VM_ERR_ARG;
   fix_sd_size(p);
+  int hit = nsd_lookup(p, x);
 #pragma omp parallel for schedule(static) num_threads(vm_problem_threads(p))
   for (int64_t i = 0; i < p->nae; i++) {
     double s[VM_QRULE_MAX_NODES];
-    elem_sd_kept(p, i, x, s, det + p->noff[i]);
+    elem_sd_at(p, i, x, hit, s, det + p->noff[i]);
   }
+  if (!hit) nsd_done(p, x);
   return VM_OK;
 }

@@ -952,6 +952,7 @@ void vm_problem_destroy(vm_problem **pp) {
   vm_free(ctx, p->Fe);
   vm_free(ctx, p->part);
   vm_problem_fix_free(p);
+  vm_problem_nsd_free(p);
   vm_free(ctx, p);
   *pp = NULL;
 }

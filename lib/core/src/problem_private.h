@@ -147,7 +147,25 @@ struct vm_problem {
   int64_t *fix_noff;  /* nslot + 1 */
   double *fix_sd;     /* s, det per node */
   uint64_t *fix_sgen; /* per slot: the geometry state fix_sd is for, 0 for none */
+
+  /* Every node's s and det C (2 per node) as the last vm_problem_node_dets
+   * or _node_stats computed them, at the positions nsd_x (nv x 3) and the
+   * geometry state nsd_ggen, for the present rule's nsd_n nodes: a
+   * minimizer's statistics after a step and the caller's before the next
+   * are at the same point, and the second pass reads them here. Only up to
+   * VM_PROBLEM_NSD_MAX bytes (none beyond: each pass computes). */
+  double *nsd;
+  double *nsd_x;
+  int64_t nsd_n;
+  size_t nsd_nx;     /* nv x 3 when kept */
+  uint64_t nsd_ggen; /* 0: nothing kept */
 };
+
+/* The most memory the kept node values (nsd) take. */
+#define VM_PROBLEM_NSD_MAX (64ll << 20)
+
+/* The kept node values freed (assembly.c). */
+void vm_problem_nsd_free(vm_problem *p);
 
 /* The kept values of all-fixed elements freed (assembly.c): no cache. */
 void vm_problem_fix_free(vm_problem *p);
