@@ -1163,11 +1163,10 @@ void vm_problem_nsd_free(vm_problem *p) {
 static int nsd_lookup(vm_problem *p, const double *x) {
   int64_t n = p->noff[p->nae];
   size_t nx = (size_t)p->m->nv * 3;
-  if (p->nsd && p->nsd_n == n && p->nsd_nx == nx && p->nsd_ggen == p->ggen &&
-      memcmp(p->nsd_x, x, nx * sizeof *x) == 0)
-    return 1;
+  int sized = p->nsd && p->nsd_n == n && p->nsd_nx == nx;
+  if (sized && p->nsd_ggen == p->ggen && memcmp(p->nsd_x, x, nx * sizeof *x) == 0) return 1;
   p->nsd_ggen = 0;
-  if (p->nsd && p->nsd_n == n && p->nsd_nx == nx) return 0;
+  if (sized) return 0;
   vm_problem_nsd_free(p);
   if ((double)n * 2 * sizeof(double) + (double)nx * sizeof(double) > (double)VM_PROBLEM_NSD_MAX)
     return 0;
