@@ -84,6 +84,10 @@ static const vm_opt opts[] = {
      .lo = 0, .hi = 0.999},
     {"--eps-inner", NULL, VM_OPT_INT, A(o.eps_inner), "N",
      "foldover: iterations per eps (default 3)", .lo = 1, .hi = 1e8},
+    {"--eps-cap", NULL, VM_OPT_DOUBLE, A(o.eps_cap), "R",
+     "foldover: while a node is inverted, eps after each block at most R |min det| "
+     "(default 0: no cap)",
+     .lo = 0, .hi = 1e8},
     {"--staged", NULL, VM_OPT_FLAG, A(o.staged), NULL,
      "hexahedra: untangle their 6-tet split first, then the rule's nodes with the split held "
      "valid (the default on meshes with hexahedra)",
@@ -698,6 +702,7 @@ static vm_volume_opts schedule_opts(const args *a, int staged, int adaptive) {
   o.method = a->method >= 0 ? (vm_untangle_method)a->method : d.method;
   o.eps_inner = a->o.eps_inner ? a->o.eps_inner : d.eps_inner;
   o.theta_untangle = !isnan(a->o.theta_untangle) ? a->o.theta_untangle : d.theta_untangle;
+  o.eps_cap = !isnan(a->o.eps_cap) ? a->o.eps_cap : d.eps_cap;
   return o;
 }
 
@@ -805,6 +810,7 @@ int main(int argc, char **argv) {
             .min_sj = 1e-5};
   a.o.eps_inner = 0; /* not given: the default, or --staged's, below */
   a.o.theta_untangle = NAN;
+  a.o.eps_cap = NAN;
   stage s = {0};
   outcome r = {0};
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
@@ -903,7 +909,7 @@ int main(int argc, char **argv) {
   /* after staged, direct; after direct, the adaptive penalty */
   vm_volume_opts f = schedule_opts(&a, 0, !r.staged);
   int differs = r.staged || f.method != o.method || f.eps_inner != o.eps_inner ||
-                f.theta_untangle != o.theta_untangle;
+                f.theta_untangle != o.theta_untangle || f.eps_cap != o.eps_cap;
   if (r.st == VM_WARN_INVERTED && r.rep.M_final > 0 && a.auto_schedule && differs &&
       !r.rep.timed_out) {
     /* the first schedule stalled with inverted nodes left (not the repair:

@@ -27,7 +27,7 @@ static void usage(void) {
           "usage: bench_rotcube [--n N] [--angles i,j,..] [--geometric] [--tets] [--mixed]\n"
           "                     [--time-limit S] [--max-iter N] [--opt-iter N] [--method "
           "penalty|oneway|barrier|adaptive|foldover]\n"
-          "                     [--eps-inner N] [--local-threshold N] [--theta T]\n"
+          "                     [--eps-inner N] [--eps-cap R] [--local-threshold N] [--theta T]\n"
           "                     [--theta-untangle T]\n"
           "                     [--explicit | --newton] [--staged | --direct] [--qi-steps N] "
           "[--threads N] "
@@ -120,6 +120,9 @@ int main(int argc, char **argv) {
       i++;
     } else if (!strcmp(a, "--eps-inner")) {
       o.eps_inner = atoi(v);
+      i++;
+    } else if (!strcmp(a, "--eps-cap")) {
+      o.eps_cap = atof(v);
       i++;
     } else if (!strcmp(a, "--local-threshold")) {
       o.local_threshold = atoi(v);

@@ -103,6 +103,8 @@ typedef struct {
   int block_iter;      /* foldover: iterations at the current eps */
   double F_block0;     /* foldover: F before the first of them */
   double eps_restart;  /* foldover: least eps after a stalled local round */
+  double eps_floor;    /* foldover: that least eps of the present run, the
+                          floor of the cap on eps (opts eps_cap) */
   int keep_certified;  /* optimization: every step keeps every cell certified */
   int no_local;        /* untangling without local rounds */
   int keep_guards;     /* every step keeps every guarded node positive */
@@ -294,6 +296,7 @@ static int update_eps(ut_state *s, int first) {
      * against 600). */
     if (first) {
       s->eps = fmax(neg > 0 ? neg : o->delta0, s->eps_restart);
+      s->eps_floor = s->eps_restart;
       s->eps_restart = 0;
       s->block_iter = 0;
       break;
@@ -306,6 +309,10 @@ static int update_eps(ut_state *s, int first) {
     double dk = o->geometric_decay, cap = s->stop_certified && dk > 0 && dk < 1 ? dk : 0.9;
     double mu = fmin(ratio, cap) * chi;
     s->eps = D < mu ? 2 * sqrt(mu * (mu - D)) : o->delta0;
+    /* never above where a start from here would put it (eps_cap |D|, not
+     * below the run's restart floor): where the worst det rose faster
+     * than the blocks lowered eps, the penalty stayed flat at the folds */
+    if (o->eps_cap > 0 && D < 0) s->eps = fmin(s->eps, fmax(o->eps_cap * -D, s->eps_floor));
     if (s->eps < o->delta0) s->eps = o->delta0;
     s->block_iter = 0;
     break;
@@ -367,7 +374,14 @@ static int before_untangle(void *user, int iter, const double *x) {
   if ((s->stop_certified || s->check_certified) && (iter == 1 || iter % 5 == 0)) {
     if ((st = reach_certified(s, x)) != 0) return st;
   }
-  if (s->go_local && s->M > 0 && s->M < local_threshold(s)) return 1;
+  /* the geometric phase takes at least one global step: from a
+   * corner-valid mesh its first eps is that of the worst of the 64 nodes,
+   * and a local round started there turned the few inverted nodes into
+   * thousands (n = 12 cube turned by 5pi/8 about (1,1,1), inner 0.35,
+   * --eps-cap 1: 36 cells, < 800 nodes -> 22,000 in its local rounds, 77 s
+   * in the phase; from a global start the phase took 5 s) */
+  if (s->go_local && s->M > 0 && s->M < local_threshold(s) && !(s->stop_certified && iter == 1))
+    return 1;
   if ((st = update_eps(s, iter == 1 && s->eps == 0)) < 0) return st;
   if (adaptive && s->M == 0 && s->done) return 1;
   s->have_step = 0;
@@ -664,6 +678,7 @@ static void sub_end(ut_state *s, ut_state *ss, submesh *sm, const uint8_t *vmark
         memcpy(s->m->xyz + 3 * (int64_t)sm->v_of[v], sm->m->xyz + 3 * v, 3 * sizeof *s->m->xyz);
   s->eps = ss->eps;
   s->eps_restart = ss->eps_restart;
+  s->eps_floor = ss->eps_floor;
   s->pressure = ss->pressure;
   s->done = ss->done;
   s->block_iter = ss->block_iter;
