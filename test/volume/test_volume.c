@@ -206,7 +206,7 @@ static void split_rules(vm_ctx *ctx) {
 
 /* The foldover rule's cap (opts eps_cap) on the n = 12 7pi/8 cube: where a
  * block ends with a node inverted, the next eps is at most eps_cap |min
- * det| of that mesh, or the run's restart floor (eps_restart, 1e-2 here)
+ * det| of that mesh, or the run's restart floor (opts eps_restart)
  * in a restarted local round.
  * Read from the progress records: a record's min det is the mesh after its
  * step, so the next record of the same phase, one iteration on, carries
@@ -215,14 +215,15 @@ typedef struct {
   vm_volume_progress prev;
   int have;
   int64_t checked, above;
-  double worst; /* the largest eps / max(|min det|, 1e-2) */
+  double floor; /* opts eps_restart */
+  double worst; /* the largest eps / max(|min det|, floor) */
 } cap_watch;
 
 static void watch_cap(void *user, const vm_volume_progress *p) {
   cap_watch *w = user;
   if (w->have && !strcmp(p->phase, w->prev.phase) && p->iter == w->prev.iter + 1 &&
       strcmp(p->phase, "optimize") && w->prev.min_det < 0 && p->eps != w->prev.eps) {
-    double bound = fmax(-w->prev.min_det, 1e-2);
+    double bound = fmax(-w->prev.min_det, w->floor);
     w->checked++;
     if (p->eps > bound * (1 + 1e-12)) w->above++;
     if (p->eps / bound > w->worst) w->worst = p->eps / bound;
@@ -252,7 +253,7 @@ static void eps_cap(vm_ctx *ctx) {
      * session 58) */
     o.max_iter = 300;
     o.time_limit = 900;
-    cap_watch w = {0};
+    cap_watch w = {.floor = o.eps_restart};
     o.progress = watch_cap;
     o.user = &w;
     vm_volume_report r;
@@ -263,8 +264,8 @@ static void eps_cap(vm_ctx *ctx) {
           (long long)w.checked);
     above[k] = w.above;
     fprintf(stderr,
-            "eps cap %g: %lld of %lld new eps above max(|min det|, 1e-2), at most %.3g times\n",
-            o.eps_cap, (long long)w.above, (long long)w.checked, w.worst);
+            "eps cap %g: %lld of %lld new eps above max(|min det|, %g), at most %.3g times\n",
+            o.eps_cap, (long long)w.above, (long long)w.checked, w.floor, w.worst);
     vm_free(ctx, ref);
     vm_mesh_destroy(&m);
   }
