@@ -204,10 +204,12 @@ static void split_rules(vm_ctx *ctx) {
   vm_free(ctx, gs);
 }
 
-/* The foldover rule's cap (opts eps_cap) on the n = 12 7pi/8 cube: where a
- * block ends with a node inverted, the next eps is at most eps_cap |min
- * det| of that mesh, or the run's restart floor (opts eps_restart)
- * in a restarted local round.
+/* The foldover rule's cap (opts eps_cap) on the n = 12 pi cube with an
+ * inner cube of half-size 0.3 (golden case volume-staged): where a
+ * block of the guarded stage ends with a node inverted, the next eps is at
+ * most eps_cap |min det| of that mesh (not below the run's restart floor,
+ * opts eps_restart, in a restarted local round). The split stage is left
+ * to the rule alone.
  * Read from the progress records: a record's min det is the mesh after its
  * step, so the next record of the same phase, one iteration on, carries
  * the eps chosen at that mesh. */
@@ -215,14 +217,18 @@ typedef struct {
   vm_volume_progress prev;
   int have;
   int64_t checked, above;
-  double floor; /* opts eps_restart */
-  double worst; /* the largest eps / max(|min det|, floor) */
+  int64_t split_above; /* the split stage's new eps above |min det| */
+  double floor;        /* opts eps_restart */
+  double worst;        /* the largest eps / max(|min det|, floor) */
 } cap_watch;
 
 static void watch_cap(void *user, const vm_volume_progress *p) {
   cap_watch *w = user;
-  if (w->have && !strcmp(p->phase, w->prev.phase) && p->iter == w->prev.iter + 1 &&
-      strcmp(p->phase, "optimize") && w->prev.min_det < 0 && p->eps != w->prev.eps) {
+  if (w->have && !strcmp(p->phase, "split") && !strcmp(p->phase, w->prev.phase) &&
+      p->iter == w->prev.iter + 1 && w->prev.min_det < 0 && p->eps != w->prev.eps)
+    w->split_above += p->eps > -w->prev.min_det * (1 + 1e-12);
+  if (w->have && !strcmp(p->phase, "guarded") && !strcmp(p->phase, w->prev.phase) &&
+      p->iter == w->prev.iter + 1 && w->prev.min_det < 0 && p->eps != w->prev.eps) {
     double bound = fmax(-w->prev.min_det, w->floor);
     w->checked++;
     if (p->eps > bound * (1 + 1e-12)) w->above++;
@@ -237,21 +243,18 @@ static void eps_cap(vm_ctx *ctx) {
   for (int k = 0; k < 2; k++) {
     vm_rotcube_opts ro = vm_rotcube_opts_default();
     ro.n = 12;
-    ro.alpha = 0.875 * PI;
+    ro.alpha = PI;
+    ro.inner = 0.3;
     vm_mesh *m;
     double *ref;
     CHECK(vm_gen_rotated_cube(ctx, &ro, &m, &ref) == VM_OK, "eps cap: generate");
     vm_volume_opts o = vm_volume_opts_staged();
-    CHECK(o.eps_cap == 0 && vm_volume_opts_direct().eps_cap == 0 &&
-              vm_volume_opts_default().eps_cap == 0,
-          "eps cap: off unless asked for");
+    CHECK(o.eps_cap == 1 && vm_volume_opts_direct().eps_cap == 1,
+          "eps cap: 1 in the foldover schedules");
     o.eps_cap = k ? 0 : 1;
     o.target_xyz = ref;
-    /* the rule, not the outcome: the first 300 iterations (with the cap
-     * the n = 12 pi cube was still untangling after 13,000, the n = 16 pi
-     * cube's split stalled: why the cap is not a default; docs/volume.md,
-     * session 58) */
-    o.max_iter = 300;
+    /* the rule, not the outcome: the first 600 iterations */
+    o.max_iter = 600;
     o.time_limit = 900;
     cap_watch w = {.floor = o.eps_restart};
     o.progress = watch_cap;
@@ -263,9 +266,14 @@ static void eps_cap(vm_ctx *ctx) {
     CHECK(w.checked > 20, "eps cap %g: %lld new eps with a node inverted", o.eps_cap,
           (long long)w.checked);
     above[k] = w.above;
+    if (!k)
+      CHECK(w.split_above > 0, "eps cap 1: the split stage is not capped (%lld new eps above)",
+            (long long)w.split_above);
     fprintf(stderr,
-            "eps cap %g: %lld of %lld new eps above max(|min det|, %g), at most %.3g times\n",
-            o.eps_cap, (long long)w.above, (long long)w.checked, w.floor, w.worst);
+            "eps cap %g: %lld of %lld new eps of the guarded stage above max(|min det|, %g), at "
+            "most %.3g times (the split's: %lld above); %d + %d iterations\n",
+            o.eps_cap, (long long)w.above, (long long)w.checked, w.floor, w.worst,
+            (long long)w.split_above, r.iter_untangle, r.iter_local);
     vm_free(ctx, ref);
     vm_mesh_destroy(&m);
   }

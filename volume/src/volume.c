@@ -47,6 +47,7 @@ vm_volume_opts vm_volume_opts_direct(void) {
   vm_volume_opts o = vm_volume_opts_default();
   o.method = VM_UNTANGLE_FOLDOVER;
   o.eps_inner = 3;
+  o.eps_cap = 1;
   o.theta_untangle = 0.999;
   return o;
 }
@@ -309,10 +310,16 @@ static int update_eps(ut_state *s, int first) {
     double dk = o->geometric_decay, cap = s->stop_certified && dk > 0 && dk < 1 ? dk : 0.9;
     double mu = fmin(ratio, cap) * chi;
     s->eps = D < mu ? 2 * sqrt(mu * (mu - D)) : o->delta0;
-    /* never above where a start from here would put it (eps_cap |D|, not
-     * below the run's restart floor): where the worst det rose faster
-     * than the blocks lowered eps, the penalty stayed flat at the folds */
-    if (o->eps_cap > 0 && D < 0) s->eps = fmin(s->eps, fmax(o->eps_cap * -D, s->eps_floor));
+    /* while nodes are guarded (the staged schedule's second stage, the
+     * repair's rounds), never above where a start from here would put it
+     * (eps_cap |D|, not below the run's restart floor): where the worst
+     * det rose faster than the blocks lowered eps, the penalty stayed flat
+     * at the folds (n = 32 7pi/8: eps 145 at min det -40 after 30 of 429
+     * guarded iterations). Not in the split stage, whose M rises tenfold
+     * from its start: there the cap took eps down with thousands of nodes
+     * inverted, and the n = 16 pi cube's split stalled at M ~ 150. */
+    if (o->eps_cap > 0 && D < 0 && s->guard && !s->split_stage)
+      s->eps = fmin(s->eps, fmax(o->eps_cap * -D, s->eps_floor));
     if (s->eps < o->delta0) s->eps = o->delta0;
     s->block_iter = 0;
     break;

@@ -63,11 +63,13 @@ typedef struct vm_volume_opts {
   double sigma;              /* contraction of (39), in (0, 1) (default 0.5) */
   double kappa;              /* adaptive: slowest eps decay per iteration (0.7) */
   int eps_inner;             /* foldover: iterations per eps (default 10) */
-  double eps_cap;            /* foldover: while a node is inverted, a block's
-                                new eps is at most eps_cap |min det| (what a
-                                start from that mesh would take), not below the
-                                run's eps_restart; <= 0: no cap (default 0,
-                                in every schedule: docs/volume.md, session 58) */
+  double eps_cap;            /* foldover: while nodes are guarded (the staged
+                                schedule's second stage, the repair's rounds)
+                                and a node is inverted, a block's new eps is at
+                                most eps_cap |min det| (what a start from that
+                                mesh would take), not below the run's
+                                eps_restart; <= 0: no cap (default 0; 1 in the
+                                foldover schedules) */
   int max_iter;              /* untangling iterations, global + local (default 20000) */
   int opt_iter;              /* optimization iterations once valid (default 100) */
   double time_limit;         /* seconds for the whole run, <= 0: none */
