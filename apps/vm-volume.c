@@ -85,7 +85,7 @@ static const vm_opt opts[] = {
     {"--eps-inner", NULL, VM_OPT_INT, A(o.eps_inner), "N",
      "foldover: iterations per eps (default 3)", .lo = 1, .hi = 1e8},
     {"--eps-cap", NULL, VM_OPT_DOUBLE, A(o.eps_cap), "R",
-     "foldover: while guarded nodes hold the split (staged) and a node is inverted, eps "
+     "foldover: while some nodes are guarded (staged, after the split) and one is inverted, eps "
      "after each block at most R |min det| (default 1; 0: no cap)",
      .lo = 0, .hi = 1e8},
     {"--staged", NULL, VM_OPT_FLAG, A(o.staged), NULL,
