@@ -224,11 +224,12 @@ typedef struct {
 
 static void watch_cap(void *user, const vm_volume_progress *p) {
   cap_watch *w = user;
-  if (w->have && !strcmp(p->phase, "split") && !strcmp(p->phase, w->prev.phase) &&
-      p->iter == w->prev.iter + 1 && w->prev.min_det < 0 && p->eps != w->prev.eps)
+  /* a new eps chosen at a mesh with a node inverted */
+  int new_eps = w->have && !strcmp(p->phase, w->prev.phase) && p->iter == w->prev.iter + 1 &&
+                w->prev.min_det < 0 && p->eps != w->prev.eps;
+  if (new_eps && !strcmp(p->phase, "split"))
     w->split_above += p->eps > -w->prev.min_det * (1 + 1e-12);
-  if (w->have && !strcmp(p->phase, "guarded") && !strcmp(p->phase, w->prev.phase) &&
-      p->iter == w->prev.iter + 1 && w->prev.min_det < 0 && p->eps != w->prev.eps) {
+  if (new_eps && !strcmp(p->phase, "guarded")) {
     double bound = fmax(-w->prev.min_det, w->floor);
     w->checked++;
     if (p->eps > bound * (1 + 1e-12)) w->above++;

@@ -315,10 +315,11 @@ static int update_eps(ut_state *s, int first) {
      * (eps_cap |D|, not below the run's restart floor): where the worst
      * det rose faster than the blocks lowered eps, the penalty stayed flat
      * at the folds (n = 32 7pi/8: eps 145 at min det -40 after 30 of 429
-     * guarded iterations). Not in the split stage, whose M rises tenfold
-     * from its start: there the cap took eps down with thousands of nodes
-     * inverted, and the n = 16 pi cube's split stalled at M ~ 150. */
-    if (o->eps_cap > 0 && D < 0 && s->guard && !s->split_stage)
+     * guarded iterations). Not in the split stage (no guards there), whose
+     * M rises tenfold from its start: there the cap took eps down with
+     * thousands of nodes inverted, and the n = 16 pi cube's split stalled
+     * at M ~ 150. */
+    if (o->eps_cap > 0 && D < 0 && s->guard)
       s->eps = fmin(s->eps, fmax(o->eps_cap * -D, s->eps_floor));
     if (s->eps < o->delta0) s->eps = o->delta0;
     s->block_iter = 0;
@@ -385,7 +386,7 @@ static int before_untangle(void *user, int iter, const double *x) {
    * corner-valid mesh its first eps is that of the worst of the 64 nodes,
    * and a local round started there turned the few inverted nodes into
    * thousands (n = 12 cube turned by 5pi/8 about (1,1,1), inner 0.35,
-   * --eps-cap 1: 36 cells, < 800 nodes -> 22,000 in its local rounds, 77 s
+   * with session 58's cap in every stage: 36 cells, < 800 nodes -> 22,000 in its local rounds, 77 s
    * in the phase; from a global start the phase took 5 s) */
   if (s->go_local && s->M > 0 && s->M < local_threshold(s) && !(s->stop_certified && iter == 1))
     return 1;
