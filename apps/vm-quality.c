@@ -13,7 +13,7 @@
 #include "varmesh/quality.h"
 
 static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
-                       const vm_jac_report *jr) {
+                       const vm_jac_report *jr, const vm_hex_bounds *hb) {
   printf("mesh %s: %lld vertices, %lld elements measured (dimension %d)", path, (long long)m->nv,
          (long long)q->measured, q->top_dim);
   if (q->skipped) printf(", %lld lower-dimensional elements not measured", (long long)q->skipped);
@@ -32,6 +32,12 @@ static void print_text(const char *path, const vm_mesh *m, const vm_quality *q,
            "%lld undecided\n",
            (long long)(jr->cells - jr->invalid - jr->undecided), (long long)jr->cells,
            (long long)jr->invalid, (long long)jr->undecided);
+  if (hb->hexes) {
+    printf("hexahedra over the whole cell (certified bracket): phi_min in [%.4e, %.4e]", hb->phi_lo,
+           hb->phi_hi);
+    if (!isnan(hb->psi_lo)) printf(", psi_min in [%.4e, %.4e]", hb->psi_lo, hb->psi_hi);
+    printf("\n");
+  }
   if (q->top_dim == 3 && q->measured)
     printf("OpenFOAM's checkMesh: %lld cells of volume <= 0, %lld face pyramids incorrectly "
            "oriented\n",
@@ -68,7 +74,7 @@ static void json_tq(const vm_type_quality *tq) {
 }
 
 static void print_json(const char *path, const vm_mesh *m, const vm_quality *q,
-                       const vm_jac_report *jr) {
+                       const vm_jac_report *jr, const vm_hex_bounds *hb) {
   printf("{\"file\": ");
   vm_json_string(stdout, path);
   printf(", \"vertices\": %lld, \"dimension\": %d, \"skipped\": %lld, \"types\": {",
@@ -94,6 +100,16 @@ static void print_json(const char *path, const vm_mesh *m, const vm_quality *q,
          "\"first_bad\": %lld}",
          (long long)jr->cells, (long long)jr->invalid, (long long)jr->undecided,
          (long long)jr->first_bad);
+  if (hb->hexes) {
+    const double v[4] = {hb->phi_lo, hb->phi_hi, hb->psi_lo, hb->psi_hi};
+    const char *k[4] = {"phi_min_lo", "phi_min_hi", "psi_min_lo", "psi_min_hi"};
+    printf(", \"hex_whole_cell\": {");
+    for (int i = 0; i < 4; i++) {
+      printf("%s\"%s\": ", i ? ", " : "", k[i]);
+      vm_json_double(stdout, v[i]);
+    }
+    printf("}");
+  }
   if (q->top_dim == 3)
     printf(", \"foam\": {\"negative_volumes\": %lld, \"pyramid_errors\": %lld}",
            (long long)q->foam_neg_volumes, (long long)q->foam_pyramid_errors);
@@ -190,14 +206,17 @@ int main(int argc, char **argv) {
     }
     vm_ctx_clear_error(cli.ctx);
   }
-  if (vm_mesh_quality(m, &a.qo, &q) < 0 || vm_mesh_jacobian_certify(m, &jr, NULL) < 0) {
+  /* phi and psi over the whole of each hex, not only at the rule's nodes */
+  vm_hex_bounds hb = {0};
+  if (vm_mesh_quality(m, &a.qo, &q) < 0 || vm_mesh_jacobian_certify(m, &jr, NULL) < 0 ||
+      vm_mesh_hex_bounds(m, a.qo.target_size, 0.01, 0, &hb) < 0) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
   if (a.json)
-    print_json(a.path, m, &q, &jr);
+    print_json(a.path, m, &q, &jr, &hb);
   else
-    print_text(a.path, m, &q, &jr);
+    print_text(a.path, m, &q, &jr, &hb);
   if (a.require_valid && q.all.inverted_nodes > 0) {
     vm_cli_error(&cli, "%s: %lld inverted quadrature simplices in %lld elements", a.path,
                  (long long)q.all.inverted_nodes, (long long)q.all.inverted_elems);

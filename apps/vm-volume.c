@@ -116,7 +116,9 @@ static const vm_opt opts[] = {
     {"--opt-iter", NULL, VM_OPT_INT, A(o.opt_iter), "N",
      "optimization iterations once valid (default 100)", .lo = 0, .hi = 1e8},
     {"--qi-steps", NULL, VM_OPT_INT, A(o.qi_steps), "N",
-     "quasi-isometric continuation steps (default 0)", .lo = 0, .hi = 1e8},
+     "quasi-isometric continuation steps, the last optimization (default 1 in the staged "
+     "schedule, else 0)",
+     .lo = 0, .hi = 1e8},
     {"--local-threshold", NULL, VM_OPT_INT, A(o.local_threshold), "N",
      "untangle locally below N inverted simplices (default 100)", .lo = 0, .hi = 1e8},
     {"--time-limit", NULL, VM_OPT_DOUBLE, A(o.time_limit), "S", "seconds for the whole run",
@@ -703,6 +705,7 @@ static vm_volume_opts schedule_opts(const args *a, int staged, int adaptive) {
   o.eps_inner = a->o.eps_inner ? a->o.eps_inner : d.eps_inner;
   o.theta_untangle = !isnan(a->o.theta_untangle) ? a->o.theta_untangle : d.theta_untangle;
   o.eps_cap = !isnan(a->o.eps_cap) ? a->o.eps_cap : d.eps_cap;
+  o.qi_steps = a->o.qi_steps >= 0 ? a->o.qi_steps : d.qi_steps;
   return o;
 }
 
@@ -811,6 +814,7 @@ int main(int argc, char **argv) {
   a.o.eps_inner = 0; /* not given: the default, or --staged's, below */
   a.o.theta_untangle = NAN;
   a.o.eps_cap = NAN;
+  a.o.qi_steps = -1;
   stage s = {0};
   outcome r = {0};
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
@@ -909,7 +913,8 @@ int main(int argc, char **argv) {
   /* after staged, direct; after direct, the adaptive penalty */
   vm_volume_opts f = schedule_opts(&a, 0, !r.staged);
   int differs = r.staged || f.method != o.method || f.eps_inner != o.eps_inner ||
-                f.theta_untangle != o.theta_untangle || f.eps_cap != o.eps_cap;
+                f.theta_untangle != o.theta_untangle || f.eps_cap != o.eps_cap ||
+                f.qi_steps != o.qi_steps;
   if (r.st == VM_WARN_INVERTED && r.rep.M_final > 0 && a.auto_schedule && differs &&
       !r.rep.timed_out) {
     /* the first schedule stalled with inverted nodes left (not the repair:

@@ -8,6 +8,7 @@
 
 #include "varmesh/rotcube.h"
 #include "varmesh/problem.h"
+#include "varmesh/jacobian.h"
 #include "varmesh/quality.h"
 #include "varmesh/volume.h"
 
@@ -227,7 +228,9 @@ int main(int argc, char **argv) {
         double v = hex_sj_sampled(m, e);
         if (v < sj5) sj5 = v;
       }
-    /* phi and psi over the certifying nodes: the geometric rule's 64 (24) */
+    /* phi and psi over the geometric rule's 64 nodes (24): all positive
+     * imply a valid cell (Theorem 3.1), but a certified cell may have some
+     * negative (its Bernstein coefficients are their means) */
     vm_quality qg;
     vm_quality_opts qgo = {VM_RULE_GEOMETRIC, 1.0 / n};
     vm_mesh_quality(m, &qgo, &qg);
@@ -236,6 +239,14 @@ int main(int argc, char **argv) {
            "face pyramid errors\n",
            qg.all.phi_min, qg.all.psi_min, (long long)qg.all.inverted_nodes, sj5,
            (long long)q.foam_neg_volumes, (long long)q.foam_pyramid_errors);
+    /* phi and psi over the whole of every hex, certified (the rules' nodes
+     * sample the cell; the certificate is the Bernstein coefficients') */
+    vm_hex_bounds hb;
+    if (vm_mesh_hex_bounds(m, 1.0 / n, 0.01, 0, &hb) == VM_OK)
+      printf("       over the whole cell (certified bracket): phi_min in [%.3e, %.3e], psi_min in "
+             "[%.3e, %.3e] (%lld of %lld hexes subdivided, %lld parts)\n",
+             hb.phi_lo, hb.phi_hi, hb.psi_lo, hb.psi_hi, (long long)hb.refined, (long long)hb.hexes,
+             (long long)hb.parts);
     if (!r.valid || q.foam_neg_volumes || q.foam_pyramid_errors) all_ok = 0;
     fflush(stdout);
     if (where && cells != VM_GEN_MIXED) {

@@ -224,6 +224,133 @@ static void prisms_and_pyramids(void) {
 /* The mesh-level counts agree with per-element verdicts and do not depend
  * on the thread count; the untangled-looking input of the rotated cube is
  * tangled. */
+/* phi = det J / (|J|_F^2 / 3)^{3/2} of the trilinear map at (u, v, w). */
+static double hex_phi(const double *x, double u, double v, double w) {
+  double d[3][3] = {{0}};
+  for (int n = 0; n < 8; n++) {
+    double a = cube[n][0], b = cube[n][1], c = cube[n][2];
+    double fu = a ? u : 1 - u, fv = b ? v : 1 - v, fw = c ? w : 1 - w;
+    double su = a ? 1 : -1, sv = b ? 1 : -1, sw = c ? 1 : -1;
+    for (int r = 0; r < 3; r++) {
+      d[0][r] += su * fv * fw * x[3 * n + r];
+      d[1][r] += fu * sv * fw * x[3 * n + r];
+      d[2][r] += fu * fv * sw * x[3 * n + r];
+    }
+  }
+  double f = 0;
+  for (int l = 0; l < 3; l++)
+    for (int r = 0; r < 3; r++) f += d[l][r] * d[l][r];
+  return det3(d[0], d[1], d[2]) / pow(f / 3, 1.5);
+}
+
+/* One hexahedron as a mesh, its bounds at target edge h. */
+static vm_hex_bounds one_hex_bounds(vm_ctx *ctx, const double *x, double h) {
+  vm_mesh *m = NULL;
+  vm_hex_bounds b = {0};
+  int32_t v[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  CHECK(vm_mesh_create(ctx, &m) == VM_OK, "mesh");
+  for (int n = 0; n < 8; n++) vm_mesh_add_vertex(m, x[3 * n], x[3 * n + 1], x[3 * n + 2], NULL);
+  vm_mesh_add_element(m, VM_HEX, v);
+  CHECK(vm_mesh_hex_bounds(m, h, 0.01, 0, &b) == VM_OK, "bounds");
+  vm_mesh_destroy(&m);
+  return b;
+}
+
+/* phi and psi over the whole cell: exact on affine cells; on non-affine
+ * ones the bracket holds the least value of a 40^3 grid's and is within
+ * about 1 % of it; a parallelepiped scaled by 2 has det C = 8 at h = 1. */
+static void hex_bounds(vm_ctx *ctx) {
+  vm_hex_bounds b = one_hex_bounds(ctx, &cube[0][0], 1);
+  CHECK(b.hexes == 1 && b.refined == 0, "one hex, not subdivided");
+  CHECK(fabs(b.phi_lo - 1) < 1e-14 && fabs(b.phi_hi - 1) < 1e-14, "cube: phi [%g, %g]", b.phi_lo,
+        b.phi_hi);
+  CHECK(fabs(b.psi_lo - 1) < 1e-14 && fabs(b.psi_hi - 1) < 1e-14, "cube: psi [%g, %g]", b.psi_lo,
+        b.psi_hi);
+  /* a sheared, stretched parallelepiped: phi of the constant matrix */
+  double x[24], A[3][3] = {{2, 0.6, 0.2}, {0, 2, -0.4}, {0, 0, 2}};
+  for (int n = 0; n < 8; n++)
+    for (int r = 0; r < 3; r++)
+      x[3 * n + r] = A[r][0] * cube[n][0] + A[r][1] * cube[n][1] + A[r][2] * cube[n][2];
+  double want = hex_phi(x, 0.3, 0.6, 0.1);
+  b = one_hex_bounds(ctx, x, 1);
+  CHECK(fabs(b.phi_lo - want) < 1e-13 && fabs(b.phi_hi - want) < 1e-13,
+        "parallelepiped: phi [%g, %g], want %g", b.phi_lo, b.phi_hi, want);
+  CHECK(fabs(b.psi_hi - 2 * 8.0 / 65) < 1e-13 && fabs(b.psi_lo - b.psi_hi) < 1e-13,
+        "parallelepiped: psi [%g, %g], want %g", b.psi_lo, b.psi_hi, 16.0 / 65);
+  /* perturbed cubes that are valid: lo <= grid min, hi attained, close */
+  uint64_t s = 777;
+  int tried = 0, refined = 0;
+  double lo_all = INFINITY, hi_all = INFINITY;
+  vm_mesh *all = NULL;
+  CHECK(vm_mesh_create(ctx, &all) == VM_OK, "mesh");
+  for (int trial = 0; trial < 400 && tried < 40; trial++) {
+    for (int n = 0; n < 8; n++)
+      for (int r = 0; r < 3; r++) x[3 * n + r] = cube[n][r] + 0.3 * (2 * rnd(&s) - 1);
+    if (vm_jacobian_certify(VM_HEX, x, 0, NULL) != VM_JAC_VALID) continue;
+    int32_t v[8];
+    for (int n = 0; n < 8; n++) {
+      v[n] = (int32_t)(8 * tried + n);
+      vm_mesh_add_vertex(all, x[3 * n], x[3 * n + 1], x[3 * n + 2], NULL);
+    }
+    vm_mesh_add_element(all, VM_HEX, v);
+    tried++;
+    double g = INFINITY;
+    for (int i = 0; i <= 40; i++)
+      for (int j = 0; j <= 40; j++)
+        for (int k = 0; k <= 40; k++) g = fmin(g, hex_phi(x, i / 40.0, j / 40.0, k / 40.0));
+    b = one_hex_bounds(ctx, x, 0);
+    refined += b.refined > 0;
+    CHECK(b.phi_lo <= g + 1e-14 && b.phi_hi >= b.phi_lo, "trial %d: phi [%g, %g], grid %g", trial,
+          b.phi_lo, b.phi_hi, g);
+    CHECK(b.phi_hi - b.phi_lo <= 0.011 * fabs(b.phi_hi) + 1e-14, "trial %d: bracket [%g, %g]",
+          trial, b.phi_lo, b.phi_hi);
+    CHECK(g >= b.phi_lo && g - b.phi_lo <= 0.02 * fabs(g), "trial %d: grid %g beyond [%g, %g]",
+          trial, g, b.phi_lo, b.phi_hi);
+    CHECK(isnan(b.psi_lo) && isnan(b.psi_hi), "no target size: no psi");
+    lo_all = fmin(lo_all, b.phi_lo);
+    hi_all = fmin(hi_all, b.phi_hi);
+  }
+  CHECK(tried == 40 && refined > 10, "40 valid perturbed cubes (%d), most subdivided (%d)", tried,
+        refined);
+  /* the 40 as one mesh: the least value's bracket, the same with 1 and 2
+   * threads (each cell is refined against the mesh's least value, so a
+   * cell alone may be bracketed tighter than within the mesh) */
+  vm_hex_bounds b1, b2;
+  vm_ctx_set_threads(ctx, 1);
+  CHECK(vm_mesh_hex_bounds(all, 0.9, 0, 0, &b1) == VM_OK, "bounds");
+  vm_ctx_set_threads(ctx, 2);
+  CHECK(vm_mesh_hex_bounds(all, 0.9, 0, 0, &b2) == VM_OK, "bounds");
+  CHECK(b1.hexes == 40 && !memcmp(&b1, &b2, sizeof b1), "thread-independent bounds");
+  CHECK(b1.phi_hi == hi_all && b1.phi_lo <= hi_all && b1.phi_lo >= lo_all - 0.011 * fabs(hi_all),
+        "mesh: phi [%g, %g], cells [%g, %g]", b1.phi_lo, b1.phi_hi, lo_all, hi_all);
+  CHECK(b1.psi_lo <= b1.psi_hi && b1.psi_hi - b1.psi_lo <= 0.011 * fabs(b1.psi_hi),
+        "mesh: psi [%g, %g]", b1.psi_lo, b1.psi_hi);
+  vm_mesh_destroy(&all);
+  /* valid, with negative Bernstein coefficients (a top face turned by
+   * 170 degrees): far below its corners' phi inside */
+  memcpy(x, cube, sizeof cube);
+  for (int n = 4; n < 8; n++) {
+    double px = cube[n][0] - 0.5, py = cube[n][1] - 0.5, t = 170 * M_PI / 180;
+    x[3 * n] = 0.5 + cos(t) * px - sin(t) * py;
+    x[3 * n + 1] = 0.5 + sin(t) * px + cos(t) * py;
+  }
+  double g = INFINITY, gc = INFINITY;
+  for (int i = 0; i <= 40; i++)
+    for (int j = 0; j <= 40; j++)
+      for (int k = 0; k <= 40; k++) g = fmin(g, hex_phi(x, i / 40.0, j / 40.0, k / 40.0));
+  for (int n = 0; n < 8; n++) gc = fmin(gc, hex_phi(x, cube[n][0], cube[n][1], cube[n][2]));
+  b = one_hex_bounds(ctx, x, 0);
+  CHECK(b.phi_lo > 0 && b.phi_lo <= g && g - b.phi_lo <= 0.02 * g && gc > 10 * g,
+        "twisted 170 deg: phi [%g, %g], grid %g, corners %g", b.phi_lo, b.phi_hi, g, gc);
+  /* a cell turned over at a corner: lo -1 (no bound), hi negative */
+  memcpy(x, cube, sizeof cube);
+  x[18] = x[19] = x[20] = 0.1;
+  CHECK(hex_grid_min(x, 40) < 0, "the hex is negative somewhere");
+  b = one_hex_bounds(ctx, x, 1);
+  CHECK(b.phi_lo == -1 && b.phi_hi < 0 && b.psi_lo <= b.psi_hi && b.psi_hi < 0,
+        "turned over: phi [%g, %g], psi [%g, %g]", b.phi_lo, b.phi_hi, b.psi_lo, b.psi_hi);
+}
+
 static void mesh_counts(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_rotcube_opts o = vm_rotcube_opts_default();
@@ -260,6 +387,7 @@ int main(void) {
   twisted_hex();
   prisms_and_pyramids();
   mesh_counts(ctx);
+  hex_bounds(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("jacobian");
 }

@@ -19,11 +19,10 @@ static const double PI = 3.14159265358979323846;
 
 /* The schedule vm-volume chooses for hexahedra by default. */
 static vm_volume_opts staged_opts(void) {
-  vm_volume_opts o = vm_volume_opts_default();
-  o.staged = 1;
-  o.method = VM_UNTANGLE_FOLDOVER;
-  o.eps_inner = 3;
-  o.theta_untangle = 0.999;
+  vm_volume_opts o = vm_volume_opts_staged();
+  CHECK(o.staged && o.method == VM_UNTANGLE_FOLDOVER && o.eps_inner == 3 &&
+            o.theta_untangle == 0.999 && o.eps_cap == 1 && o.qi_steps == 1,
+        "the staged schedule's options");
   /* a guard against hangs, not a speed test (sanitizer builds on a busy
    * machine are many times slower) */
   o.time_limit = 900;
@@ -82,6 +81,46 @@ static void pi_cube(vm_ctx *ctx, int n) {
   vm_free(ctx, ref);
   vm_mesh_destroy(&before);
   vm_mesh_destroy(&m);
+}
+
+/* The quasi-isometric step of the staged schedule comes after the repair
+ * (the path to a certified mesh is the same without it: the same
+ * iterations) and keeps every cell certified while it lifts the worst:
+ * phi_min at the corners and over the whole of every hex rise. */
+static void qi_last(vm_ctx *ctx) {
+  vm_volume_report r[2];
+  vm_hex_bounds hb[2];
+  for (int k = 0; k < 2; k++) {
+    vm_rotcube_opts ro = vm_rotcube_opts_default();
+    ro.n = 12;
+    ro.alpha = PI;
+    ro.inner = 0.3;
+    vm_mesh *m = NULL;
+    CHECK(vm_gen_rotated_cube(ctx, &ro, &m, NULL) == VM_OK, "generate");
+    vm_volume_opts o = staged_opts();
+    o.qi_steps = k;
+    int st = vm_volume_run(ctx, m, NULL, &o, &r[k]);
+    vm_jac_report jr;
+    vm_mesh_jacobian_certify(m, &jr, NULL);
+    CHECK(st == VM_OK && r[k].valid && jr.invalid + jr.undecided == 0,
+          "qi %d: status %d, %lld cells not certified", k, st,
+          (long long)(jr.invalid + jr.undecided));
+    vm_mesh_hex_bounds(m, 1.0 / 12, 0, 0, &hb[k]);
+    fprintf(stderr,
+            "qi steps %d: %d + %d + %d repair + %d opt iterations, t %.3g; phi_min %.3e at the "
+            "corners, [%.3e, %.3e] over the cells\n",
+            k, r[k].iter_untangle, r[k].iter_local, r[k].iter_repair, r[k].iter_opt, r[k].t_reached,
+            r[k].phi_min, hb[k].phi_lo, hb[k].phi_hi);
+    vm_mesh_destroy(&m);
+  }
+  CHECK(r[0].cert_bad_init > 0, "the repair had cells to certify (%lld)",
+        (long long)r[0].cert_bad_init);
+  CHECK(r[0].iter_untangle == r[1].iter_untangle && r[0].iter_local == r[1].iter_local &&
+            r[0].iter_repair == r[1].iter_repair && r[1].iter_opt > r[0].iter_opt,
+        "the same path to certified, then the step");
+  CHECK(r[1].t_reached > 0 && r[1].phi_min > 1.2 * r[0].phi_min && hb[1].phi_lo > hb[0].phi_lo,
+        "the step lifts phi_min: %.3e -> %.3e (cells %.3e -> %.3e)", r[0].phi_min, r[1].phi_min,
+        hb[0].phi_lo, hb[1].phi_lo);
 }
 
 /* The repair works on the cells within repair_rings of those not certified
@@ -187,21 +226,27 @@ static void geometric_alone(vm_ctx *ctx, const vm_mesh *m0) {
   CHECK(moved_fixed == 0, "geometric phase: %lld fixed vertices moved", (long long)moved_fixed);
   fprintf(stderr, "geometric phase: %lld -> 0 cells not certified in %d iterations, %.2f s\n",
           (long long)r.cert_bad_init, r.iter_repair, r.time_geometric);
-  /* the phase's eps at the other phases' pace (0.9 per block): certified
-   * too, in more iterations */
-  vm_mesh *m9 = NULL;
-  CHECK(vm_mesh_clone(m0, &m9) == VM_OK, "clone");
-  o.geometric_decay = 0.9;
-  vm_volume_report r9;
-  st = vm_volume_run(ctx, m9, NULL, &o, &r9);
-  CHECK(st == VM_OK && r9.valid && r9.geometric_left == 0,
-        "geometric phase, decay 0.9: status %d, %lld cells left", st, (long long)r9.geometric_left);
-  CHECK(r9.iter_repair > r.iter_repair,
-        "geometric phase: decay 0.9 took %d iterations, the default %d", r9.iter_repair,
-        r.iter_repair);
-  fprintf(stderr, "geometric phase, decay 0.9: %d iterations, %.2f s\n", r9.iter_repair,
-          r9.time_geometric);
-  vm_mesh_destroy(&m9);
+  /* without the cap on eps (opts eps_cap), the phase's eps at its own
+   * pace (geometric_decay 0.7 per block) and at the other phases' (0.9):
+   * certified too, the second in more iterations (with the cap, eps
+   * follows |min det| and the decay hardly matters) */
+  vm_volume_report rd[2];
+  for (int k = 0; k < 2; k++) {
+    vm_mesh *m9 = NULL;
+    CHECK(vm_mesh_clone(m0, &m9) == VM_OK, "clone");
+    o.eps_cap = 0;
+    o.geometric_decay = k ? 0.9 : 0.7;
+    st = vm_volume_run(ctx, m9, NULL, &o, &rd[k]);
+    CHECK(st == VM_OK && rd[k].valid && rd[k].geometric_left == 0,
+          "geometric phase, no cap, decay %g: status %d, %lld cells left", o.geometric_decay, st,
+          (long long)rd[k].geometric_left);
+    fprintf(stderr, "geometric phase, no cap, decay %g: %d iterations, %.2f s\n", o.geometric_decay,
+            rd[k].iter_repair, rd[k].time_geometric);
+    vm_mesh_destroy(&m9);
+  }
+  CHECK(rd[1].iter_repair > rd[0].iter_repair,
+        "geometric phase without the cap: decay 0.9 took %d iterations, 0.7 %d", rd[1].iter_repair,
+        rd[0].iter_repair);
   vm_mesh_destroy(&m);
 }
 
@@ -333,6 +378,7 @@ int main(void) {
   vm_ctx_create(&ctx);
   bernstein_map();
   pi_cube(ctx, 12);
+  qi_last(ctx);
   no_repair(ctx);
   foam_relief(ctx);
   vm_ctx_destroy(&ctx);

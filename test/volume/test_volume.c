@@ -206,10 +206,10 @@ static void split_rules(vm_ctx *ctx) {
 
 /* The foldover rule's cap (opts eps_cap) on the n = 12 pi cube with an
  * inner cube of half-size 0.3 (golden case volume-staged): where a
- * block of the guarded stage ends with a node inverted, the next eps is at
- * most eps_cap |min det| of that mesh (not below the run's restart floor,
- * opts eps_restart, in a restarted local round). The split stage is left
- * to the rule alone.
+ * block of the guarded stage or of the geometric phase's global rounds
+ * ends with a node inverted, the next eps is at most eps_cap |min det| of
+ * that mesh (not below the run's restart floor, opts eps_restart, in a
+ * restarted local round). The split stage is left to the rule alone.
  * Read from the progress records: a record's min det is the mesh after its
  * step, so the next record of the same phase, one iteration on, carries
  * the eps chosen at that mesh. */
@@ -217,9 +217,10 @@ typedef struct {
   vm_volume_progress prev;
   int have;
   int64_t checked, above;
-  int64_t split_above; /* the split stage's new eps above |min det| */
-  double floor;        /* opts eps_restart */
-  double worst;        /* the largest eps / max(|min det|, floor) */
+  int64_t geo_checked, geo_above; /* of those, the geometric phase's */
+  int64_t split_above;            /* the split stage's new eps above |min det| */
+  double floor;                   /* opts eps_restart */
+  double worst;                   /* the largest eps / max(|min det|, floor) */
 } cap_watch;
 
 static void watch_cap(void *user, const vm_volume_progress *p) {
@@ -229,10 +230,14 @@ static void watch_cap(void *user, const vm_volume_progress *p) {
                 w->prev.min_det < 0 && p->eps != w->prev.eps;
   if (new_eps && !strcmp(p->phase, "split"))
     w->split_above += p->eps > -w->prev.min_det * (1 + 1e-12);
-  if (new_eps && !strcmp(p->phase, "guarded")) {
+  int geo = !strcmp(p->phase, "geometric");
+  if (new_eps && (geo || !strcmp(p->phase, "guarded"))) {
     double bound = fmax(-w->prev.min_det, w->floor);
+    int up = p->eps > bound * (1 + 1e-12);
     w->checked++;
-    if (p->eps > bound * (1 + 1e-12)) w->above++;
+    w->above += up;
+    w->geo_checked += geo;
+    w->geo_above += geo && up;
     if (p->eps / bound > w->worst) w->worst = p->eps / bound;
   }
   w->prev = *p;
@@ -240,7 +245,7 @@ static void watch_cap(void *user, const vm_volume_progress *p) {
 }
 
 static void eps_cap(vm_ctx *ctx) {
-  int64_t above[2] = {0, 0};
+  int64_t above[2] = {0, 0}, geo_above[2] = {0, 0};
   for (int k = 0; k < 2; k++) {
     vm_rotcube_opts ro = vm_rotcube_opts_default();
     ro.n = 12;
@@ -254,7 +259,7 @@ static void eps_cap(vm_ctx *ctx) {
           "eps cap: 1 in the foldover schedules");
     o.eps_cap = k ? 0 : 1;
     o.target_xyz = ref;
-    /* the rule, not the outcome: the first 600 iterations */
+    /* the rule, not the outcome: the first 600 iterations and the repair */
     o.max_iter = 600;
     o.time_limit = 900;
     cap_watch w = {.floor = o.eps_restart};
@@ -267,20 +272,27 @@ static void eps_cap(vm_ctx *ctx) {
     CHECK(w.checked > 20, "eps cap %g: %lld new eps with a node inverted", o.eps_cap,
           (long long)w.checked);
     above[k] = w.above;
+    geo_above[k] = w.geo_above;
+    CHECK(w.geo_checked >= 2, "eps cap %g: the geometric phase's new eps (%lld)", o.eps_cap,
+          (long long)w.geo_checked);
     if (!k)
       CHECK(w.split_above > 0, "eps cap 1: the split stage is not capped (%lld new eps above)",
             (long long)w.split_above);
     fprintf(stderr,
-            "eps cap %g: %lld of %lld new eps of the guarded stage above max(|min det|, %g), at "
-            "most %.3g times (the split's: %lld above); %d + %d iterations\n",
-            o.eps_cap, (long long)w.above, (long long)w.checked, w.floor, w.worst,
-            (long long)w.split_above, r.iter_untangle, r.iter_local);
+            "eps cap %g: %lld of %lld new eps of the guarded stage and the geometric phase above "
+            "max(|min det|, %g) (the phase's: %lld of %lld), at most %.3g times (the split's: %lld "
+            "above); %d + %d + %d repair iterations\n",
+            o.eps_cap, (long long)w.above, (long long)w.checked, w.floor, (long long)w.geo_above,
+            (long long)w.geo_checked, w.worst, (long long)w.split_above, r.iter_untangle,
+            r.iter_local, r.iter_repair);
     vm_free(ctx, ref);
     vm_mesh_destroy(&m);
   }
   CHECK(above[0] == 0, "eps cap 1: no eps above the cap (%lld)", (long long)above[0]);
   /* the records can show the rule: without it they do go above */
   CHECK(above[1] > 0, "eps cap 0: eps above |min det| somewhere (%lld)", (long long)above[1]);
+  CHECK(geo_above[1] > 0, "eps cap 0: the geometric phase's eps above |min det| (%lld)",
+        (long long)geo_above[1]);
 }
 
 /* The same run twice gives the same bits. */

@@ -119,17 +119,18 @@ check 'grep -q "slip boundary: 218 boundary vertices: .* along 12 sharp edge lin
 
 # a free or sliding boundary that does not keep the shape fails (exit 3,
 # the mesh written): the 3pi/4 cube with a free boundary turns as a whole
-# with its fixed inner cube (every cell valid, the corners 0.2 away)
+# with its fixed inner cube (every cell valid, the corners 0.2 away: 0.207,
+# 0.213 with the staged schedule's quasi-isometric step since session 60)
 "$gen" rotcube --n 6 --angle 3pi/4 --free-boundary "$dir/turn.vtk"
 "$vol" --free-boundary --json "$dir/turn.vtk" "$dir/turn-out.vtk" >"$dir/turn.json" 2>"$dir/turn.err"
 rc=$?
 check '[ $rc -eq 3 ] && [ -s "$dir/turn-out.vtk" ] && grep -q "\"valid\": false" "$dir/turn.json" &&
   grep -q "\"boundary_moved\": true" "$dir/turn.json" && grep -q "\"certified_invalid\": 0, \"certified_undecided\": 0" "$dir/turn.json"' \
   "--free-boundary that turns the shape: exit 3, valid cells, the shape not kept (got $rc)"
-check 'grep -q "error: .*turn-out.vtk: the boundary moved by 2.0[0-9]*e-01 .*12 % of its diagonal, beyond --boundary-tolerance 0.01.*--slip-boundary" "$dir/turn.err"' \
+check 'grep -q "error: .*turn-out.vtk: the boundary moved by 2\.[0-9]*e-01 .*1[0-9.]* % of its diagonal, beyond --boundary-tolerance 0.01.*--slip-boundary" "$dir/turn.err"' \
   "one line: how far, where, the tolerance, the option that keeps it"
 "$vol" --free-boundary --boundary-tolerance 0.5 "$dir/turn.vtk" "$dir/turn-out.vtk" 2>"$dir/turn2.err"
-check '[ $? -eq 0 ] && grep -q "boundary moved by at most 2.0[0-9]*e-01" "$dir/turn2.err"' \
+check '[ $? -eq 0 ] && grep -q "boundary moved by at most 2\.[0-9]*e-01" "$dir/turn2.err"' \
   "within a tolerance the user gives, the same run exits 0 and says how far it moved"
 # sliding without features: the cube's edges and corners are rounded off
 "$vol" --slip-boundary --feature-angle 179 --max-iter 2000 --json "$dir/slip.vtk" "$dir/round.vtk" >"$dir/round.json" 2>"$dir/round.err"

@@ -55,6 +55,7 @@ vm_volume_opts vm_volume_opts_direct(void) {
 vm_volume_opts vm_volume_opts_staged(void) {
   vm_volume_opts o = vm_volume_opts_direct();
   o.staged = 1;
+  o.qi_steps = 1;
   return o;
 }
 
@@ -315,11 +316,14 @@ static int update_eps(ut_state *s, int first) {
      * (eps_cap |D|, not below the run's restart floor): where the worst
      * det rose faster than the blocks lowered eps, the penalty stayed flat
      * at the folds (n = 32 7pi/8: eps 145 at min det -40 after 30 of 429
-     * guarded iterations). Not in the split stage (no guards there), whose
-     * M rises tenfold from its start: there the cap took eps down with
-     * thousands of nodes inverted, and the n = 16 pi cube's split stalled
-     * at M ~ 150. */
-    if (o->eps_cap > 0 && D < 0 && s->guard)
+     * guarded iterations). And in the geometric phase's global rounds
+     * (stop_certified), which start from a corner-valid mesh with eps 4.5
+     * times |min det| (n = 32 7pi/8: 255 at -56) and had eps 17 times it
+     * ten iterations later: there the cap took the phase from 52 to 35 s.
+     * Not in the split stage (no guards there), whose M rises tenfold from
+     * its start: there the cap took eps down with thousands of nodes
+     * inverted, and the n = 16 pi cube's split stalled at M ~ 150. */
+    if (o->eps_cap > 0 && D < 0 && (s->guard || s->stop_certified))
       s->eps = fmin(s->eps, fmax(o->eps_cap * -D, s->eps_floor));
     if (s->eps < o->delta0) s->eps = o->delta0;
     s->block_iter = 0;
@@ -1184,10 +1188,16 @@ static int repair_phase(ut_state *s, const vm_measure_params *prm, int *budget) 
   return st;
 }
 
-/* The Bernstein term as a wall on every hex whose 27 coefficients are
- * positive (weight w, eps delta0), so that the optimization after the
- * repair keeps them so without the line search having to cut its steps to
- * nothing at a wall it cannot see; w <= 0 takes the term off. */
+/* The Bernstein term on every hex (weight w), so that the optimization
+ * after the repair keeps the cells certified without the line search
+ * having to cut its steps to nothing at a wall it cannot see: a positive
+ * coefficient walled (eps delta0), and a coefficient <= 0 of a cell
+ * certified by subdivision penalized (eps twice its magnitude), which
+ * lifts it. Without that penalty such a cell was held only by the line
+ * search's certification and sank towards det J = 0 inside: the n = 32
+ * 7pi/8 cube with the reference targets ended with one whose phi over the
+ * whole cell was 4.8e-6 against 1.6e-4 at the corners (a coefficient of
+ * -1.2e-7). w <= 0 takes the term off. */
 static int bern_walls(ut_state *s, double w) {
   vm_ctx *ctx = s->ctx;
   const vm_mesh *m = s->m;
@@ -1195,30 +1205,31 @@ static int bern_walls(ut_state *s, double w) {
   double *bw = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *bw);
   double *be = vm_alloc_array(ctx, 27 * (size_t)m->ne + 1, sizeof *be);
   int st = bw && be ? VM_OK : VM_ERR_NOMEM;
+  double scale = hex_scale(s->P, m);
   for (int64_t e = 0; e < m->ne && st >= 0; e++) {
     bw[e] = 0;
     for (int c = 0; c < 27; c++) be[27 * e + c] = s->o->delta0;
     if (m->etype[e] != VM_HEX) continue;
     double b[27];
     hex_coefs(m, m->xyz, e, b);
-    int pos = 1;
-    for (int c = 0; c < 27; c++) pos &= b[c] > 0;
-    bw[e] = pos ? w : 0;
+    for (int c = 0; c < 27; c++)
+      if (b[c] <= 0) be[27 * e + c] = fmax(-2 * scale * b[c], s->o->delta0);
+    bw[e] = w;
   }
-  if (st >= 0) st = vm_problem_set_bernstein(s->P, bw, be, hex_scale(s->P, m));
+  if (st >= 0) st = vm_problem_set_bernstein(s->P, bw, be, scale);
   vm_free(ctx, bw);
   vm_free(ctx, be);
   return st;
 }
 
 /* Optimization of an untangled mesh: the barrier measure (which keeps the
- * mesh admissible) for opt_iter iterations, then qi_steps steps of the
- * quasi-isometric continuation (11), raising t of W_t to push up the worst
- * element. With s->keep_certified every step also keeps every cell
+ * mesh admissible) for opt_iter iterations (if `plain`), then `qi` steps of
+ * the quasi-isometric continuation (11), raising t of W_t to push up the
+ * worst element. With s->keep_certified every step also keeps every cell
  * certified; on a mesh with 3D cells other than tets no step adds a face
  * pyramid OpenFOAM's checkMesh calls incorrectly oriented (a certified
  * cell can have one: a warped face with the cell centre beyond it). */
-static int optimize_phase(ut_state *s, const vm_measure_params *prm) {
+static int optimize_phase(ut_state *s, const vm_measure_params *prm, int plain, int qi) {
   const vm_volume_opts *o = s->o;
   vm_minimize_result res;
   int st;
@@ -1226,13 +1237,13 @@ static int optimize_phase(ut_state *s, const vm_measure_params *prm) {
   s->eps = 0;
   if ((st = vm_problem_set_measure(s->P, o->measure, prm)) < 0) return st;
   if (has_foam_cells(s->m)) s->foam_max = foam_errors_at(s, s->m->xyz);
-  if (o->opt_iter > 0) {
+  if (plain && o->opt_iter > 0) {
     st = run_phase(s, "optimize", o->solver, o->opt_iter, before_plain, &res);
     s->rep->iter_opt += res.iterations;
     if (st < 0) goto done;
     if (s->foam_max > 0) s->foam_max = foam_errors_at(s, s->m->xyz);
   }
-  for (int k = 0; k < o->qi_steps && st >= 0 && !out_of_time(s); k++) {
+  for (int k = 0; k < qi && st >= 0 && !out_of_time(s); k++) {
     if ((st = vm_problem_set_measure(s->P, VM_MEASURE_QUASI_ISO, prm)) < 0) goto done;
     double lo = k == 0 ? 0 : s->rep->t_reached;
     double tmax = qi_feasible_t(s, lo);
@@ -1402,8 +1413,14 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
   if ((st = untangle_rounds(&s, &prm, &budget)) < 0) goto done;
   if (s.M > 0 && s.best_M < s.M) memcpy(m->xyz, s.best, (size_t)m->nv * 3 * sizeof *m->xyz);
   rep.time_untangle = now() - s.t0;
+  /* with hexes to certify, the quasi-isometric steps come last, on the
+   * certified mesh (below): before the repair they would change what it
+   * starts from */
+  int qi_last = o.repair && has_hex(m);
   if (s.M == 0 && !out_of_time(&s))
-    if ((st = optimize_phase(&s, &prm)) < 0 && st != VM_ERR_INTERRUPTED) goto done;
+    if ((st = optimize_phase(&s, &prm, 1, qi_last ? 0 : o.qi_steps)) < 0 &&
+        st != VM_ERR_INTERRUPTED)
+      goto done;
   if (st >= 0 && s.M == 0 && o.repair && !out_of_time(&s)) {
     /* the corner rule's M = 0 is not det J > 0 inside every hex */
     if ((st = repair_phase(&s, &prm, &budget)) < 0) goto done;
@@ -1411,7 +1428,18 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
       /* the repair squeezed cells to certify them: optimize again, every
        * step keeping every cell certified */
       s.keep_certified = 1;
-      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm);
+      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm, 1, 0);
+      s.keep_certified = 0;
+      bern_walls(&s, 0);
+      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+    }
+    if (st >= 0 && qi_last && o.qi_steps > 0 && rep.cert_cells > 0 &&
+        rep.cert_invalid + rep.cert_undecided == 0 && !out_of_time(&s)) {
+      /* the worst cells lifted, every step keeping every cell certified:
+       * the n = 32 pi cube's phi_min 2.5e-4 -> 5.3e-4 in one step (the
+       * paper's 2.65e-4), about 15 s on 2 threads */
+      s.keep_certified = 1;
+      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm, 0, o.qi_steps);
       s.keep_certified = 0;
       bern_walls(&s, 0);
       if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;

@@ -434,3 +434,195 @@ int vm_mesh_jacobian_certify(const vm_mesh *m, vm_jac_report *rep, uint8_t *verd
   rep->first_bad = first < m->ne ? first : -1;
   return VM_OK;
 }
+
+/* ---- phi and psi over the whole hexahedron ---- */
+
+typedef struct {
+  double phi, psi;
+} phipsi;
+
+static double psi_of(double d) { return 2 * d / (1 + d * d); }
+
+/* The least psi on [a, b]: psi rises on [-1, 1] and falls outside it. */
+static double psi_min_on(double a, double b) {
+  if (a <= -1 && b >= -1) return -1;
+  return fmin(psi_of(a), psi_of(b));
+}
+
+static void trilinear(const double *x8, double u, double v, double w, double *p) {
+  for (int r = 0; r < 3; r++) {
+    double s = 0;
+    for (int c = 0; c < 2; c++)
+      for (int b = 0; b < 2; b++)
+        for (int a = 0; a < 2; a++)
+          s +=
+              (a ? u : 1 - u) * (b ? v : 1 - v) * (c ? w : 1 - w) * x8[3 * hex_vertex(a, b, c) + r];
+    p[r] = s;
+  }
+}
+
+/* The sub-cell of edge s at corner o of the reference cube: lo the
+ * certified lower bounds of phi and psi on it, at the least phi and psi at
+ * its corners (points of the cell, where the derivatives are the edges);
+ * h scales det for psi (h <= 0: no psi). */
+static void box_eval(const double *x8, const double *o, double s, double h, phipsi *lo,
+                     phipsi *at) {
+  double p[24];
+  for (int c = 0; c < 2; c++)
+    for (int b = 0; b < 2; b++)
+      for (int a = 0; a < 2; a++)
+        trilinear(x8, o[0] + a * s, o[1] + b * s, o[2] + c * s, p + 3 * hex_vertex(a, b, c));
+  double bc[27], dlo = INFINITY, dhi = -INFINITY;
+  vm_hex_bernstein(p, bc, NULL);
+  for (int i = 0; i < 27; i++) {
+    dlo = fmin(dlo, bc[i]);
+    dhi = fmax(dhi, bc[i]);
+  }
+  /* the derivative along an axis is a convex combination of the 4 edges
+   * on that axis: its squared length is at most their largest */
+  double fhi = 0;
+  at->phi = at->psi = INFINITY;
+  double sc = h > 0 ? (s * h) * (s * h) * (s * h) : 1;
+  for (int ax = 0; ax < 3; ax++) {
+    double big = 0;
+    for (int q = 0; q < 4; q++) {
+      int t[3], hd[3];
+      t[ax] = 0;
+      t[(ax + 1) % 3] = q & 1;
+      t[(ax + 2) % 3] = q >> 1;
+      memcpy(hd, t, sizeof t);
+      hd[ax] = 1;
+      const double *a = p + 3 * hex_vertex(t[0], t[1], t[2]);
+      const double *b = p + 3 * hex_vertex(hd[0], hd[1], hd[2]);
+      double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
+      big = fmax(big, d0 * d0 + d1 * d1 + d2 * d2);
+    }
+    fhi += big;
+  }
+  for (int n = 0; n < 8; n++) {
+    int a = n & 1, b = n >> 1 & 1, c = n >> 2;
+    double e[3][3];
+    const double *pa[3][2] = {
+        {p + 3 * hex_vertex(0, b, c), p + 3 * hex_vertex(1, b, c)},
+        {p + 3 * hex_vertex(a, 0, c), p + 3 * hex_vertex(a, 1, c)},
+        {p + 3 * hex_vertex(a, b, 0), p + 3 * hex_vertex(a, b, 1)},
+    };
+    double f = 0;
+    for (int l = 0; l < 3; l++)
+      for (int r = 0; r < 3; r++) {
+        e[l][r] = pa[l][1][r] - pa[l][0][r];
+        f += e[l][r] * e[l][r];
+      }
+    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                 e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    at->phi = fmin(at->phi, f > 0 ? det / pow(f / 3, 1.5) : -1);
+    at->psi = fmin(at->psi, psi_of(det / sc));
+  }
+  lo->phi = dlo > 0 && fhi > 0 ? dlo / pow(fhi / 3, 1.5) : -1;
+  lo->psi = psi_min_on(dlo / sc, dhi / sc);
+  if (h <= 0) lo->psi = at->psi = NAN;
+}
+
+#define BOUNDS_BUDGET 20000
+
+/* One cell: lo and hi brackets; sub-cells split while a bound is below the
+ * least value found (in the cell, or H over the mesh) less rel of it. */
+static int64_t cell_bounds(const double *x8, double h, double rel, int max_depth, phipsi H,
+                           phipsi *lo, phipsi *hi) {
+  struct {
+    double o[3], s;
+    int depth;
+  } stack[8 * 16 + 8];
+  int top = 0;
+  int64_t parts = 0;
+  stack[top].o[0] = stack[top].o[1] = stack[top].o[2] = 0;
+  stack[top].s = 1;
+  stack[top++].depth = 0;
+  lo->phi = lo->psi = hi->phi = hi->psi = INFINITY;
+  int use_psi = h > 0;
+  while (top > 0) {
+    top--;
+    double o[3] = {stack[top].o[0], stack[top].o[1], stack[top].o[2]}, s = stack[top].s;
+    int depth = stack[top].depth;
+    phipsi bl, ba;
+    box_eval(x8, o, s, h, &bl, &ba);
+    parts++;
+    hi->phi = fmin(hi->phi, ba.phi);
+    if (use_psi) hi->psi = fmin(hi->psi, ba.psi);
+    double tphi = fmin(hi->phi, H.phi), tpsi = use_psi ? fmin(hi->psi, H.psi) : 0;
+    tphi -= rel * fabs(tphi);
+    tpsi -= rel * fabs(tpsi);
+    int done = bl.phi >= tphi && (!use_psi || bl.psi >= tpsi);
+    if (done || depth >= max_depth || parts + top >= BOUNDS_BUDGET) {
+      lo->phi = fmin(lo->phi, bl.phi);
+      if (use_psi) lo->psi = fmin(lo->psi, bl.psi);
+      continue;
+    }
+    for (int n = 0; n < 8; n++) {
+      stack[top].o[0] = o[0] + (n & 1) * s / 2;
+      stack[top].o[1] = o[1] + (n >> 1 & 1) * s / 2;
+      stack[top].o[2] = o[2] + (n >> 2) * s / 2;
+      stack[top].s = s / 2;
+      stack[top++].depth = depth + 1;
+    }
+  }
+  if (!use_psi) lo->psi = hi->psi = NAN;
+  return parts;
+}
+
+static void hex_coords(const vm_mesh *m, int64_t e, double *x8) {
+  for (int k = 0; k < 8; k++)
+    memcpy(x8 + 3 * k, m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + k], 3 * sizeof(double));
+}
+
+int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm_hex_bounds *out) {
+  if (!m || !out) return VM_ERR_ARG;
+  if (rel <= 0) rel = 0.01;
+  if (max_depth <= 0) max_depth = 8;
+  if (max_depth > 16) max_depth = 16;
+  int nt = vm_nthreads(m->ctx);
+  /* the whole cells first: the least value attained, H */
+  double hphi = INFINITY, hpsi = INFINITY;
+  int64_t hexes = 0;
+#pragma omp parallel for num_threads(nt) schedule(static) reduction(min : hphi, hpsi) \
+    reduction(+ : hexes)
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_HEX) continue;
+    double x8[24], o[3] = {0, 0, 0};
+    phipsi bl, ba;
+    hex_coords(m, e, x8);
+    box_eval(x8, o, 1, h, &bl, &ba);
+    hphi = fmin(hphi, ba.phi);
+    if (h > 0) hpsi = fmin(hpsi, ba.psi);
+    hexes++;
+  }
+  phipsi H = {hphi, hpsi};
+  double lphi = INFINITY, lpsi = INFINITY, uphi = INFINITY, upsi = INFINITY;
+  int64_t refined = 0, parts = 0;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 64) \
+    reduction(min : lphi, lpsi, uphi, upsi) reduction(+ : refined, parts)
+  for (int64_t e = 0; e < m->ne; e++) {
+    if (m->etype[e] != VM_HEX) continue;
+    double x8[24];
+    phipsi lo, hi;
+    hex_coords(m, e, x8);
+    int64_t n = cell_bounds(x8, h, rel, max_depth, H, &lo, &hi);
+    parts += n;
+    refined += n > 1;
+    lphi = fmin(lphi, lo.phi);
+    uphi = fmin(uphi, hi.phi);
+    if (h > 0) {
+      lpsi = fmin(lpsi, lo.psi);
+      upsi = fmin(upsi, hi.psi);
+    }
+  }
+  out->hexes = hexes;
+  out->refined = refined;
+  out->parts = parts;
+  out->phi_lo = hexes ? lphi : NAN;
+  out->phi_hi = hexes ? uphi : NAN;
+  out->psi_lo = hexes && h > 0 ? lpsi : NAN;
+  out->psi_hi = hexes && h > 0 ? upsi : NAN;
+  return VM_OK;
+}

@@ -65,6 +65,7 @@ typedef struct vm_volume_opts {
   int eps_inner;             /* foldover: iterations per eps (default 10) */
   double eps_cap;            /* foldover: while nodes are guarded (the staged
                                 schedule's second stage, the repair's rounds)
+                                or in the geometric phase's global rounds,
                                 and a node is inverted, a block's new eps is at
                                 most eps_cap |min det| (what a start from that
                                 mesh would take), not below the run's
@@ -75,7 +76,10 @@ typedef struct vm_volume_opts {
   double time_limit;         /* seconds for the whole run, <= 0: none */
   int local_threshold;       /* go local when fewer nodes than this are inverted (100) */
   int local_rings;           /* rings of elements around inverted ones (default 3) */
-  int qi_steps;              /* quasi-isometric continuation steps (0: off) */
+  int qi_steps;              /* quasi-isometric continuation steps (0: off;
+                                1 in the staged schedule); with hexahedra and
+                                the repair on, after the repair, every step
+                                keeping every cell certified */
   int staged;                /* meshes with hexahedra, corner or geometric rule:
                                 untangle the hexes' 6-tet split first, then the
                                 rule's nodes with the split held admissible

@@ -82,6 +82,30 @@ typedef struct vm_jac_report {
  * is valid when invalid + undecided == 0. */
 int vm_mesh_jacobian_certify(const vm_mesh *m, vm_jac_report *rep, uint8_t *verdict);
 
+/* The least shape quality phi = det C / (tr C^T C / 3)^{3/2} and the
+ * least volume quality psi = 2 det C / (1 + det C^2) of the paper's Table 1
+ * over the whole of every hexahedron (C = grad x / h, x the trilinear map
+ * of the reference cube [0, 1]^3, h the target cube's edge), not at a rule's
+ * nodes. Each is bracketed: lo <= the least value <= hi, where hi is a value
+ * attained at a point of a cell and lo a bound certified (to rounding) by
+ * the Bernstein coefficients of det J on sub-cells (their least, over the
+ * largest squared edge lengths for phi's denominator: the derivative along
+ * an axis is a convex combination of the sub-cell's edge vectors on that
+ * axis). Sub-cells are split in 8 while their bound is below the least
+ * value found less `rel` times its magnitude (rel <= 0: 0.01), at most
+ * `max_depth` levels (<= 0: 8). phi is scale-free; h <= 0 leaves psi
+ * NAN. Cells that are not hexahedra are not measured; a mesh without
+ * hexahedra gives NAN. */
+typedef struct vm_hex_bounds {
+  int64_t hexes;   /* hexahedra measured */
+  int64_t refined; /* of those, cells subdivided to tighten lo */
+  int64_t parts;   /* sub-cells examined in all */
+  double phi_lo, phi_hi;
+  double psi_lo, psi_hi;
+} vm_hex_bounds;
+
+int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm_hex_bounds *out);
+
 #ifdef __cplusplus
 }
 #endif
