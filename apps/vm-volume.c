@@ -85,8 +85,9 @@ static const vm_opt opts[] = {
     {"--eps-inner", NULL, VM_OPT_INT, A(o.eps_inner), "N",
      "foldover: iterations per eps (default 3)", .lo = 1, .hi = 1e8},
     {"--eps-cap", NULL, VM_OPT_DOUBLE, A(o.eps_cap), "R",
-     "foldover: while some nodes are guarded (staged, after the split) and one is inverted, eps "
-     "after each block at most R |min det| (default 1; 0: no cap)",
+     "foldover: while some nodes are guarded (staged, after the split; the repair) or in the "
+     "repair's geometric global rounds, and one is inverted, eps after each block at most "
+     "R |min det| (default 1; 0: no cap)",
      .lo = 0, .hi = 1e8},
     {"--staged", NULL, VM_OPT_FLAG, A(o.staged), NULL,
      "hexahedra: untangle their 6-tet split first, then the rule's nodes with the split held "

@@ -31,20 +31,26 @@ static double det3(const double *a, const double *b, const double *c) {
 static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
 
-/* det J of the trilinear map at (u, v, w), computed directly. */
-static double hex_det(const double *x, double u, double v, double w) {
-  double du[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, dw[3] = {0, 0, 0};
+/* The columns of J of the trilinear map at (u, v, w): d[l] = dx/du_l. */
+static void hex_jac(const double *x, double u, double v, double w, double d[3][3]) {
+  memset(d, 0, 9 * sizeof(double));
   for (int n = 0; n < 8; n++) {
     double a = cube[n][0], b = cube[n][1], c = cube[n][2];
     double fu = a ? u : 1 - u, fv = b ? v : 1 - v, fw = c ? w : 1 - w;
     double su = a ? 1 : -1, sv = b ? 1 : -1, sw = c ? 1 : -1;
     for (int r = 0; r < 3; r++) {
-      du[r] += su * fv * fw * x[3 * n + r];
-      dv[r] += fu * sv * fw * x[3 * n + r];
-      dw[r] += fu * fv * sw * x[3 * n + r];
+      d[0][r] += su * fv * fw * x[3 * n + r];
+      d[1][r] += fu * sv * fw * x[3 * n + r];
+      d[2][r] += fu * fv * sw * x[3 * n + r];
     }
   }
-  return det3(du, dv, dw);
+}
+
+/* det J of the trilinear map at (u, v, w), computed directly. */
+static double hex_det(const double *x, double u, double v, double w) {
+  double d[3][3];
+  hex_jac(x, u, v, w, d);
+  return det3(d[0], d[1], d[2]);
 }
 
 static double hex_grid_min(const double *x, int g) {
@@ -221,23 +227,10 @@ static void prisms_and_pyramids(void) {
   CHECK(nv > 200 && ni > 200 && nu <= 20, "pyramid verdicts %d %d %d", nv, ni, nu);
 }
 
-/* The mesh-level counts agree with per-element verdicts and do not depend
- * on the thread count; the untangled-looking input of the rotated cube is
- * tangled. */
 /* phi = det J / (|J|_F^2 / 3)^{3/2} of the trilinear map at (u, v, w). */
 static double hex_phi(const double *x, double u, double v, double w) {
-  double d[3][3] = {{0}};
-  for (int n = 0; n < 8; n++) {
-    double a = cube[n][0], b = cube[n][1], c = cube[n][2];
-    double fu = a ? u : 1 - u, fv = b ? v : 1 - v, fw = c ? w : 1 - w;
-    double su = a ? 1 : -1, sv = b ? 1 : -1, sw = c ? 1 : -1;
-    for (int r = 0; r < 3; r++) {
-      d[0][r] += su * fv * fw * x[3 * n + r];
-      d[1][r] += fu * sv * fw * x[3 * n + r];
-      d[2][r] += fu * fv * sw * x[3 * n + r];
-    }
-  }
-  double f = 0;
+  double d[3][3], f = 0;
+  hex_jac(x, u, v, w, d);
   for (int l = 0; l < 3; l++)
     for (int r = 0; r < 3; r++) f += d[l][r] * d[l][r];
   return det3(d[0], d[1], d[2]) / pow(f / 3, 1.5);
@@ -351,6 +344,9 @@ static void hex_bounds(vm_ctx *ctx) {
         "turned over: phi [%g, %g], psi [%g, %g]", b.phi_lo, b.phi_hi, b.psi_lo, b.psi_hi);
 }
 
+/* The mesh-level counts agree with per-element verdicts and do not depend
+ * on the thread count; the untangled-looking input of the rotated cube is
+ * tangled. */
 static void mesh_counts(vm_ctx *ctx) {
   vm_mesh *m = NULL;
   vm_rotcube_opts o = vm_rotcube_opts_default();

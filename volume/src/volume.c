@@ -1261,6 +1261,18 @@ done:
   return st > 0 ? VM_OK : st;
 }
 
+/* optimize_phase with every step keeping every cell certified and the
+ * Bernstein walls on (after the repair, whose cells it must not lose);
+ * the walls and the flag are off again on return */
+static int optimize_certified(ut_state *s, const vm_measure_params *prm, int plain, int qi) {
+  s->keep_certified = 1;
+  int st = bern_walls(s, 0.1);
+  if (st >= 0) st = optimize_phase(s, prm, plain, qi);
+  s->keep_certified = 0;
+  bern_walls(s, 0);
+  return st;
+}
+
 /* The face pyramids OpenFOAM calls wrong that the optimization left (its
  * guard keeps their count from rising; the repair before it is free to make
  * them). For each cell that has one, in cell order, up to 20 rounds: each
@@ -1427,22 +1439,15 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
     if (rep.cert_bad_init > 0 && rep.cert_invalid + rep.cert_undecided == 0 && !out_of_time(&s)) {
       /* the repair squeezed cells to certify them: optimize again, every
        * step keeping every cell certified */
-      s.keep_certified = 1;
-      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm, 1, 0);
-      s.keep_certified = 0;
-      bern_walls(&s, 0);
-      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+      if ((st = optimize_certified(&s, &prm, 1, 0)) < 0 && st != VM_ERR_INTERRUPTED) goto done;
     }
     if (st >= 0 && qi_last && o.qi_steps > 0 && rep.cert_cells > 0 &&
         rep.cert_invalid + rep.cert_undecided == 0 && !out_of_time(&s)) {
       /* the worst cells lifted, every step keeping every cell certified:
        * the n = 32 pi cube's phi_min 2.5e-4 -> 5.3e-4 in one step (the
        * paper's 2.65e-4), about 15 s on 2 threads */
-      s.keep_certified = 1;
-      if ((st = bern_walls(&s, 0.1)) >= 0) st = optimize_phase(&s, &prm, 0, o.qi_steps);
-      s.keep_certified = 0;
-      bern_walls(&s, 0);
-      if (st < 0 && st != VM_ERR_INTERRUPTED) goto done;
+      if ((st = optimize_certified(&s, &prm, 0, o.qi_steps)) < 0 && st != VM_ERR_INTERRUPTED)
+        goto done;
     }
   }
   if (st >= 0 && s.M == 0 && s.rule == VM_RULE_CORNER && has_foam_cells(m) && !out_of_time(&s)) {

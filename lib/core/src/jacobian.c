@@ -403,6 +403,13 @@ vm_jac_verdict vm_jacobian_certify(int type, const double *xyz, int max_depth, d
   return v;
 }
 
+/* the coordinates of element e's vertices, in its order */
+static void cell_coords(const vm_mesh *m, int64_t e, double *x) {
+  int nv = vm_elem_nverts(m->etype[e]);
+  for (int k = 0; k < nv; k++)
+    memcpy(x + 3 * k, m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + k], 3 * sizeof(double));
+}
+
 int vm_mesh_jacobian_certify(const vm_mesh *m, vm_jac_report *rep, uint8_t *verdict) {
   if (!m || !rep) return VM_ERR_ARG;
   int64_t counts[VM_NTYPES];
@@ -417,9 +424,7 @@ int vm_mesh_jacobian_certify(const vm_mesh *m, vm_jac_report *rep, uint8_t *verd
     vm_jac_verdict v = VM_JAC_VALID;
     if (cell_dim && vm_elem_dim(t) == cell_dim) {
       double x[3 * 8];
-      int nv = vm_elem_nverts(t);
-      for (int k = 0; k < nv; k++)
-        memcpy(x + 3 * k, m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + k], 3 * sizeof(double));
+      cell_coords(m, e, x);
       v = vm_jacobian_certify(t, x, 0, NULL);
       cells++;
       if (v == VM_JAC_INVALID) invalid++;
@@ -529,7 +534,7 @@ static void box_eval(const double *x8, const double *o, double s, double h, phip
 /* One cell: lo and hi brackets; sub-cells split while a bound is below the
  * least value found (in the cell, or H over the mesh) less rel of it. */
 static int64_t cell_bounds(const double *x8, double h, double rel, int max_depth, phipsi H,
-                           phipsi *lo, phipsi *hi) {
+                           const phipsi root[2], phipsi *lo, phipsi *hi) {
   struct {
     double o[3], s;
     int depth;
@@ -546,7 +551,11 @@ static int64_t cell_bounds(const double *x8, double h, double rel, int max_depth
     double o[3] = {stack[top].o[0], stack[top].o[1], stack[top].o[2]}, s = stack[top].s;
     int depth = stack[top].depth;
     phipsi bl, ba;
-    box_eval(x8, o, s, h, &bl, &ba);
+    if (parts == 0) {
+      bl = root[0];
+      ba = root[1];
+    } else
+      box_eval(x8, o, s, h, &bl, &ba);
     parts++;
     hi->phi = fmin(hi->phi, ba.phi);
     if (use_psi) hi->psi = fmin(hi->psi, ba.psi);
@@ -571,18 +580,16 @@ static int64_t cell_bounds(const double *x8, double h, double rel, int max_depth
   return parts;
 }
 
-static void hex_coords(const vm_mesh *m, int64_t e, double *x8) {
-  for (int k = 0; k < 8; k++)
-    memcpy(x8 + 3 * k, m->xyz + 3 * (int64_t)m->conn[m->eoff[e] + k], 3 * sizeof(double));
-}
-
 int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm_hex_bounds *out) {
   if (!m || !out) return VM_ERR_ARG;
   if (rel <= 0) rel = 0.01;
   if (max_depth <= 0) max_depth = 8;
   if (max_depth > 16) max_depth = 16;
   int nt = vm_nthreads(m->ctx);
-  /* the whole cells first: the least value attained, H */
+  /* the whole cells first: the least value attained, H; each hex's
+   * evaluation kept for the second pass */
+  phipsi *root = vm_alloc_array(m->ctx, (size_t)m->ne * 2 + 1, sizeof *root);
+  if (!root) return VM_ERR_NOMEM;
   double hphi = INFINITY, hpsi = INFINITY;
   int64_t hexes = 0;
 #pragma omp parallel for num_threads(nt) schedule(static) reduction(min : hphi, hpsi) \
@@ -591,8 +598,10 @@ int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm
     if (m->etype[e] != VM_HEX) continue;
     double x8[24], o[3] = {0, 0, 0};
     phipsi bl, ba;
-    hex_coords(m, e, x8);
+    cell_coords(m, e, x8);
     box_eval(x8, o, 1, h, &bl, &ba);
+    root[2 * e] = bl;
+    root[2 * e + 1] = ba;
     hphi = fmin(hphi, ba.phi);
     if (h > 0) hpsi = fmin(hpsi, ba.psi);
     hexes++;
@@ -606,8 +615,8 @@ int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm
     if (m->etype[e] != VM_HEX) continue;
     double x8[24];
     phipsi lo, hi;
-    hex_coords(m, e, x8);
-    int64_t n = cell_bounds(x8, h, rel, max_depth, H, &lo, &hi);
+    cell_coords(m, e, x8);
+    int64_t n = cell_bounds(x8, h, rel, max_depth, H, root + 2 * e, &lo, &hi);
     parts += n;
     refined += n > 1;
     lphi = fmin(lphi, lo.phi);
@@ -617,6 +626,7 @@ int vm_mesh_hex_bounds(const vm_mesh *m, double h, double rel, int max_depth, vm
       upsi = fmin(upsi, hi.psi);
     }
   }
+  vm_free(m->ctx, root);
   out->hexes = hexes;
   out->refined = refined;
   out->parts = parts;
