@@ -292,6 +292,11 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
                                                                  : "  -- interrupted")
                 : "");
   }
+  if (!cli->quiet && !rep->valid && rep->stalled && rep->M_final > 0)
+    fprintf(stderr,
+            "vm-volume: the untangling was stopped as stalled: its eps had fallen to %.3g and %d "
+            "iterations brought neither fewer inverted nodes nor a higher min det (%.3g)\n",
+            rep->stall_eps, VM_VOLUME_STALL_ITER, rep->stall_min_det);
   if (!cli->quiet && rc == VM_EXIT_OK && rep->timed_out)
     fprintf(stderr,
             "vm-volume: the time limit was reached after the mesh was certified valid (after "
@@ -352,18 +357,19 @@ static void print_json(const args *a, const outcome *r, int rc) {
   vm_json_string(stdout, a->in);
   printf(", \"output\": ");
   vm_json_string(stdout, a->out);
-  printf(", \"valid\": %s, \"interrupted\": %s, \"timed_out\": %s, \"method\": \"%s\", \"rule\": "
-         "\"%s\", "
+  printf(", \"valid\": %s, \"interrupted\": %s, \"timed_out\": %s, \"stalled\": %s, "
+         "\"method\": \"%s\", \"rule\": \"%s\", "
          "\"nodes\": %lld, \"M_init\": %lld, \"M_max\": %lld, \"M_final\": %lld, "
          "\"inverted_corner_tets\": %lld, \"inverted_elements\": %lld, \"iter_untangle\": %d, "
          "\"iter_local\": %d, \"iter_opt\": %d, \"time_untangle\": %.3f, \"time_total\": %.3f, "
          "\"phi_min\": ",
          rep->valid && r->bad == 0 && rc == VM_EXIT_OK ? "true" : "false",
          r->st == VM_ERR_INTERRUPTED ? "true" : "false", rep->timed_out ? "true" : "false",
-         vm_untangle_method_name(a->o.method), rules[a->o.rule], (long long)rep->nodes,
-         (long long)rep->M_init, (long long)rep->M_max, (long long)rep->M_final,
-         (long long)r->q.all.inverted_nodes, (long long)r->q.all.inverted_elems, rep->iter_untangle,
-         rep->iter_local, rep->iter_opt, rep->time_untangle, rep->time_total);
+         rep->stalled && !rep->valid ? "true" : "false", vm_untangle_method_name(a->o.method),
+         rules[a->o.rule], (long long)rep->nodes, (long long)rep->M_init, (long long)rep->M_max,
+         (long long)rep->M_final, (long long)r->q.all.inverted_nodes,
+         (long long)r->q.all.inverted_elems, rep->iter_untangle, rep->iter_local, rep->iter_opt,
+         rep->time_untangle, rep->time_total);
   vm_json_double(stdout, rep->phi_min);
   printf(", \"psi_min\": ");
   vm_json_double(stdout, rep->psi_min);

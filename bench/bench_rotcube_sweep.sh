@@ -3,7 +3,7 @@
 # family beyond Table 1 (issue 23, item 5): rotation axes z, (1,1,1),
 # (0,1,1) and (1,2,3), angles k pi/8 (k = 1..8), inner half-sizes 0.25, 0.3,
 # 0.35 and 0.4, for each n given. Per case: the exit code (0 certified
-# valid, 3 not valid or impossible, 4 time limit), the time to a certified
+# valid, 3 not valid, impossible or stopped as stalled, 4 time limit), the time to a certified
 # mesh, phi_min, min scaled Jacobian, cells not certified, the face pyramids
 # OpenFOAM's checkMesh would call wrong, CPU seconds; then a summary per n. One thread, so that two sweeps can run side by side.
 # usage: bench/bench_rotcube_sweep.sh BUILD_DIR [N ...]   (default N: 12)
@@ -25,7 +25,7 @@ json() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" "$1" | head -1; }
 printf '| n | axis | angle | inner | exit | certified after s | CPU s | phi_min | min SJ | not certified | wrong face pyramids | note |\n'
 printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 for n in $sizes; do
-  ok=0 bad=0 imp=0 slow=0 total=0 cpu_sum=0 worst_cpu=0 foam_bad=0
+  ok=0 bad=0 imp=0 slow=0 stalled=0 total=0 cpu_sum=0 worst_cpu=0 foam_bad=0
   for ax in $axes; do
     for an in $angles; do
       for in in $inners; do
@@ -50,6 +50,9 @@ for n in $sizes; do
         elif [ $rc -eq 4 ]; then
           slow=$((slow + 1))
           note="time limit"
+        elif grep -q '"stalled": true' "$c.json"; then
+          stalled=$((stalled + 1))
+          note="stalled (stopped, exit 3)"
         else
           bad=$((bad + 1))
           note=$(grep -m1 "error:" "$c.err" | cut -c1-80)
@@ -68,7 +71,7 @@ for n in $sizes; do
       done
     done
   done
-  printf '\nn = %s: %s cases: %s certified valid (CPU mean %s s, max %s s; %s of them with face pyramids OpenFOAM calls wrong), %s impossible (said at once), %s at the %s s limit, %s other exit 3\n\n' \
+  printf '\nn = %s: %s cases: %s certified valid (CPU mean %s s, max %s s; %s of them with face pyramids OpenFOAM calls wrong), %s impossible (said at once), %s stopped as stalled, %s at the %s s limit, %s other exit 3\n\n' \
     "$n" "$total" "$ok" "$(awk -v s="$cpu_sum" -v k="$ok" 'BEGIN { printf "%.1f", k ? s / k : 0 }')" \
-    "$worst_cpu" "$foam_bad" "$imp" "$slow" "$limit" "$bad"
+    "$worst_cpu" "$foam_bad" "$imp" "$stalled" "$slow" "$limit" "$bad"
 done

@@ -4,7 +4,8 @@
 # naming the element and --slip-boundary, the input written; vm-quality
 # --require-valid and --verify refuse a mesh whose corner tets are all
 # positive but whose hex is not certified (det J < 0 inside); fixed
-# vertices outside the fixed (or sliding) boundary end at once too.
+# vertices outside the fixed (or sliding) boundary end at once too; an
+# untangling that stalls for good is stopped, exit 3.
 set -u
 vol=$1 qual=$2 gen=$3
 dir=$(mktemp -d)
@@ -75,6 +76,30 @@ check '! grep -q "lies outside" "$dir/in04.err"' \
 "$vol" --time-limit 1 -q "$dir/graze.vmsh" "$dir/out_res.vmsh" 2>"$dir/graze.err"
 check '! grep -q "lies outside" "$dir/graze.err"' \
   "n = 16, pi/4, half-size 0.3: inside, not refused (rays from its turned vertices along simple irrational directions grazed the outer grid's edges)"
+
+# a cube it cannot untangle, with no proof that it cannot: n = 6, pi about
+# (0,1,1), inner half-size 0.3 (one cell of shell around the turned inner
+# cube). Foldover's eps collapses to 1e-11 at min det -0.88 and nothing
+# moves: the run is stopped as stalled (2-4 s) instead of spending the
+# iteration budget (15,221 untangling iterations, 17 s, before the stall
+# watch); exit 3, the best state written, the JSON says so
+"$gen" rotcube --n 6 --angle pi --axis 0,1,1 --inner 0.3 "$dir/stall.vmsh"
+"$vol" --threads 1 --time-limit 60 --json "$dir/stall.vmsh" "$dir/stall_out.vmsh" \
+  >"$dir/stall.json" 2>"$dir/stall.err"
+rc=$?
+iters=$(sed -n 's/.*"iter_untangle": \([0-9]*\).*/\1/p' "$dir/stall.json")
+check '[ $rc -eq 3 ] && grep -q "\"stalled\": true" "$dir/stall.json"' \
+  "a cube it cannot untangle: exit 3, \"stalled\" in the JSON (got $rc)"
+check '[ -n "$iters" ] && [ "$iters" -lt 5000 ]' \
+  "stopped after $iters untangling iterations, not at the budget"
+check 'grep -q "untangling was stopped as stalled: its eps had fallen to 1e-11 and 300 iterations" "$dir/stall.err" &&
+  grep -q "not valid: .*the best state is written" "$dir/stall.err" && [ -s "$dir/stall_out.vmsh" ]' \
+  "saying so, and the best state written"
+"$gen" rotcube --n 8 --angle pi/2 "$dir/ok.vmsh"
+"$vol" --threads 1 --json "$dir/ok.vmsh" "$dir/ok_out.vmsh" >"$dir/ok.json" 2>/dev/null
+rc=$?
+check '[ $rc -eq 0 ] && grep -q "\"stalled\": false" "$dir/ok.json"' \
+  "a cube it can untangle: exit 0, not stalled (got $rc)"
 
 # hex 283 of the n = 16 pi cube after the staged schedule without the
 # repair (scaled): all 8 corner tets positive, det J < 0 inside

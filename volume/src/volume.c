@@ -116,6 +116,13 @@ typedef struct {
   int check_certified; /* a local round of the geometric phase ends once
                           every cell of its region is certified */
   int local_scale;     /* local_threshold counts this many times the nodes */
+  /* the stall watch of foldover's untangling (stalled): the best M and
+   * min det since the last progress, and the iterations since */
+  int64_t watch_M;
+  double watch_D;
+  int watch_n;
+  int stalled; /* the untangling stalled for good: eps collapsed, no progress */
+  int sub;     /* a region's state (sub_begin), not the mesh's */
   int reached_certified;
   /* the Bernstein repair: per element of m a weight (hexes of the region),
    * per coefficient penalized (1) or walled (0) and its eps, and the scale
@@ -205,6 +212,34 @@ static double hex_scale(const vm_problem *P, const vm_mesh *m) {
     nhex++;
   }
   return nhex > 0 && vsum > 0 ? (double)nhex / vsum : 1;
+}
+
+/* The stall watch, after each global untangling iteration's stats: 1 when
+ * foldover's eps has collapsed (below 1e-6 of |min det|: the penalty at the
+ * folds so steep that steps shrink to nothing) and for VM_VOLUME_STALL_ITER such
+ * iterations neither M reached a new least nor min det rose by 5 % of its
+ * best. The n = 12 cube turned by pi about (0,1,1), inner half-size 0.35:
+ * the 6-tet split's eps fell to delta0 (1e-11) at min det -2.3 after 800
+ * iterations and sat there with M between 4,700 and 4,860 for 65 s, the
+ * direct schedule after it the same for 50 s, until the time limit. Not
+ * in the repair, which has its own rounds and budget. */
+static int stall_watch(ut_state *s) {
+  if (s->sub || s->repair_stage || s->o->method != VM_UNTANGLE_FOLDOVER || s->M == 0) return 0;
+  double D = s->min_det;
+  if (s->M < s->watch_M || D > s->watch_D + 0.05 * fabs(s->watch_D)) {
+    if (s->M < s->watch_M) s->watch_M = s->M;
+    if (D > s->watch_D) s->watch_D = D;
+    s->watch_n = 0;
+    return 0;
+  }
+  if (!(D < 0 && s->eps < 1e-6 * -D)) return 0;
+  return ++s->watch_n >= VM_VOLUME_STALL_ITER;
+}
+
+static void stall_reset(ut_state *s) {
+  s->watch_M = INT64_MAX;
+  s->watch_D = -INFINITY;
+  s->watch_n = 0;
 }
 
 /* Node determinants at x: M, min det, and the best state so far. */
@@ -396,6 +431,13 @@ static int before_untangle(void *user, int iter, const double *x) {
     return 1;
   if ((st = update_eps(s, iter == 1 && s->eps == 0)) < 0) return st;
   if (adaptive && s->M == 0 && s->done) return 1;
+  if (stall_watch(s)) {
+    s->stalled = 1;
+    s->rep->stalled++;
+    s->rep->stall_min_det = s->min_det;
+    s->rep->stall_eps = s->eps;
+    return 1;
+  }
   s->have_step = 0;
   return VM_OK;
 }
@@ -622,6 +664,7 @@ static int sub_begin(ut_state *s, vm_rule rule, vm_measure_kind k, const vm_meas
                      const uint8_t *emask, const uint8_t *vmark, ut_state *ss, submesh *sm) {
   vm_ctx *ctx = s->ctx;
   *ss = *s;
+  ss->sub = 1;
   ss->tref_own = NULL;
   ss->P = NULL;
   ss->dets = ss->node_eps = ss->nw = ss->best = NULL;
@@ -723,7 +766,7 @@ static int local_phase(ut_state *s, vm_measure_kind k, const vm_measure_params *
   uint8_t *vmark = vm_malloc(ctx, (size_t)m->nv + 1);
   int st = (!emask || !vmark) ? VM_ERR_NOMEM : vm_mesh_vertex_elements(m, &vrp, &vel);
   int rings = s->o->local_rings, stalls = 0;
-  while (st >= 0 && s->M > 0 && *budget > 0 && !out_of_time(s) &&
+  while (st >= 0 && s->M > 0 && !s->stalled && *budget > 0 && !out_of_time(s) &&
          rings <= 4 * s->o->local_rings + 8) {
     int64_t M0 = s->M;
     local_mask(s, rings, vrp, vel, emask, vmark);
@@ -799,8 +842,11 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
   vm_measure_params prm = *prm0;
   vm_minimize_result res;
   int st = VM_OK;
-  for (int round = 0;
-       s->M > 0 && !s->reached_certified && *budget > 0 && !out_of_time(s) && round < 50; round++) {
+  s->stalled = 0;
+  stall_reset(s);
+  for (int round = 0; s->M > 0 && !s->stalled && !s->reached_certified && *budget > 0 &&
+                      !out_of_time(s) && round < 50;
+       round++) {
     vm_measure_kind k = o->method == VM_UNTANGLE_BARRIER ? VM_MEASURE_BARRIER : VM_MEASURE_PENALTY;
     prm.drop_chi2 = 1;
     vm_measure_params pu = prm;

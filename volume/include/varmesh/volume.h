@@ -132,6 +132,10 @@ vm_volume_opts vm_volume_opts_direct(void);
  * hexahedra: vm_volume_opts_direct() with staged = 1. */
 vm_volume_opts vm_volume_opts_staged(void);
 
+/* Iterations without progress at a collapsed eps after which foldover's
+ * untangling is given up as stalled (vm_volume_report.stalled). */
+#define VM_VOLUME_STALL_ITER 300
+
 typedef struct vm_volume_report {
   int64_t nodes; /* quadrature nodes */
   int64_t M_init, M_max, M_final;
@@ -140,7 +144,12 @@ typedef struct vm_volume_report {
   int iter_opt;         /* optimization (and quasi-iso) iterations */
   double time_untangle; /* seconds until M = 0 (or the end) */
   double time_total;
-  int timed_out;                    /* the run was cut short by opts.time_limit */
+  int timed_out; /* the run was cut short by opts.time_limit */
+  /* untangling phases given up as stalled (foldover: its eps collapsed
+   * below 1e-6 |min det| and 300 iterations brought neither fewer inverted
+   * nodes nor a min det 5 % higher), and the last one's figures then */
+  int stalled;
+  double stall_min_det, stall_eps;
   double phi_min, psi_min, min_det; /* final, over all nodes */
   double t_reached;                 /* quasi-iso: the largest t with a finite W_t (0 if off) */
   int valid;                        /* M_final == 0 and every cell certified valid */
