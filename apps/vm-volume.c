@@ -251,6 +251,12 @@ static int run_code(const outcome *r) {
   return fails ? VM_EXIT_CHECK : VM_EXIT_OK;
 }
 
+/* The run ended with inverted nodes because an untangling phase was
+ * stopped as stalled (not a repair that left cells, not the budget). */
+static int ended_stalled(const vm_volume_report *rep) {
+  return rep->stalled && !rep->valid && rep->M_final > 0;
+}
+
 static void print_summary(const vm_cli *cli, const args *a, const outcome *r, int rc) {
   const vm_volume_report *rep = &r->rep;
   if (!cli->quiet) {
@@ -292,7 +298,7 @@ static void print_summary(const vm_cli *cli, const args *a, const outcome *r, in
                                                                  : "  -- interrupted")
                 : "");
   }
-  if (!cli->quiet && !rep->valid && rep->stalled && rep->M_final > 0)
+  if (!cli->quiet && ended_stalled(rep))
     fprintf(stderr,
             "vm-volume: the untangling was stopped as stalled: its eps had fallen to %.3g and %d "
             "iterations brought neither fewer inverted nodes nor a higher min det (%.3g)\n",
@@ -365,7 +371,7 @@ static void print_json(const args *a, const outcome *r, int rc) {
          "\"phi_min\": ",
          rep->valid && r->bad == 0 && rc == VM_EXIT_OK ? "true" : "false",
          r->st == VM_ERR_INTERRUPTED ? "true" : "false", rep->timed_out ? "true" : "false",
-         rep->stalled && !rep->valid ? "true" : "false", vm_untangle_method_name(a->o.method),
+         ended_stalled(rep) ? "true" : "false", vm_untangle_method_name(a->o.method),
          rules[a->o.rule], (long long)rep->nodes, (long long)rep->M_init, (long long)rep->M_max,
          (long long)rep->M_final, (long long)r->q.all.inverted_nodes,
          (long long)r->q.all.inverted_elems, rep->iter_untangle, rep->iter_local, rep->iter_opt,
