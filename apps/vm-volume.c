@@ -251,7 +251,7 @@ static int run_code(const outcome *r) {
   return fails ? VM_EXIT_CHECK : VM_EXIT_OK;
 }
 
-/* The run ended with inverted nodes because an untangling phase was
+/* The run ended with inverted nodes because its last untangling phase was
  * stopped as stalled (not a repair that left cells, not the budget). */
 static int ended_stalled(const vm_volume_report *rep) {
   return rep->stalled && !rep->valid && rep->M_final > 0;

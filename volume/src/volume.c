@@ -237,6 +237,7 @@ static int stall_watch(ut_state *s) {
 }
 
 static void stall_reset(ut_state *s) {
+  s->stalled = 0;
   s->watch_M = INT64_MAX;
   s->watch_D = -INFINITY;
   s->watch_n = 0;
@@ -433,7 +434,6 @@ static int before_untangle(void *user, int iter, const double *x) {
   if (adaptive && s->M == 0 && s->done) return 1;
   if (stall_watch(s)) {
     s->stalled = 1;
-    s->rep->stalled++;
     s->rep->stall_min_det = s->min_det;
     s->rep->stall_eps = s->eps;
     return 1;
@@ -842,7 +842,6 @@ static int untangle_rounds(ut_state *s, const vm_measure_params *prm0, int *budg
   vm_measure_params prm = *prm0;
   vm_minimize_result res;
   int st = VM_OK;
-  s->stalled = 0;
   stall_reset(s);
   for (int round = 0; s->M > 0 && !s->stalled && !s->reached_certified && *budget > 0 &&
                       !out_of_time(s) && round < 50;
@@ -1530,6 +1529,9 @@ int vm_volume_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_ops *surf, const vm_
 done:
   rep.time_total = now() - s.t0;
   rep.timed_out = out_of_time(&s);
+  /* the last untangling phase's: a stage that stalled before another ran
+   * is not why the run ended */
+  rep.stalled = s.stalled;
   if (st == VM_ERR_INTERRUPTED && (s.split_stage || s.guard || s.nw)) {
     /* interrupted while staged: count the rule's own nodes again */
     s.split_stage = 0;

@@ -497,30 +497,22 @@ static void box_eval(const double *x8, const double *o, double s, double h, phip
       t[(ax + 2) % 3] = q >> 1;
       memcpy(hd, t, sizeof t);
       hd[ax] = 1;
-      const double *a = p + 3 * hex_vertex(t[0], t[1], t[2]);
-      const double *b = p + 3 * hex_vertex(hd[0], hd[1], hd[2]);
-      double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
-      big = fmax(big, d0 * d0 + d1 * d1 + d2 * d2);
+      double d[3];
+      vm_sub3(p + 3 * hex_vertex(hd[0], hd[1], hd[2]), p + 3 * hex_vertex(t[0], t[1], t[2]), d);
+      big = fmax(big, vm_dot3(d, d));
     }
     fhi += big;
   }
   for (int n = 0; n < 8; n++) {
     int a = n & 1, b = n >> 1 & 1, c = n >> 2;
-    double e[3][3];
-    const double *pa[3][2] = {
-        {p + 3 * hex_vertex(0, b, c), p + 3 * hex_vertex(1, b, c)},
-        {p + 3 * hex_vertex(a, 0, c), p + 3 * hex_vertex(a, 1, c)},
-        {p + 3 * hex_vertex(a, b, 0), p + 3 * hex_vertex(a, b, 1)},
-    };
-    double f = 0;
-    for (int l = 0; l < 3; l++)
-      for (int r = 0; r < 3; r++) {
-        e[l][r] = pa[l][1][r] - pa[l][0][r];
-        f += e[l][r] * e[l][r];
-      }
-    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
-                 e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    /* the edges from corner n along each axis: the derivatives there */
+    double e[3][3], x[3];
+    vm_sub3(p + 3 * hex_vertex(1, b, c), p + 3 * hex_vertex(0, b, c), e[0]);
+    vm_sub3(p + 3 * hex_vertex(a, 1, c), p + 3 * hex_vertex(a, 0, c), e[1]);
+    vm_sub3(p + 3 * hex_vertex(a, b, 1), p + 3 * hex_vertex(a, b, 0), e[2]);
+    double f = vm_dot3(e[0], e[0]) + vm_dot3(e[1], e[1]) + vm_dot3(e[2], e[2]);
+    vm_cross3(e[1], e[2], x);
+    double det = vm_dot3(e[0], x);
     at->phi = fmin(at->phi, f > 0 ? det / pow(f / 3, 1.5) : -1);
     at->psi = fmin(at->psi, psi_of(det / sc));
   }

@@ -145,9 +145,10 @@ typedef struct vm_volume_report {
   double time_untangle; /* seconds until M = 0 (or the end) */
   double time_total;
   int timed_out; /* the run was cut short by opts.time_limit */
-  /* untangling phases given up as stalled (foldover: its eps collapsed
-   * below 1e-6 |min det| and 300 iterations brought neither fewer inverted
-   * nodes nor a min det 5 % higher), and the last one's figures then */
+  /* the last untangling phase was given up as stalled (foldover: its eps
+   * collapsed below 1e-6 |min det| and VM_VOLUME_STALL_ITER iterations
+   * brought neither fewer inverted nodes nor a min det 5 % higher), and
+   * its figures then */
   int stalled;
   double stall_min_det, stall_eps;
   double phi_min, psi_min, min_det; /* final, over all nodes */
