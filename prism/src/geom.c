@@ -3,6 +3,7 @@
 #include "geom.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "varmesh/quadrature.h"
@@ -21,11 +22,32 @@ static double node_ratio(const vm_qnode *q, const double *x) {
   return det / l;
 }
 
+/* The geometric rule's 12 nodes use 7 edges of the prism between them:
+ * each edge's vector and length is taken once (edge[h][t], by head and
+ * tail), the same values node_ratio would take at every node. */
 double pr_prism_quality(const double *x) {
   const vm_qrule *R = vm_qrule_get(VM_PRISM, VM_RULE_GEOMETRIC);
+  double ev[36][3], el[36];
+  uint64_t have = 0;
   double q = INFINITY;
   for (int j = 0; j < R->nnodes; j++) {
-    double v = node_ratio(&R->nodes[j], x);
+    const vm_qnode *nd = &R->nodes[j];
+    const double *c[3];
+    double l[3];
+    for (int k = 0; k < 3; k++) {
+      int e = 6 * nd->head[k] + nd->tail[k];
+      if (!(have >> e & 1)) {
+        for (int r = 0; r < 3; r++) ev[e][r] = x[3 * nd->head[k] + r] - x[3 * nd->tail[k] + r];
+        el[e] = vm_norm3(ev[e]);
+        have |= (uint64_t)1 << e;
+      }
+      c[k] = ev[e];
+      l[k] = el[e];
+    }
+    double cr[3];
+    vm_cross3(c[1], c[2], cr);
+    double det = vm_dot3(c[0], cr), ll = l[0] * l[1] * l[2];
+    double v = !(ll > 0) ? (det > 0 ? 1 : -1) : det / ll;
     if (v < q) q = v;
   }
   return q / (sqrt(3.0) / 2);

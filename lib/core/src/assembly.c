@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "hessian_psd_private.h"
+#include "measure_private.h"
 #include "problem_private.h"
 #include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
@@ -366,6 +367,8 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
   const vm_qrule *R = ec->R;
   const vm_nodepat *pats = p->pat[ec->t];
   vm_measure_scalar_fn scalar = p->ops->scalar;
+  /* the balanced measure (the prism stage's, and the default) inlined */
+  int bal = p->ops == &vm_measure_balanced_ops;
   int nn = R->nnodes;
   double F = 0;
   node3 nv[VM_QRULE_MAX_NODES];
@@ -376,7 +379,10 @@ VM_INLINE int elem3(const vm_problem *p, const elem_ctx *ec, int order, int diag
     double *f = order ? fv[j] : fv[0];
     node3_eval(ec, &R->nodes[j], ec->S + 9 * j, diag, order > 0, v);
     vm_measure_params tmp;
-    if (scalar(node_params(p, ec->n0 + j, &tmp), 3, v->s, v->det, order, f)) return 1;
+    const vm_measure_params *prm = node_params(p, ec->n0 + j, &tmp);
+    if (bal ? vm_balanced_scalar(prm, 3, v->s, v->det, order, f)
+            : scalar(prm, 3, v->s, v->det, order, f))
+      return 1;
     F += ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0) * f[0];
   }
   *Fe = F;
@@ -479,7 +485,10 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd,
     node2_eval(ec, q, S, order > 0, &v);
     vm_measure_params tmp;
     double f[6];
-    if (p->ops->scalar(node_params(p, ec->n0 + j, &tmp), 2, v.s, v.det, order, f)) return 1;
+    const vm_measure_params *prm = node_params(p, ec->n0 + j, &tmp);
+    if (p->ops == &vm_measure_balanced_ops ? vm_balanced_scalar(prm, 2, v.s, v.det, order, f)
+                                           : p->ops->scalar(prm, 2, v.s, v.det, order, f))
+      return 1;
     double wq = ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0);
     F += wq * f[0];
     if (!order) continue;

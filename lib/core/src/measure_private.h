@@ -59,6 +59,18 @@ static inline int vm_measure_outside(double out[6]) {
   return 1;
 }
 
+/* The balanced measure (10), W = phi_theta / det, with its partials: here
+ * so that the element kernels can inline it (the measure files' table
+ * calls it through a pointer). */
+static inline int vm_balanced_scalar(const vm_measure_params *p, int d, double s, double det,
+                                     int order, double out[6]) {
+  if ((d != 2 && d != 3) || !(det > 0) || !(s < INFINITY)) return vm_measure_outside(out);
+  vm_sd_fn phi = vm_phi_theta_fn(p->theta, d, s, det);
+  double r = 1 / det;
+  vm_measure_product(&phi, r, -r * r, 2 * r * r * r, order, out);
+  return 0;
+}
+
 extern const vm_measure_ops vm_measure_shape_ops;
 extern const vm_measure_ops vm_measure_shape_alt_ops;
 extern const vm_measure_ops vm_measure_balanced_ops;

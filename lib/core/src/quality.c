@@ -103,18 +103,14 @@ static void rule_tinv(const vm_qrule *R, const double *ref, double h, double *Ti
   }
 }
 
-void vm_foam_face(const double *y, int n, double *c, double *s) {
-  if (n == 3) {
-    double u[3], w[3];
-    vm_sub3(y + 3, y, u);
-    vm_sub3(y + 6, y, w);
-    vm_cross3(u, w, s);
-    for (int r = 0; r < 3; r++) {
-      s[r] *= 0.5;
-      c[r] = (y[r] + y[3 + r] + y[6 + r]) / 3;
-    }
-    return;
-  }
+/* A face of n > 3 vertices, as OpenFOAM takes it: the triangles from each
+ * edge to the vertices' mean. Inlined with n a constant for quads (the
+ * same operations, so the same bits). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void
+foam_polygon(const double *y, int n, double *c, double *s) {
   double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
   for (int i = 0; i < n; i++)
     for (int r = 0; r < 3; r++) pc[r] += y[3 * i + r];
@@ -134,6 +130,25 @@ void vm_foam_face(const double *y, int n, double *c, double *s) {
     sa += an;
   }
   for (int r = 0; r < 3; r++) c[r] = sa > 0 ? sc[r] / (3 * sa) : pc[r];
+}
+
+void vm_foam_face(const double *y, int n, double *c, double *s) {
+  if (n == 4) {
+    foam_polygon(y, 4, c, s);
+    return;
+  }
+  if (n == 3) {
+    double u[3], w[3];
+    vm_sub3(y + 3, y, u);
+    vm_sub3(y + 6, y, w);
+    vm_cross3(u, w, s);
+    for (int r = 0; r < 3; r++) {
+      s[r] *= 0.5;
+      c[r] = (y[r] + y[3 + r] + y[6 + r]) / 3;
+    }
+    return;
+  }
+  foam_polygon(y, n, c, s);
 }
 
 /* vm_cell_foam, and the least face pyramid's volume over the cell's
