@@ -10,21 +10,25 @@
 #include "varmesh/quality.h"
 #include "varmesh/surface_mesh.h"
 
-static double node_ratio(const vm_qnode *q, const double *x) {
-  double c[3][3];
-  for (int k = 0; k < 3; k++)
-    for (int r = 0; r < 3; r++) c[k][r] = x[3 * q->head[k] + r] - x[3 * q->tail[k] + r];
+/* det(c0, c1, c2) over the product l of their lengths (+-1 where l is 0). */
+static double edge_ratio(const double *c0, const double *c1, const double *c2, double l) {
   double cr[3];
-  vm_cross3(c[1], c[2], cr);
-  double det = vm_dot3(c[0], cr);
-  double l = vm_norm3(c[0]) * vm_norm3(c[1]) * vm_norm3(c[2]);
+  vm_cross3(c1, c2, cr);
+  double det = vm_dot3(c0, cr);
   if (!(l > 0)) return det > 0 ? 1 : -1;
   return det / l;
 }
 
+static double node_ratio(const vm_qnode *q, const double *x) {
+  double c[3][3];
+  for (int k = 0; k < 3; k++)
+    for (int r = 0; r < 3; r++) c[k][r] = x[3 * q->head[k] + r] - x[3 * q->tail[k] + r];
+  return edge_ratio(c[0], c[1], c[2], vm_norm3(c[0]) * vm_norm3(c[1]) * vm_norm3(c[2]));
+}
+
 /* The geometric rule's 12 nodes use 7 edges of the prism between them:
- * each edge's vector and length is taken once (edge[h][t], by head and
- * tail), the same values node_ratio would take at every node. */
+ * each edge's vector and length is taken once (ev[6 head + tail], el),
+ * the same values node_ratio would take at every node. */
 double pr_prism_quality(const double *x) {
   const vm_qrule *R = vm_qrule_get(VM_PRISM, VM_RULE_GEOMETRIC);
   double ev[36][3], el[36];
@@ -44,10 +48,7 @@ double pr_prism_quality(const double *x) {
       c[k] = ev[e];
       l[k] = el[e];
     }
-    double cr[3];
-    vm_cross3(c[1], c[2], cr);
-    double det = vm_dot3(c[0], cr), ll = l[0] * l[1] * l[2];
-    double v = !(ll > 0) ? (det > 0 ? 1 : -1) : det / ll;
+    double v = edge_ratio(c[0], c[1], c[2], l[0] * l[1] * l[2]);
     if (v < q) q = v;
   }
   return q / (sqrt(3.0) / 2);

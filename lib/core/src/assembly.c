@@ -476,6 +476,7 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd,
                     elem_acc *acc) {
   const vm_qrule *R = ec->R;
   const vm_nodepat *pats = p->pat[ec->t];
+  int bal = p->ops == &vm_measure_balanced_ops; /* inlined, as in elem3 */
   double F = 0;
   for (int j = 0; j < R->nnodes; j++) {
     if (ec->nw && ec->nw[j] == 0) continue; /* left out */
@@ -486,8 +487,8 @@ VM_INLINE int elem2(const vm_problem *p, const elem_ctx *ec, int order, int psd,
     vm_measure_params tmp;
     double f[6];
     const vm_measure_params *prm = node_params(p, ec->n0 + j, &tmp);
-    if (p->ops == &vm_measure_balanced_ops ? vm_balanced_scalar(prm, 2, v.s, v.det, order, f)
-                                           : p->ops->scalar(prm, 2, v.s, v.det, order, f))
+    if (bal ? vm_balanced_scalar(prm, 2, v.s, v.det, order, f)
+            : p->ops->scalar(prm, 2, v.s, v.det, order, f))
       return 1;
     double wq = ec->w * ec->wb[j] * (ec->nw ? ec->nw[j] : 1.0);
     F += wq * f[0];
