@@ -330,7 +330,7 @@ static inline int ft_read(const char *dir, ft_case *c) {
   for (int o = 0; o < 5; o++) {
     char path[400];
     snprintf(path, sizeof path, "%.300s/constant/polyMesh/%s", dir, obj[o]);
-    size_t len;
+    size_t len = 0;
     char *s = ft_slurp(path, &len);
     ft_scan f = {s, len, 0, 0, "", ""};
     int ok = s && ft_header(&f);

@@ -67,7 +67,10 @@ static void test_binary(vm_ctx *ctx, const char *dir) {
   uint8_t *base = binary_of(ctx, m, dir, &n);
   vm_mesh_destroy(&m);
   CHECK(base && n > 200, "base file");
-  if (!base) return;
+  if (!base || n <= 200) {
+    free(base);
+    return;
+  }
   vm_mesh *ok = NULL;
   CHECK(vm_mesh_read_memory(ctx, BIN, base, n, VM_FMT_VMSH, &ok) == VM_OK, "base reads");
   vm_mesh_destroy(&ok);
@@ -75,6 +78,10 @@ static void test_binary(vm_ctx *ctx, const char *dir) {
   size_t vflg = vt_find_chunk(base, n, "VFLG", 0), elem = vt_find_chunk(base, n, "ELEM", 0);
   size_t fild = vt_find_chunk(base, n, "FILD", 0), attr = vt_find_chunk(base, n, "ATTR", 0);
   CHECK(mesh == 24 && vert && vflg && elem && fild && attr, "chunks found");
+  if (!(mesh == 24 && vert && vflg && elem && fild && attr)) {
+    free(base);
+    return;
+  }
   uint8_t *b;
 
   expect_fail(ctx, BIN, base, 0, "empty", "empty file");

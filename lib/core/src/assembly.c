@@ -5,16 +5,11 @@
 #include <string.h>
 
 #include "hessian_psd_private.h"
+#include "inline.h"
 #include "measure_private.h"
 #include "problem_private.h"
 #include "varmesh/jacobian.h"
 #include "varmesh/problem.h"
-
-#if defined(__GNUC__)
-#define VM_INLINE static inline __attribute__((always_inline))
-#else
-#define VM_INLINE static inline
-#endif
 
 /* Per-element accumulators: gradient and diagonal blocks by local vertex,
  * off-diagonal block diagonals by element pair (problem->pair), and (full

@@ -8,14 +8,11 @@
 #include <string.h>
 
 #include "hessian_psd_private.h"
+#include "inline.h"
 #include "varmesh/problem.h"
 
 /* Cyclic Jacobi; inlined with a constant n for the 3x3 cases. */
-#if defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-static inline void
-sym_eig(int n, double *A, double *w, double *V) {
+VM_INLINE void sym_eig(int n, double *A, double *w, double *V) {
   for (int i = 0; i < n; i++)
     for (int k = 0; k < n; k++) V[i * n + k] = i == k;
   for (int sweep = 0; sweep < 60; sweep++) {

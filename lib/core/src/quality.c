@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "inline.h"
 #include "vec3.h"
 
 static double det3(const double *A) {
@@ -106,11 +107,7 @@ static void rule_tinv(const vm_qrule *R, const double *ref, double h, double *Ti
 /* A face of n > 3 vertices, as OpenFOAM takes it: the triangles from each
  * edge to the vertices' mean. Inlined with n a constant for quads (the
  * same operations, so the same bits). */
-#if defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-static inline void
-foam_polygon(const double *y, int n, double *c, double *s) {
+VM_INLINE void foam_polygon(const double *y, int n, double *c, double *s) {
   double pc[3] = {0, 0, 0}, sa = 0, sc[3] = {0, 0, 0};
   for (int i = 0; i < n; i++)
     for (int r = 0; r < 3; r++) pc[r] += y[3 * i + r];

@@ -179,7 +179,7 @@ static int read_required(medit_rd *r) {
   int64_t n;
   int st = read_count(r, &n, 1, "RequiredVertices");
   for (int64_t i = 0; !st && i < n; i++) {
-    int32_t v;
+    int32_t v = 0;
     if (!(st = read_vertex_index(r, "RequiredVertices", &v))) r->m->vflag[v] = VM_VERTEX_FIXED;
   }
   return st;

@@ -203,7 +203,7 @@ static int rd_raw(msh_rd *r, void *dst, size_t n, const char *what) {
 /* size_t of the format: 8 bytes in binary files (data-size 8). */
 static int rd_size(msh_rd *r, int64_t *v, const char *what) {
   if (r->binary) {
-    uint64_t u;
+    uint64_t u = 0;
     int st = rd_raw(r, &u, 8, what);
     if (st) return st;
     if (u > (uint64_t)INT64_MAX)
@@ -219,7 +219,7 @@ static int rd_size(msh_rd *r, int64_t *v, const char *what) {
 /* int of the format: 4 bytes in binary files. */
 static int rd_int(msh_rd *r, int64_t *v, const char *what) {
   if (r->binary) {
-    int32_t x;
+    int32_t x = 0;
     int st = rd_raw(r, &x, 4, what);
     if (!st) *v = x;
     return st;
@@ -973,7 +973,7 @@ static int read_format(msh_rd *r) {
   if (dsize != 8)
     return rd_unsupported(r, "data size %lld (only 8 is supported)", (long long)dsize);
   if (ftype == 1) {
-    int32_t one;
+    int32_t one = 0;
     r->binary = 1;
     if ((st = rd_eol(r)) || (st = rd_raw(r, &one, 4, "endianness check"))) return st;
     if (one == 0x01000000)

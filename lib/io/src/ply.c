@@ -425,8 +425,9 @@ int vm_write_ply(vm_ctx *ctx, const vm_mesh *m, const char *path, const vm_write
     if (vm_elem_dim(m->etype[e]) != 2) continue;
     const int32_t *c = m->conn + m->eoff[e];
     int k = vm_elem_nverts(m->etype[e]);
+    if (k > 4) continue; /* (a 2D element is a triangle or a quad) */
     if (binary) {
-      uint8_t b[17];
+      uint8_t b[1 + 4 * 4];
       b[0] = (uint8_t)k;
       for (int i = 0; i < k; i++) vm_surf_put_le32(b + 1 + 4 * i, (uint32_t)c[i]);
       fwrite(b, 1, 1 + 4 * (size_t)k, fp);

@@ -178,7 +178,7 @@ static int su2_type(int64_t id) {
 /* Vertex indices of the record's tokens 1..k (file order) into v (vm order). */
 static int su2_verts(su2_rd *r, int type, int k, int32_t *v, const char *what) {
   for (int j = 0; j < k; j++) {
-    int64_t x;
+    int64_t x = 0;
     int st = tok_int(r, 1 + j, &x, what);
     if (st) return st;
     int64_t nv = r->have_poin ? r->m->nv : INT32_MAX;

@@ -507,7 +507,7 @@ static int64_t loc_count(const vtkrd *r) {
  * Cell rows of skipped cells are dropped. */
 static int read_array(vtkrd *r, const char *fname, int64_t ntuples, int ncomp, const dtype *t,
                       double scale, const char *rec) {
-  int64_t count;
+  int64_t count = 0;
   int st = fit_count(r, ntuples, ncomp, t->size, &count, rec);
   if (st) return st;
   rdesc d = {rec, "tuple", ncomp};
@@ -632,7 +632,7 @@ static int read_cells(vtkrd *r, const char *kw, cellsec *s) {
 static int read_points(vtkrd *r) {
   if (r->have_points) return vm_lex_fail(&r->lx, "POINTS appears twice");
   if (r->geom_done) return vm_lex_fail(&r->lx, "POINTS after POINT_DATA or CELL_DATA");
-  int64_t n, cnt;
+  int64_t n = 0, cnt = 0;
   dtype t;
   int st = get_count(r, &n, "POINTS");
   if (!st) st = get_dtype(r, &t, "POINTS");
@@ -802,7 +802,7 @@ static int read_attribute(vtkrd *r, const char *kw, size_t kwn) {
   if (vm_tok_is(kw, kwn, "LOOKUP_TABLE")) {
     const char *s;
     size_t n;
-    int64_t size, cnt;
+    int64_t size = 0, cnt = 0;
     int st = vm_lex_word(&r->lx, &s, &n, "LOOKUP_TABLE name");
     if (!st) st = get_count(r, &size, "LOOKUP_TABLE");
     if (!st) st = end_line(r, "LOOKUP_TABLE");
