@@ -769,6 +769,7 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   vm_json_double(stdout, r.growth_p99);
   printf(", \"growth_band_share\": ");
   vm_json_double(stdout, r.growth_band_share);
+  printf(", \"growth_respaced\": %lld", (long long)r.growth_respaced);
   printf(", \"nonortho_over_70deg\": %lld, \"nonortho_max_deg\": ", (long long)r.nonortho_over70);
   vm_json_double(stdout, r.nonortho_max);
   printf(", \"skewness_max\": ");
@@ -875,8 +876,10 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                         (long long)r.smooth_vertices, r.normal_dev_all_max, r.normal_dev_all_p99);
   if (st2 >= 0)
     st2 = vm_report_row(report, "growth of successive heights (columns' largest ratio)",
-                        "max %.3f, p99 %.3f; %.2f %% of the columns within [1/1.5, 1.5] x %g",
-                        r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.growth);
+                        "max %.3f, p99 %.3f; %.2f %% of the columns within [1/1.5, 1.5] x %g "
+                        "(%lld re-spaced by the growth relief)",
+                        r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.growth,
+                        (long long)r.growth_respaced);
   if (st2 >= 0)
     st2 = vm_report_row(report, "faces as OpenFOAM measures them",
                         "max non-orthogonality %.1f deg, %lld faces beyond 70 deg, max skewness "

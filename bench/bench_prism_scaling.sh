@@ -37,7 +37,7 @@ trap 'rm -rf "$dir"' EXIT
 # "KEY": (flat objects only), val KEY TEXT the number after "KEY":
 obj() { sed -n "s/.*\"$1\": {\([^}]*\)}.*/\1/p" "$2" | head -1; }
 val() { echo "$2" | sed -n "s/.*\"$1\": \([^,}]*\).*/\1/p" | head -1; }
-printf '| res. | triangles | prisms | CPU s | wall s | peak MB | B/prism | thin / springback / cut / restore / march s | marching: splits / stack / redistribution / first level / solve / skewness / non-orth. s | peak reached in | full T | inverted, crossing, split negative |\n'
+printf '| res. | triangles | prisms | CPU s | wall s | peak MB | B/prism | thin / springback / cut / restore / march s | marching: splits / stack / redistribution / first level / solve / skewness / non-orth. / growth s | peak reached in | full T | inverted, crossing, split negative |\n'
 printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 fit=$dir/fit.txt
 : >"$fit"
@@ -66,7 +66,7 @@ for r in $res; do
   mt=$(obj march_time "$c.json")
   pk=$(obj peak_mb "$c.json")
   phases="thin springback cut restore march"
-  steps="splits stack_smoothing redistribution orthogonal_first_level orthogonal_solve skewness_relief nonortho_relief"
+  steps="splits stack_smoothing redistribution orthogonal_first_level orthogonal_solve skewness_relief nonortho_relief growth_relief"
   ph=$(for k in $phases; do val "$k" "{$tm}"; done | awk '{printf "%s%.1f", (NR > 1 ? " / " : ""), $1}')
   ms=$(for k in $steps; do val "$k" "{$mt}"; done | awk '{printf "%s%.1f", (NR > 1 ? " / " : ""), $1}')
   # the phase whose end first showed the peak (within 1 MB), else the
@@ -85,7 +85,7 @@ echo
 echo "Fitted exponent b of cost ~ n^b (n: wall triangles; least squares on the logarithms; a figure under 0.05 s in some case is left out):"
 echo
 awk 'BEGIN {
-  split("CPU peak_memory thin springback cut restore march splits stack_smoothing redistribution orthogonal_first_level orthogonal_solve skewness_relief nonortho_relief", name, " ")
+  split("CPU peak_memory thin springback cut restore march splits stack_smoothing redistribution orthogonal_first_level orthogonal_solve skewness_relief nonortho_relief growth_relief", name, " ")
 }
 { for (k = 2; k <= NF; k++) { x[NR] = log($1); y[NR, k] = $k } n = NR; nf = NF }
 END {

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "state.h"
+#include "varmesh/quality.h"
 
 /* Minimum corner quality of the prisms between levels a and b. */
 static double level_quality(const vm_prism *p, const double *la, const double *lb) {
@@ -294,6 +295,15 @@ static void cell_centre(const vm_prism *p, const double *cc, int64_t t, int k, d
   pr_foam_cell(x, c);
 }
 
+/* The side quad of prism x over its bottom edge i (vertices i, i + 1)
+ * into f (12 values): bottom i, bottom i + 1, top i + 1, top i. */
+static void side_quad(const double *x, int i, double *f) {
+  memcpy(f, x + 3 * i, 3 * sizeof *f);
+  memcpy(f + 3, x + 3 * ((i + 1) % 3), 3 * sizeof *f);
+  memcpy(f + 6, x + 9 + 3 * ((i + 1) % 3), 3 * sizeof *f);
+  memcpy(f + 9, x + 9 + 3 * i, 3 * sizeof *f);
+}
+
 /* The largest OpenFOAM skewness over the faces of triangle t's cells (every
  * layer) seen from t: the faces between layers, the outer face, and the
  * side faces shared with the edge neighbours' cells (t's cell the owner).
@@ -318,10 +328,7 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
     for (int i = 0; i < 3; i++) {
       if (nb[i] < 0) continue;
       double f[12];
-      memcpy(f, x + 3 * i, 3 * sizeof *f);
-      memcpy(f + 3, x + 3 * ((i + 1) % 3), 3 * sizeof *f);
-      memcpy(f + 6, x + 9 + 3 * ((i + 1) % 3), 3 * sizeof *f);
-      memcpy(f + 9, x + 9 + 3 * i, 3 * sizeof *f);
+      side_quad(x, i, f);
       cell_centre(p, cc, nb[i], k, cn);
       double q = pr_foam_skew(f, 4, cp, cn);
       worst = q > worst ? q : worst;
@@ -463,6 +470,55 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
   return 1;
 }
 
+/* How far the cells around column v fall below checkMesh's determinant
+ * limit: the sum of log10(0.001 / det) over those below it (the wall's
+ * faces are outside the hybrid mesh, the rest inside it). */
+static double column_det_deficit(const vm_prism *p, int64_t v) {
+  double e = 0;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+    for (int k = 0; k < p->nlev - 1; k++) {
+      double x[18], s[5][3];
+      pr_prism_at(p, p->lev, p->vt[j], k, x);
+      static const int q[3][4] = {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
+      double a[3], b[3];
+      for (int c = 0; c < 3; c++) {
+        a[c] = x[6 + c] - x[c];
+        b[c] = x[3 + c] - x[c];
+      }
+      vm_cross3(a, b, s[0]);
+      for (int c = 0; c < 3; c++) {
+        a[c] = x[12 + c] - x[9 + c];
+        b[c] = x[15 + c] - x[9 + c];
+      }
+      vm_cross3(a, b, s[1]);
+      for (int f = 0; f < 3; f++) {
+        for (int c = 0; c < 3; c++) {
+          a[c] = x[3 * q[f][2] + c] - x[3 * q[f][0] + c];
+          b[c] = x[3 * q[f][3] + c] - x[3 * q[f][1] + c];
+        }
+        vm_cross3(a, b, s[2 + f]);
+      }
+      double d = vm_foam_cell_determinant(k > 0 ? 5 : 4, (const double(*)[3])(k > 0 ? s[0] : s[1]));
+      if (d < 1e-3) e += d > 1e-30 ? log10(1e-3 / d) : 30;
+    }
+  return e;
+}
+
+/* How far the ratios of successive heights of the column whose levels
+ * 0..nl are x + k * stride leave the growth band [r / 1.5, 1.5 r]: the sum
+ * over its ratios of log(ratio / bound) outside it (0: in the band). */
+static double band_excess(const vm_prism *p, const double *x, int nl, size_t stride) {
+  double lo = p->rep.growth / 1.5, hi = p->rep.growth * 1.5, e = 0;
+  for (int k = 0; k + 2 <= nl; k++) {
+    double h0 = vm_dist3(x + k * stride, x + (k + 1) * stride);
+    double h1 = vm_dist3(x + (k + 1) * stride, x + (k + 2) * stride);
+    if (!(h0 > 0) || !(h1 > 0)) return INFINITY;
+    double g = h1 / h0;
+    e += g < lo ? log(lo / g) : g > hi ? log(g / hi) : 0;
+  }
+  return e;
+}
+
 /* Every column's levels 1..nlev-2 put back on the schedule: level k at the
  * share (h_0 + ... + h_{k-1}) / T of the column's length, measured along
  * the column's polyline (the levels move along it, so the column keeps its
@@ -559,6 +615,158 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
       }
     }
   }
+  vm_free(p->ctx, frac);
+  *count = moved;
+  return VM_OK;
+}
+
+/* The faces of the cells on column v beyond 70 degrees of OpenFOAM's
+ * non-orthogonality, each face once (those between two of the cells from
+ * the lower triangle's side; the outer surface's are the fill's), and the
+ * least cosine over them in *cmin. */
+static int column_over70(const vm_prism *p, int64_t v, double *cmin) {
+  int nl = p->nlev - 1, n = 0;
+  const double c70 = cos(70 * PR_PI / 180);
+  *cmin = 1;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t t = p->vt[j], nb[3];
+    for (int i = 0; i < 3; i++) {
+      nb[i] = pr_tri_across(p, t, i);
+      /* a neighbour on the column as well counts the face once */
+      if (nb[i] >= 0 && nb[i] < t) {
+        const int32_t *c = p->tri + 3 * nb[i];
+        if (c[0] == v || c[1] == v || c[2] == v) nb[i] = -1;
+      }
+    }
+    for (int k = 0; k < nl; k++) {
+      double x[18], cp[3], cn[3], c;
+      pr_prism_at(p, p->lev, t, k, x);
+      cell_centre(p, NULL, t, k, cp);
+      if (k + 1 < nl) {
+        cell_centre(p, NULL, t, k + 1, cn);
+        c = pr_foam_ortho_cos(x + 9, 3, cp, cn);
+        n += c < c70;
+        *cmin = c < *cmin ? c : *cmin;
+      }
+      for (int i = 0; i < 3; i++) {
+        if (nb[i] < 0) continue;
+        double f[12];
+        side_quad(x, i, f);
+        cell_centre(p, NULL, nb[i], k, cn);
+        c = pr_foam_ortho_cos(f, 4, cp, cn);
+        n += c < c70;
+        *cmin = c < *cmin ? c : *cmin;
+      }
+    }
+  }
+  return n;
+}
+
+/* The prisms around column v: how many are not positive in every 3-tet
+ * split, and their least scaled Jacobian (the corner rule's) in *sj. */
+static int column_split_sj(const vm_prism *p, int64_t v, double *sj) {
+  int n = 0;
+  *sj = INFINITY;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+    for (int k = 0; k < p->nlev - 1; k++) {
+      double x[18];
+      int inv;
+      pr_prism_at(p, p->lev, p->vt[j], k, x);
+      n += vm_prism_split_check(x, NULL) > 0;
+      double q = pr_prism_corner_quality(x, &inv);
+      *sj = q < *sj ? q : *sj;
+    }
+  return n;
+}
+
+/* The growth law where the steps after the redistribution left a column's
+ * heights off it (the first level stood up, the reliefs' moves across the
+ * columns; 50 columns of 7,138 on the demo aircraft at T = 5 %): each
+ * column whose ratios of successive heights leave the band [r / 1.5,
+ * 1.5 r] has its levels 1..nlev-2 moved along its own polyline (its
+ * course, the wall and the outer surface stay as they are) from their
+ * shares of its length towards its own schedule's (column_fractions), the
+ * whole way or, refused, a share k.growth_parts of it; the first move that
+ * brings the ratios closer to the band is kept if, around the column,
+ * every prism stays valid above min(k.ortho_qmin, k.redistribute_qshare
+ * of its quality before), no more fail a 3-tet split, the least scaled
+ * Jacobian does not fall below min(its value before, k.growth_sj_floor),
+ * no cell falls further below checkMesh's determinant limit, no more faces
+ * are beyond 70 degrees and the worst is no worse, the skewness stays
+ * below k.skew_limit (or its value before) and a smooth column's first
+ * side edge within k.tilt_limit_deg of its normal (or its tilt before).
+ * k.growth_sweeps sweeps in vertex order (a neighbour moved can make
+ * room), each column moved once at most; counts the columns moved. */
+static int growth_relief(vm_prism *p, int64_t *count) {
+  int64_t nw = p->nw, moved = 0;
+  int nl = p->nlev - 1;
+  size_t lsz = (size_t)(3 * nw);
+  const pr_params *kp = &p->k;
+  const int nparts = (int)(sizeof kp->growth_parts / sizeof *kp->growth_parts);
+  const double c70 = cos(70 * PR_PI / 180);
+  *count = 0;
+  if (nl < 3 || p->ended) return VM_OK;
+  double *frac = vm_alloc_array(p->ctx, (size_t)(7 * (nl + 1)), sizeof *frac);
+  if (!frac) return VM_ERR_NOMEM;
+  double *arc = frac + nl + 1, *fc = arc + nl + 1, *fb = fc + nl + 1, *old = fb + nl + 1;
+  uint8_t *done = vm_calloc(p->ctx, (size_t)nw, sizeof *done);
+  if (!done) {
+    vm_free(p->ctx, frac);
+    return VM_ERR_NOMEM;
+  }
+  double tot = common_fractions(p, nl, frac);
+  for (int sweep = 0, again = 1; sweep < kp->growth_sweeps && again; sweep++) {
+    again = 0;
+    for (int64_t v = 0; v < nw; v++) {
+      /* once per column: moved again along its new polyline it would cut
+       * the corners of its course */
+      if (done[v]) continue;
+      for (int k = 0; k <= nl; k++)
+        memcpy(old + 3 * k, p->lev + (size_t)k * lsz + 3 * v, 3 * sizeof *old);
+      double band0 = band_excess(p, old, nl, 3);
+      if (!(band0 > 0) || !isfinite(band0)) continue;
+      arc[0] = 0;
+      for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
+      if (!(arc[nl] > 0)) continue;
+      column_fractions(p, v, nl, arc[nl], frac, tot, fc);
+      double q0 = INFINITY;
+      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+        double q = layers_quality(p, p->vt[j], 0, nl - 1);
+        q0 = q < q0 ? q : q0;
+      }
+      double sj0, sj1, cmin0, cmin1;
+      int split0 = column_split_sj(p, v, &sj0), over0 = column_over70(p, v, &cmin0);
+      double det0 = column_det_deficit(p, v), skew0 = column_skew(p, v);
+      double skew_max = skew0 > kp->skew_limit ? skew0 : kp->skew_limit;
+      double sj_min = sj0 < kp->growth_sj_floor ? sj0 : kp->growth_sj_floor;
+      double cos_min = cmin0 < c70 ? cmin0 : c70;
+      int guard = p->smooth[v];
+      double tilt_max = guard ? tilt_allowed(p, v) : 0;
+      int ok = 0;
+      for (int b = 0; b < nparts && !ok; b++) {
+        double w = kp->growth_parts[b];
+        fb[0] = 0;
+        fb[nl] = 1;
+        for (int k = 1; k < nl; k++) fb[k] = (1 - w) * arc[k] / arc[nl] + w * fc[k];
+        place_levels(p, v, nl, old, arc, fb, 1);
+        ok = band_excess(p, p->lev + 3 * v, nl, lsz) < band0 &&
+             column_valid(p, v, quality_floor(p, q0, kp->redistribute_qshare)) &&
+             !(guard && first_tilt(p, v) > tilt_max) && column_split_sj(p, v, &sj1) <= split0 &&
+             sj1 >= sj_min && column_det_deficit(p, v) <= det0 &&
+             column_over70(p, v, &cmin1) <= over0 && cmin1 >= cos_min &&
+             column_skew(p, v) <= skew_max;
+        if (!ok)
+          for (int k = 1; k < nl; k++)
+            memcpy(p->lev + (size_t)k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);
+      }
+      if (ok) {
+        done[v] = 1;
+        moved++;
+        again = 1;
+      }
+    }
+  }
+  vm_free(p->ctx, done);
   vm_free(p->ctx, frac);
   *count = moved;
   return VM_OK;
@@ -1225,8 +1433,8 @@ int vm_prism_march(vm_prism *p) {
   vm_mesh_destroy(&m2);
   /* seconds of the marching's steps: splits, stack smoothing,
    * redistribution, orthogonal first level, orthogonal solve, skewness
-   * relief, non-orthogonality relief */
-  double ts[8];
+   * relief, non-orthogonality relief, growth relief */
+  double ts[9];
   ts[0] = t0;
   ts[1] = omp_get_wtime();
   if (p->nlev > 2 && (st = stack_smooth(p)) < 0) goto done;
@@ -1271,13 +1479,21 @@ int vm_prism_march(vm_prism *p) {
              (long long)os.split_before, (long long)os.split_after, os.split_sj, os.split_time);
   }
   ts[7] = omp_get_wtime();
+  if (p->nlev > 2 && p->o.growth_relief) {
+    int64_t ng = 0;
+    if ((st = growth_relief(p, &ng)) < 0) goto done;
+    p->rep.growth_respaced = ng;
+    vm_log(ctx, VM_LOG_INFO, "prism: growth relief: %lld columns re-spaced towards the growth law",
+           (long long)ng);
+  }
+  ts[8] = omp_get_wtime();
   for (int k = 0; k < VM_PRISM_NMARCH_STEPS; k++) p->rep.march_time[k] += ts[k + 1] - ts[k];
   vm_log(ctx, VM_LOG_INFO,
          "prism: marching steps (s): splits %.2f, stack smoothing %.2f, redistribution %.2f, "
          "orthogonal first level %.2f, orthogonal solve %.2f, skewness relief %.2f, "
-         "non-orthogonality relief %.2f",
+         "non-orthogonality relief %.2f, growth relief %.2f",
          ts[1] - ts[0], ts[2] - ts[1], ts[3] - ts[2], ts[4] - ts[3], ts[5] - ts[4], ts[6] - ts[5],
-         ts[7] - ts[6]);
+         ts[7] - ts[6], ts[8] - ts[7]);
   /* the paper's option: drop a skewed outermost remainder */
   if (p->o.drop_quality > 0 && p->nlev > 2 &&
       level_quality(p, p->lev + (size_t)(p->nlev - 2) * lsz, p->lev + (size_t)(p->nlev - 1) * lsz) <

@@ -217,6 +217,15 @@ typedef struct pr_params {
                                       the long ones for columns tilted far over */
   int ortho_passes;                /* 4: passes over the columns that went back (a
                                       neighbour standing up can make room) */
+  int growth_sweeps;               /* 3: sweeps of the growth relief (march.c) over the
+                                      columns off the growth band (a neighbour moved can
+                                      make room: 50 -> 27 -> 22 columns on the demo
+                                      aircraft at T = 5 % after one sweep and three) */
+  double growth_parts[5];          /* {1, 0.75, 0.5, 0.25, 0.125}: shares of the way to
+                                      its schedule a column tries, in order */
+  double growth_sj_floor;          /* 0.05: the growth relief never lowers a column's
+                                      least scaled Jacobian below min(this, its value
+                                      before) (issue 24's floor) */
   double ortho_lean_deg;           /* 4.5: the last resort leans by this much, within
                                       the 5 degree target */
   double ortho_high_ratio;         /* 0.5: a first level more than twice as high as
@@ -421,6 +430,9 @@ static inline pr_params pr_params_default(void) {
       .ortho_rounds = 100,
       .ortho_bends = {6, 12, 9, 18, 0, 3, 2, 1},
       .ortho_passes = 4,
+      .growth_sweeps = 3,
+      .growth_parts = {1, 0.75, 0.5, 0.25, 0.125},
+      .growth_sj_floor = 0.05,
       .ortho_lean_deg = 4.5,
       .ortho_high_ratio = 0.5,
       .redistribute_tol = 0.05,

@@ -15,8 +15,8 @@ const char *vm_prism_phase_name(vm_prism_phase ph) {
 
 const char *vm_prism_march_step_name(int k) {
   static const char *const names[VM_PRISM_NMARCH_STEPS] = {
-      "splits",           "stack_smoothing", "redistribution", "orthogonal_first_level",
-      "orthogonal_solve", "skewness_relief", "nonortho_relief"};
+      "splits",           "stack_smoothing", "redistribution",  "orthogonal_first_level",
+      "orthogonal_solve", "skewness_relief", "nonortho_relief", "growth_relief"};
   return k >= 0 && k < VM_PRISM_NMARCH_STEPS ? names[k] : "unknown";
 }
 
@@ -51,6 +51,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.time_limit = 0;
   o.check_incremental = 0;
   o.orient = 1;
+  o.growth_relief = 1;
   return o;
 }
 

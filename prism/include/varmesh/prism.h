@@ -60,10 +60,11 @@ typedef enum {
 const char *vm_prism_phase_name(vm_prism_phase ph);
 
 /* The marching's steps, in order (their seconds are in the report). */
-#define VM_PRISM_NMARCH_STEPS 7
+#define VM_PRISM_NMARCH_STEPS 8
 /* Name of a marching step k ("splits", "stack_smoothing",
  * "redistribution", "orthogonal_first_level", "orthogonal_solve",
- * "skewness_relief", "nonortho_relief"; "unknown" out of range). */
+ * "skewness_relief", "nonortho_relief", "growth_relief"; "unknown" out of
+ * range). */
 const char *vm_prism_march_step_name(int k);
 
 typedef struct vm_prism_progress {
@@ -136,6 +137,12 @@ typedef struct vm_prism_opts {
                             with a full one, an error (VM_ERR_NUMERIC) if
                             they differ; for tests (default 0: the
                             incremental answer is trusted, twice as fast) */
+  int growth_relief;     /* 1 (default): last, the columns whose ratios of
+                            successive heights leave the band [r / 1.5, 1.5 r]
+                            are re-spaced along their own course towards their
+                            schedule, where no cell gets worse by any of the
+                            checks OpenFOAM and the stage make (prism/src/march.c,
+                            growth_relief); 0: off (for comparison) */
   int orient;            /* 1 (default): a wall oriented inwards (negative
                             enclosed volume) has its triangles turned, with a
                             warning on the log, so the layer grows outside;
@@ -237,6 +244,8 @@ typedef struct vm_prism_report {
   double growth_p99;        /* the 99th percentile of the columns' largest ratio */
   double growth_band_share; /* columns whose every ratio lies within
                                [1/1.5, 1.5] x the growth ratio */
+  int64_t growth_respaced;  /* columns the growth relief re-spaced
+                               (vm_prism_opts.growth_relief) */
   /* the layer's faces as OpenFOAM's checkMesh measures them: internal
    * faces whose non-orthogonality is beyond 70 degrees, the largest
    * non-orthogonality (degrees), the largest skewness (the wall and the
