@@ -472,9 +472,11 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
 
 /* How far the cells around column v fall below checkMesh's determinant
  * limit: the sum of log10(0.001 / det) over those below it (the wall's
- * faces are outside the hybrid mesh, the rest inside it). */
-static double column_det_deficit(const vm_prism *p, int64_t v) {
+ * faces are outside the hybrid mesh, the rest inside it), and how many
+ * they are in *n. */
+static double column_det_deficit(const vm_prism *p, int64_t v, int *n) {
   double e = 0;
+  *n = 0;
   for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
     for (int k = 0; k < p->nlev - 1; k++) {
       double x[18], s[5][3];
@@ -499,7 +501,10 @@ static double column_det_deficit(const vm_prism *p, int64_t v) {
         vm_cross3(a, b, s[2 + f]);
       }
       double d = vm_foam_cell_determinant(k > 0 ? 5 : 4, (const double(*)[3])(k > 0 ? s[0] : s[1]));
-      if (d < 1e-3) e += d > 1e-30 ? log10(1e-3 / d) : 30;
+      if (d < 1e-3) {
+        e += d > 1e-30 ? log10(1e-3 / d) : 30;
+        (*n)++;
+      }
     }
   return e;
 }
@@ -691,7 +696,8 @@ static int column_split_sj(const vm_prism *p, int64_t v, double *sj) {
  * every prism stays valid above min(k.ortho_qmin, k.redistribute_qshare
  * of its quality before), no more fail a 3-tet split, the least scaled
  * Jacobian does not fall below min(its value before, k.growth_sj_floor),
- * no cell falls further below checkMesh's determinant limit, no more faces
+ * no more cells are below checkMesh's determinant limit nor further below
+ * it (the sum of log10(0.001 / det) over them), no more faces
  * are beyond 70 degrees and the worst is no worse, the skewness stays
  * below k.skew_limit (or its value before) and a smooth column's first
  * side edge within k.tilt_limit_deg of its normal (or its tilt before).
@@ -736,7 +742,8 @@ static int growth_relief(vm_prism *p, int64_t *count) {
       }
       double sj0, sj1, cmin0, cmin1;
       int split0 = column_split_sj(p, v, &sj0), over0 = column_over70(p, v, &cmin0);
-      double det0 = column_det_deficit(p, v), skew0 = column_skew(p, v);
+      int ndet0, ndet1;
+      double det0 = column_det_deficit(p, v, &ndet0), skew0 = column_skew(p, v);
       double skew_max = skew0 > kp->skew_limit ? skew0 : kp->skew_limit;
       double sj_min = sj0 < kp->growth_sj_floor ? sj0 : kp->growth_sj_floor;
       double cos_min = cmin0 < c70 ? cmin0 : c70;
@@ -752,7 +759,7 @@ static int growth_relief(vm_prism *p, int64_t *count) {
         ok = band_excess(p, p->lev + 3 * v, nl, lsz) < band0 &&
              column_valid(p, v, quality_floor(p, q0, kp->redistribute_qshare)) &&
              !(guard && first_tilt(p, v) > tilt_max) && column_split_sj(p, v, &sj1) <= split0 &&
-             sj1 >= sj_min && column_det_deficit(p, v) <= det0 &&
+             sj1 >= sj_min && column_det_deficit(p, v, &ndet1) <= det0 && ndet1 <= ndet0 &&
              column_over70(p, v, &cmin1) <= over0 && cmin1 >= cos_min &&
              column_skew(p, v) <= skew_max;
         if (!ok)
