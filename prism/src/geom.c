@@ -289,6 +289,14 @@ void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*f
   for (int r = 0; r < 3; r++) cc[r] = sv > 0 ? sum[r] / sv : est[r];
 }
 
+double pr_foam_cell_det(const double (*fs)[3], const int *internal) {
+  double s[5][3];
+  int n = 0;
+  for (int f = 0; f < 5; f++)
+    if (internal[f]) memcpy(s[n++], fs[f], sizeof s[0]);
+  return vm_foam_cell_determinant(n, (const double(*)[3])s);
+}
+
 /* OpenFOAM's skewness of face x (n vertices) between the cells centred at
  * cp and cn: the distance from the face centre to where the line joining
  * the centres meets the face, over the face's extent that way (at least a

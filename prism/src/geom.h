@@ -75,6 +75,14 @@ void pr_foam_cell(const double *x, double *cc);
 /* The same, with its faces' centres fc and area vectors fs (in
  * pr_prism_faces' order and orientation). */
 void pr_foam_cell_faces(const double *x, double *cc, double (*fc)[3], double (*fs)[3]);
+/* checkMesh -allGeometry fails a cell whose determinant is below this. */
+#define PR_FOAM_DET_MIN 1e-3
+/* OpenFOAM's determinant of a prism from its faces' area vectors fs
+ * (pr_foam_cell_faces), over those inside the hybrid mesh (internal[f]):
+ * checkMesh leaves out the boundary's, the wall under layer 0 and a side
+ * over an open edge; the top of the last layer is inside once the fill's
+ * tets stand on it. */
+double pr_foam_cell_det(const double (*fs)[3], const int *internal);
 /* Skewness of face x (n vertices) between the cells centred at cp and cn:
  * the distance from the face centre to where the line joining the centres
  * meets the face, over the face's extent that way (at least a fifth of

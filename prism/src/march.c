@@ -307,20 +307,39 @@ static void side_quad(const double *x, int i, double *f) {
 /* The largest OpenFOAM skewness over the faces of triangle t's cells (every
  * layer) seen from t: the faces between layers, the outer face, and the
  * side faces shared with the edge neighbours' cells (t's cell the owner).
- * cc: every cell's centre (cell_centre), or NULL. */
-static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
+ * cc: every cell's centre (cell_centre), or NULL. With o70 (not NULL), the
+ * same pass also adds to *o70 the faces beyond 70 degrees of OpenFOAM's
+ * non-orthogonality and lowers *cmin to their least cosine, each face of
+ * the cells on column v once: not the outer faces (the fill's), and a side
+ * face between two triangles of v's from the lower-numbered one. */
+static double tri_faces(const vm_prism *p, int64_t t, const double *cc, int64_t v, int *o70,
+                        double *cmin) {
   int nl = p->nlev - 1;
-  double worst = 0;
+  const double c70 = cos(70 * PR_PI / 180);
+  double worst = 0, cp[3], cu[3];
   int64_t nb[3];
-  for (int i = 0; i < 3; i++) nb[i] = pr_tri_across(p, t, i);
+  int ortho[3];
+  for (int i = 0; i < 3; i++) {
+    nb[i] = pr_tri_across(p, t, i);
+    ortho[i] = o70 && nb[i] >= 0;
+    if (ortho[i] && nb[i] < t) {
+      const int32_t *c = p->tri + 3 * nb[i];
+      ortho[i] = c[0] != v && c[1] != v && c[2] != v;
+    }
+  }
+  cell_centre(p, cc, t, 0, cp);
   for (int k = 0; k < nl; k++) {
-    double x[18], cp[3], cn[3];
+    double x[18], cn[3];
     pr_prism_at(p, p->lev, t, k, x);
-    cell_centre(p, cc, t, k, cp);
     if (k + 1 < nl) {
-      cell_centre(p, cc, t, k + 1, cn);
-      double q = pr_foam_skew(x + 9, 3, cp, cn);
+      cell_centre(p, cc, t, k + 1, cu);
+      double q = pr_foam_skew(x + 9, 3, cp, cu);
       worst = q > worst ? q : worst;
+      if (o70) {
+        double c = pr_foam_ortho_cos(x + 9, 3, cp, cu);
+        *o70 += c < c70;
+        *cmin = c < *cmin ? c : *cmin;
+      }
     } else {
       double q = pr_foam_boundary_skew(x + 9, 3, cp);
       worst = q > worst ? q : worst;
@@ -332,7 +351,13 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
       cell_centre(p, cc, nb[i], k, cn);
       double q = pr_foam_skew(f, 4, cp, cn);
       worst = q > worst ? q : worst;
+      if (ortho[i]) {
+        double c = pr_foam_ortho_cos(f, 4, cp, cn);
+        *o70 += c < c70;
+        *cmin = c < *cmin ? c : *cmin;
+      }
     }
+    if (k + 1 < nl) memcpy(cp, cu, sizeof cp);
   }
   return worst;
 }
@@ -343,7 +368,7 @@ static double tri_skew(const vm_prism *p, int64_t t, const double *cc) {
 static double column_skew(const vm_prism *p, int64_t v) {
   double worst = 0;
   for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-    double q = tri_skew(p, p->vt[j], NULL);
+    double q = tri_faces(p, p->vt[j], NULL, v, NULL, NULL);
     worst = q > worst ? q : worst;
   }
   return worst;
@@ -369,7 +394,7 @@ static int all_column_skew(const vm_prism *p, double *sk) {
     pr_foam_cell(x, cc + 3 * c);
   }
 #pragma omp parallel for schedule(static)
-  for (int64_t t = 0; t < nt; t++) tq[t] = tri_skew(p, t, cc);
+  for (int64_t t = 0; t < nt; t++) tq[t] = tri_faces(p, t, cc, -1, NULL, NULL);
   for (int64_t v = 0; v < nw; v++) {
     double worst = 0;
     for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
@@ -468,45 +493,6 @@ static int column_valid(const vm_prism *p, int64_t v, double floor) {
       if (inv || !(pr_prism_quality(x) >= floor)) return 0;
     }
   return 1;
-}
-
-/* How far the cells around column v fall below checkMesh's determinant
- * limit: the sum of log10(0.001 / det) over those below it (the wall's
- * faces are outside the hybrid mesh, the rest inside it), and how many
- * they are in *n. */
-static double column_det_deficit(const vm_prism *p, int64_t v, int *n) {
-  double e = 0;
-  *n = 0;
-  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
-    for (int k = 0; k < p->nlev - 1; k++) {
-      double x[18], s[5][3];
-      pr_prism_at(p, p->lev, p->vt[j], k, x);
-      static const int q[3][4] = {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}};
-      double a[3], b[3];
-      for (int c = 0; c < 3; c++) {
-        a[c] = x[6 + c] - x[c];
-        b[c] = x[3 + c] - x[c];
-      }
-      vm_cross3(a, b, s[0]);
-      for (int c = 0; c < 3; c++) {
-        a[c] = x[12 + c] - x[9 + c];
-        b[c] = x[15 + c] - x[9 + c];
-      }
-      vm_cross3(a, b, s[1]);
-      for (int f = 0; f < 3; f++) {
-        for (int c = 0; c < 3; c++) {
-          a[c] = x[3 * q[f][2] + c] - x[3 * q[f][0] + c];
-          b[c] = x[3 * q[f][3] + c] - x[3 * q[f][1] + c];
-        }
-        vm_cross3(a, b, s[2 + f]);
-      }
-      double d = vm_foam_cell_determinant(k > 0 ? 5 : 4, (const double(*)[3])(k > 0 ? s[0] : s[1]));
-      if (d < 1e-3) {
-        e += d > 1e-30 ? log10(1e-3 / d) : 30;
-        (*n)++;
-      }
-    }
-  return e;
 }
 
 /* How far the ratios of successive heights of the column whose levels
@@ -625,63 +611,59 @@ static int redistribute_columns(vm_prism *p, int64_t *count) {
   return VM_OK;
 }
 
-/* The faces of the cells on column v beyond 70 degrees of OpenFOAM's
- * non-orthogonality, each face once (those between two of the cells from
- * the lower triangle's side; the outer surface's are the fill's), and the
- * least cosine over them in *cmin. */
-static int column_over70(const vm_prism *p, int64_t v, double *cmin) {
-  int nl = p->nlev - 1, n = 0;
-  const double c70 = cos(70 * PR_PI / 180);
+/* The largest skewness over the faces of the cells on column v
+ * (column_skew), and in *o70 their faces beyond 70 degrees of
+ * non-orthogonality, each once (tri_faces), with the least cosine in
+ * *cmin: one pass for both. */
+static double column_faces(const vm_prism *p, int64_t v, int *o70, double *cmin) {
+  double worst = 0;
+  *o70 = 0;
   *cmin = 1;
   for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-    int64_t t = p->vt[j], nb[3];
-    for (int i = 0; i < 3; i++) {
-      nb[i] = pr_tri_across(p, t, i);
-      /* a neighbour on the column as well counts the face once */
-      if (nb[i] >= 0 && nb[i] < t) {
-        const int32_t *c = p->tri + 3 * nb[i];
-        if (c[0] == v || c[1] == v || c[2] == v) nb[i] = -1;
-      }
-    }
-    for (int k = 0; k < nl; k++) {
-      double x[18], cp[3], cn[3], c;
+    double q = tri_faces(p, p->vt[j], NULL, v, o70, cmin);
+    worst = q > worst ? q : worst;
+  }
+  return worst;
+}
+
+/* What the growth relief guards in the prisms around column v (every
+ * layer of its triangles), in one pass. */
+typedef struct col_cells {
+  double qmin;        /* least quality (pr_prism_quality) */
+  int inverted;       /* prisms with a corner tet not positive */
+  int split;          /* prisms not positive in every 3-tet split */
+  double sj;          /* least scaled Jacobian (the corner rule's) */
+  int ndet;           /* cells below checkMesh's determinant limit, over
+                         their faces inside the hybrid mesh (all but the
+                         wall's and an open edge's) ... */
+  double det_deficit; /* ... and the sum of log10(limit / det) over them */
+} col_cells;
+
+static void column_cells(const vm_prism *p, int64_t v, col_cells *cs) {
+  memset(cs, 0, sizeof *cs);
+  cs->qmin = cs->sj = INFINITY;
+  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
+    int64_t t = p->vt[j];
+    int in[5] = {0, 1, pr_tri_across(p, t, 0) >= 0, pr_tri_across(p, t, 1) >= 0,
+                 pr_tri_across(p, t, 2) >= 0};
+    for (int k = 0; k < p->nlev - 1; k++) {
+      double x[18], cc[3], fc[5][3], fs[5][3];
+      int inv;
       pr_prism_at(p, p->lev, t, k, x);
-      cell_centre(p, NULL, t, k, cp);
-      if (k + 1 < nl) {
-        cell_centre(p, NULL, t, k + 1, cn);
-        c = pr_foam_ortho_cos(x + 9, 3, cp, cn);
-        n += c < c70;
-        *cmin = c < *cmin ? c : *cmin;
-      }
-      for (int i = 0; i < 3; i++) {
-        if (nb[i] < 0) continue;
-        double f[12];
-        side_quad(x, i, f);
-        cell_centre(p, NULL, nb[i], k, cn);
-        c = pr_foam_ortho_cos(f, 4, cp, cn);
-        n += c < c70;
-        *cmin = c < *cmin ? c : *cmin;
+      double q = pr_prism_quality(x), sj = pr_prism_corner_quality(x, &inv);
+      cs->qmin = q < cs->qmin ? q : cs->qmin;
+      cs->sj = sj < cs->sj ? sj : cs->sj;
+      cs->inverted += inv;
+      cs->split += vm_prism_split_check(x, NULL) > 0;
+      in[0] = k > 0;
+      pr_foam_cell_faces(x, cc, fc, fs);
+      double d = pr_foam_cell_det((const double(*)[3])fs, in);
+      if (d < PR_FOAM_DET_MIN) {
+        cs->ndet++;
+        cs->det_deficit += d > 1e-30 ? log10(PR_FOAM_DET_MIN / d) : 30;
       }
     }
   }
-  return n;
-}
-
-/* The prisms around column v: how many are not positive in every 3-tet
- * split, and their least scaled Jacobian (the corner rule's) in *sj. */
-static int column_split_sj(const vm_prism *p, int64_t v, double *sj) {
-  int n = 0;
-  *sj = INFINITY;
-  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
-    for (int k = 0; k < p->nlev - 1; k++) {
-      double x[18];
-      int inv;
-      pr_prism_at(p, p->lev, p->vt[j], k, x);
-      n += vm_prism_split_check(x, NULL) > 0;
-      double q = pr_prism_corner_quality(x, &inv);
-      *sj = q < *sj ? q : *sj;
-    }
-  return n;
 }
 
 /* The growth law where the steps after the redistribution left a column's
@@ -711,7 +693,7 @@ static int growth_relief(vm_prism *p, int64_t *count) {
   const int nparts = (int)(sizeof kp->growth_parts / sizeof *kp->growth_parts);
   const double c70 = cos(70 * PR_PI / 180);
   *count = 0;
-  if (nl < 3 || p->ended) return VM_OK;
+  if (nl < 3) return VM_OK;
   double *frac = vm_alloc_array(p->ctx, (size_t)(7 * (nl + 1)), sizeof *frac);
   if (!frac) return VM_ERR_NOMEM;
   double *arc = frac + nl + 1, *fc = arc + nl + 1, *fb = fc + nl + 1, *old = fb + nl + 1;
@@ -735,18 +717,15 @@ static int growth_relief(vm_prism *p, int64_t *count) {
       for (int k = 1; k <= nl; k++) arc[k] = arc[k - 1] + vm_dist3(old + 3 * k, old + 3 * (k - 1));
       if (!(arc[nl] > 0)) continue;
       column_fractions(p, v, nl, arc[nl], frac, tot, fc);
-      double q0 = INFINITY;
-      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-        double q = layers_quality(p, p->vt[j], 0, nl - 1);
-        q0 = q < q0 ? q : q0;
-      }
-      double sj0, sj1, cmin0, cmin1;
-      int split0 = column_split_sj(p, v, &sj0), over0 = column_over70(p, v, &cmin0);
-      int ndet0, ndet1;
-      double det0 = column_det_deficit(p, v, &ndet0), skew0 = column_skew(p, v);
+      col_cells c0, c1;
+      column_cells(p, v, &c0);
+      double cmin0, cmin1;
+      int over0, over1;
+      double skew0 = column_faces(p, v, &over0, &cmin0);
       double skew_max = skew0 > kp->skew_limit ? skew0 : kp->skew_limit;
-      double sj_min = sj0 < kp->growth_sj_floor ? sj0 : kp->growth_sj_floor;
+      double sj_min = c0.sj < kp->growth_sj_floor ? c0.sj : kp->growth_sj_floor;
       double cos_min = cmin0 < c70 ? cmin0 : c70;
+      double floor = quality_floor(p, c0.qmin, kp->redistribute_qshare);
       int guard = p->smooth[v];
       double tilt_max = guard ? tilt_allowed(p, v) : 0;
       int ok = 0;
@@ -756,12 +735,15 @@ static int growth_relief(vm_prism *p, int64_t *count) {
         fb[nl] = 1;
         for (int k = 1; k < nl; k++) fb[k] = (1 - w) * arc[k] / arc[nl] + w * fc[k];
         place_levels(p, v, nl, old, arc, fb, 1);
-        ok = band_excess(p, p->lev + 3 * v, nl, lsz) < band0 &&
-             column_valid(p, v, quality_floor(p, q0, kp->redistribute_qshare)) &&
-             !(guard && first_tilt(p, v) > tilt_max) && column_split_sj(p, v, &sj1) <= split0 &&
-             sj1 >= sj_min && column_det_deficit(p, v, &ndet1) <= det0 && ndet1 <= ndet0 &&
-             column_over70(p, v, &cmin1) <= over0 && cmin1 >= cos_min &&
-             column_skew(p, v) <= skew_max;
+        if (!(band_excess(p, p->lev + 3 * v, nl, lsz) < band0) ||
+            (guard && first_tilt(p, v) > tilt_max)) {
+          ok = 0;
+        } else {
+          column_cells(p, v, &c1);
+          ok = !c1.inverted && c1.qmin >= floor && c1.split <= c0.split && c1.sj >= sj_min &&
+               c1.ndet <= c0.ndet && c1.det_deficit <= c0.det_deficit &&
+               column_faces(p, v, &over1, &cmin1) <= skew_max && over1 <= over0 && cmin1 >= cos_min;
+        }
         if (!ok)
           for (int k = 1; k < nl; k++)
             memcpy(p->lev + (size_t)k * lsz + 3 * v, old + 3 * k, 3 * sizeof *old);

@@ -86,22 +86,6 @@ static int face_of(const double *x, int f, double *y) {
   return n;
 }
 
-/* checkMesh fails a cell whose determinant is below this. */
-#define PR_FOAM_DET_MIN 1e-3
-
-/* OpenFOAM's determinant of a prism from its faces' area vectors fs
- * (pr_foam_cell_faces), over those inside the hybrid mesh (internal[f]):
- * checkMesh leaves out the boundary's, the wall under layer 0 and a side
- * over an open edge; the top of the last layer is inside once the fill's
- * tets stand on it. */
-static double cell_det(const double (*fs)[3], const int *internal) {
-  double s[5][3];
-  int n = 0;
-  for (int f = 0; f < 5; f++)
-    if (internal[f]) memcpy(s[n++], fs[f], sizeof s[0]);
-  return vm_foam_cell_determinant(n, (const double(*)[3])s);
-}
-
 /* The relief's penalty of a cell of determinant d below the limit dl:
  * (log10(dl / d))^2 (a degenerate cell: that of 1e-12). */
 static double det_penalty(double d, double dl) {
@@ -126,7 +110,7 @@ typedef struct facemap {
   uint8_t *bad;
   uint8_t *o70;
   double *cw;
-  double *det;   /* nt nl: each cell's OpenFOAM determinant (cell_det) */
+  double *det;   /* nt nl: each cell's OpenFOAM determinant (pr_foam_cell_det) */
   uint8_t *mark; /* nt nl scratch: cells to update */
   double qworst; /* the least scaled Jacobian of the stack when the split
                     repair starts: the repair lowers no cell below it (the
@@ -138,7 +122,7 @@ typedef struct facemap {
  * sides over open wall edges (nbt: edge_neighbours). */
 static double prism_det(const int32_t *nbt, int64_t t, int k, const double (*fs)[3]) {
   int in[5] = {k > 0, 1, nbt[3 * t] >= 0, nbt[3 * t + 1] >= 0, nbt[3 * t + 2] >= 0};
-  return cell_det(fs, in);
+  return pr_foam_cell_det(fs, in);
 }
 
 /* Cell c = (t, k)'s centre and determinant into the facemap. */
@@ -260,7 +244,7 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
      * face but a boundary one below or beside it) */
     int in[5];
     for (int f = 0; f < 5; f++) in[f] = f == 1 || h->nb[c][f] != -1;
-    double d = cell_det((const double(*)[3])fs[c], in);
+    double d = pr_foam_cell_det((const double(*)[3])fs[c], in);
     a->ndet += d < PR_FOAM_DET_MIN;
     a->detmin = d < a->detmin ? d : a->detmin;
     if (!split) a->e += det_penalty(d, p->k.det_relief_limit);
