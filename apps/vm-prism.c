@@ -592,6 +592,11 @@ static const vm_opt opts[] = {
     {"--drop-quality", NULL, VM_OPT_DOUBLE, A(o.drop_quality), "Q",
      "drop the outermost layer if its minimum scaled Jacobian is below Q (default 0: keep)",
      .lo = 0, .hi = 0.999},
+    {"--no-end-short", NULL, VM_OPT_FLAG, A(o.end_short), NULL,
+     "keep every layer in short columns (by default, where the layer has cells below "
+     "OpenFOAM's determinant limit, a squeezed patch of short columns takes the schedule's "
+     "layers that fit it, ending in pyramids and tets, if that halves such cells around it)",
+     .ival = 0},
     {"--no-orient", NULL, VM_OPT_FLAG, A(o.orient), NULL,
      "refuse a wall oriented inwards (default: its triangles are turned, with a warning, so "
      "the layer grows outside)",
@@ -739,6 +744,7 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
   printf(", \"ended_columns\": %lld, \"ended_kept\": %lld, \"pyramids\": %lld, \"tets\": %lld",
          (long long)r.ended_columns, (long long)r.ended_kept, (long long)r.pyramids,
          (long long)r.tets);
+  printf(", \"short_ended\": %lld", (long long)r.short_ended);
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
   printf(", \"thickness_min\": ");
@@ -853,10 +859,11 @@ static int write_report(vm_cli *cli, vm_report **rep, const char *dir, const cha
                       "%g (%.3g), %g, %g", r.thickness, r.thickness / L, r.first_height, r.growth);
   if (st2 >= 0 && (r.ended_columns > 0 || r.ended_kept > 0))
     st2 = vm_report_row(report,
-                        "layers ending per region: columns ended, columns kept whole, pyramids, "
-                        "tets",
-                        "%lld, %lld, %lld, %lld", (long long)r.ended_columns,
-                        (long long)r.ended_kept, (long long)r.pyramids, (long long)r.tets);
+                        "layers ending (per region, short columns): columns ended, of them "
+                        "short, columns kept whole, pyramids, tets",
+                        "%lld, %lld, %lld, %lld, %lld", (long long)r.ended_columns,
+                        (long long)r.short_ended, (long long)r.ended_kept, (long long)r.pyramids,
+                        (long long)r.tets);
   if (st2 >= 0)
     st2 = vm_report_row(report, "columns at full thickness", "%.1f %%", 100 * r.full_fraction);
   if (st2 >= 0)

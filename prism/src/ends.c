@@ -14,7 +14,18 @@
  * goes up by one (at the stack's count, the column's levels are the
  * marching's again, bit for bit), and the check runs again until none
  * fails. It stops: counts only rise, and a stack with no column ended is
- * the marching's, which is valid. */
+ * the marching's, which is valid.
+ *
+ * Short columns (vm_prism_opts.end_short): where the layer has cells below
+ * OpenFOAM's determinant limit (checkMesh -allGeometry), each column
+ * shorter than its aim is first given the schedule's layers that fit its
+ * length (fit_counts: heights h1 r^k, as a full column's first layers),
+ * so that a squeeze does not put all the layers into a fraction of T
+ * (two spheres 0.03 apart at T = 0.10: 20 layers in 0.015, every cell 80
+ * times wider than high). After the checks above, each patch of such
+ * columns is kept only where it lowers the cells below the limit on its
+ * faces to at most k.end_short_gain of what they were (keep_patches); the
+ * others go back to the marching's stack, bit for bit. */
 #include <math.h>
 #include <omp.h>
 #include <string.h>
@@ -125,34 +136,181 @@ static double tri_skew(const vm_prism *p, const double *L, int64_t t, int nl) {
   return worst;
 }
 
+double pr_cell_foam_det(const vm_prism *p, const double *L, int64_t t, int k, int nl) {
+  double x[18], s[6][3];
+  int nv, fv[6][4], nfv[6], n = 0;
+  int type = pr_cell_at(p, L, t, k, nl, x, &nv);
+  if (type < 0) return INFINITY;
+  int nf = vm_elem_faces(type, fv, nfv);
+  for (int f = 0; f < nf; f++) {
+    if (type == VM_PRISM && k == 0 && nfv[f] == 3 && fv[f][0] < 3 && fv[f][1] < 3 && fv[f][2] < 3)
+      continue;
+    double y[12], c[3];
+    for (int i = 0; i < nfv[f]; i++) memcpy(y + 3 * i, x + 3 * fv[f][i], 3 * sizeof *y);
+    vm_foam_face(y, nfv[f], c, s[n++]);
+  }
+  return vm_foam_cell_determinant(n, (const double(*)[3])s);
+}
+
+/* The cells of triangle t's stack below OpenFOAM's determinant limit. */
+static int tri_flat(const vm_prism *p, int64_t t, int nl) {
+  int n = 0;
+  for (int k = 0; k < nl; k++) n += pr_cell_foam_det(p, p->lev, t, k, nl) < PR_FOAM_DET_MIN;
+  return n;
+}
+
+/* Each column shorter than its aim (a squeeze: contact, a gap) given the
+ * schedule's layers that fit its length: the count n of heights h1 r^k
+ * (its first height, the growth ratio) whose sum reaches its length, or
+ * passes it by less than half the next height. Returns the columns whose
+ * count fell. */
+static int64_t fit_counts(vm_prism *p, const double *old) {
+  int nl = p->nlev - 1;
+  size_t lsz = (size_t)(3 * p->nw);
+  int64_t nf = 0;
+  for (int64_t v = 0; v < p->nw; v++) {
+    double len = 0;
+    for (int k = 1; k <= nl; k++)
+      len += vm_dist3(old + k * lsz + 3 * v, old + (k - 1) * lsz + 3 * v);
+    if (!(len < (1 - p->o.full_tol) * p->tv[v])) continue;
+    double h = pr_first_height(p, v), sum = 0;
+    int n = 1;
+    for (; n < nl; n++) {
+      sum += h;
+      h *= p->rep.growth;
+      if (sum + 0.5 * h >= len) break;
+    }
+    if (n < p->nlv[v]) {
+      p->nlv[v] = n;
+      nf++;
+    }
+  }
+  return nf;
+}
+
+/* The patches of columns that end below their count n0 after the fit
+ * (connected along wall edges), each judged by the faces around its
+ * columns: kept if their cells below the determinant limit (fl0 before,
+ * per face) are at most half of what they were, else its columns go back
+ * to the marching's levels. Two columns of one face are neighbours, so
+ * the faces around different patches are different and each patch is
+ * judged alone. *ncols, *npatch, *nkept: the columns kept, the patches,
+ * those kept. */
+static int keep_patches(vm_prism *p, const double *old, const int32_t *n0, const int32_t *fl0,
+                        int64_t *ncols, int64_t *npatch, int64_t *nkept) {
+  int64_t nw = p->nw, nt = p->nt;
+  int nl = p->nlev - 1;
+  size_t lsz = (size_t)(3 * nw);
+  uint8_t *seen = vm_calloc(p->ctx, (size_t)nw, 1), *mark = vm_calloc(p->ctx, (size_t)nt, 1);
+  int32_t *cols = vm_alloc_array(p->ctx, (size_t)nw, sizeof *cols);
+  int32_t *faces = vm_alloc_array(p->ctx, (size_t)nt, sizeof *faces);
+  *ncols = *npatch = *nkept = 0;
+  if (!seen || !mark || !cols || !faces) {
+    vm_free(p->ctx, seen);
+    vm_free(p->ctx, mark);
+    vm_free(p->ctx, cols);
+    vm_free(p->ctx, faces);
+    return VM_ERR_NOMEM;
+  }
+  for (int64_t s = 0; s < nw; s++) {
+    if (seen[s] || !(p->nlv[s] < n0[s])) continue;
+    int64_t nc = 0, nf = 0, before = 0, after = 0;
+    cols[nc++] = (int32_t)s;
+    seen[s] = 1;
+    for (int64_t h = 0; h < nc; h++) {
+      int32_t v = cols[h];
+      for (int64_t j = p->vv_off[v]; j < p->vv_off[v + 1]; j++) {
+        int32_t u = p->vv[j];
+        if (!seen[u] && p->nlv[u] < n0[u]) {
+          seen[u] = 1;
+          cols[nc++] = u;
+        }
+      }
+      for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++)
+        if (!mark[p->vt[j]]) {
+          mark[p->vt[j]] = 1;
+          faces[nf++] = p->vt[j];
+        }
+    }
+    for (int64_t i = 0; i < nf; i++) {
+      before += fl0[faces[i]];
+      after += tri_flat(p, faces[i], nl);
+      mark[faces[i]] = 0;
+    }
+    (*npatch)++;
+    if (after < before && after <= p->k.end_short_gain * before) {
+      (*nkept)++;
+      *ncols += nc;
+      continue;
+    }
+    for (int64_t i = 0; i < nc; i++) {
+      int32_t v = cols[i];
+      p->nlv[v] = n0[v];
+      if (n0[v] < nl) {
+        end_column(p, v, n0[v], nl, old);
+        continue;
+      }
+      for (int k = 0; k <= nl; k++)
+        memcpy(p->lev + k * lsz + 3 * (size_t)v, old + k * lsz + 3 * (size_t)v, 3 * sizeof *old);
+    }
+  }
+  vm_free(p->ctx, seen);
+  vm_free(p->ctx, mark);
+  vm_free(p->ctx, cols);
+  vm_free(p->ctx, faces);
+  return VM_OK;
+}
+
 int pr_end_layers(vm_prism *p) {
-  if (!p->nlv || p->nlev < 2) return VM_OK;
+  if (p->nlev < 2 || (p->nlev < 3 && !p->nlv)) return VM_OK;
+  /* short columns given the layers that fit them (end_short): tried
+   * where the layer has cells below OpenFOAM's determinant limit, not
+   * with a count per region */
+  int fit = p->o.end_short && !p->regional && p->nlev > 2;
+  if (!p->nlv && !fit) return VM_OK;
   double t0 = omp_get_wtime();
   vm_ctx *ctx = p->ctx;
   int64_t nw = p->nw, nt = p->nt;
   int nl = p->nlev - 1;
   size_t lsz = (size_t)(3 * nw);
+  int64_t f0 = 0, nfit = 0, kept = 0, raised = 0, checks = 0;
+  int st = VM_OK;
+  int32_t *fl0 = NULL, *n0 = NULL, *queue = NULL;
+  double *old = NULL, *sk0 = NULL;
+  uint8_t *touch = NULL, *split0 = NULL;
+  if (fit) {
+    if (!(fl0 = vm_alloc_array(ctx, (size_t)nt, sizeof *fl0))) return VM_ERR_NOMEM;
+#pragma omp parallel for schedule(static) reduction(+ : f0)
+    for (int64_t t = 0; t < nt; t++) f0 += fl0[t] = tri_flat(p, t, nl);
+    fit = f0 > 0;
+  }
+  if (!p->nlv && !fit) goto done;
+  if (!p->nlv) {
+    if (!(p->nlv = vm_alloc_array(ctx, (size_t)nw, sizeof *p->nlv))) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    for (int64_t v = 0; v < nw; v++) p->nlv[v] = nl;
+  }
   int64_t ended = 0;
   for (int64_t v = 0; v < nw; v++) {
     if (p->nlv[v] > nl) p->nlv[v] = nl;
     ended += p->nlv[v] < nl;
   }
-  if (!ended) return VM_OK;
-  double *old = vm_alloc_array(ctx, (size_t)(nl + 1) * lsz, sizeof *old);
-  uint8_t *touch = vm_calloc(ctx, (size_t)nt, 1);
-  uint8_t *split0 = vm_calloc(ctx, (size_t)(nt * nl), 1);
-  double *sk0 = vm_alloc_array(ctx, (size_t)nt, sizeof *sk0);
-  int32_t *queue = vm_alloc_array(ctx, (size_t)nt, sizeof *queue);
-  int64_t kept = 0;
-  if (!old || !touch || !split0 || !sk0 || !queue) {
-    vm_free(ctx, queue);
-    vm_free(ctx, sk0);
-    vm_free(ctx, old);
-    vm_free(ctx, touch);
-    vm_free(ctx, split0);
-    return VM_ERR_NOMEM;
+  if (!ended && !fit) goto done;
+  old = vm_alloc_array(ctx, (size_t)(nl + 1) * lsz, sizeof *old);
+  touch = vm_calloc(ctx, (size_t)nt, 1);
+  split0 = vm_calloc(ctx, (size_t)(nt * nl), 1);
+  sk0 = vm_alloc_array(ctx, (size_t)nt, sizeof *sk0);
+  queue = vm_alloc_array(ctx, (size_t)nt, sizeof *queue);
+  n0 = vm_alloc_array(ctx, (size_t)nw, sizeof *n0);
+  if (!old || !touch || !split0 || !sk0 || !queue || !n0) {
+    st = VM_ERR_NOMEM;
+    goto done;
   }
   memcpy(old, p->lev, (size_t)(nl + 1) * lsz * sizeof *old);
+  memcpy(n0, p->nlv, (size_t)nw * sizeof *n0);
+  if (fit) nfit = fit_counts(p, old);
   /* the faces with an ended column, and which of their prisms failed a
    * 3-tet split before */
   for (int64_t t = 0; t < nt; t++) {
@@ -173,7 +331,6 @@ int pr_end_layers(vm_prism *p) {
    * k.skew_limit and than before: the smallest count among its ended
    * columns goes up by one (at the stack's count, the column is the
    * marching's again), until no face fails */
-  int64_t raised = 0, checks = 0;
   /* a FIFO of the faces to check (touch[t] bit 1: queued), first every
    * face with an ended column in order, then the faces around each raised
    * column: the work is linear in the layers given back */
@@ -221,6 +378,19 @@ int pr_end_layers(vm_prism *p) {
       }
     }
   }
+  if (fit) {
+    int64_t nk = 0, np = 0, npk = 0, f1 = 0;
+    if ((st = keep_patches(p, old, n0, fl0, &nk, &np, &npk)) < 0) goto done;
+#pragma omp parallel for schedule(static) reduction(+ : f1)
+    for (int64_t t = 0; t < nt; t++) f1 += tri_flat(p, t, nl);
+    p->rep.short_ended = nk;
+    vm_log(ctx, VM_LOG_INFO,
+           "prism: short columns: %lld given the layers that fit them, in %lld patches; %lld of "
+           "the patches (%lld columns) kept, where that halves the cells below OpenFOAM's "
+           "determinant limit around them; such cells in the layer %lld -> %lld",
+           (long long)nfit, (long long)np, (long long)npk, (long long)nk, (long long)f0,
+           (long long)f1);
+  }
   int64_t pyr = 0, tet = 0, still = 0;
   for (int64_t v = 0; v < nw; v++) still += p->nlv[v] < nl;
   for (int64_t t = 0; t < nt; t++)
@@ -236,16 +406,20 @@ int pr_end_layers(vm_prism *p) {
   p->rep.ended_kept = kept;
   p->rep.pyramids = pyr;
   p->rep.tets = tet;
-  vm_log(ctx, VM_LOG_INFO,
-         "prism: layers end on %lld columns (%lld pyramids, %lld tets between the counts); "
-         "%lld layers given back where ending them made a cell invalid or skewed, %lld "
-         "columns keep all %d layers (%lld face checks, %.2f s)",
-         (long long)still, (long long)pyr, (long long)tet, (long long)raised, (long long)kept, nl,
-         (long long)checks, omp_get_wtime() - t0);
+  if (still || ended)
+    vm_log(ctx, VM_LOG_INFO,
+           "prism: layers end on %lld columns (%lld pyramids, %lld tets between the counts); "
+           "%lld layers given back where ending them made a cell invalid or skewed, %lld "
+           "columns keep all %d layers (%lld face checks, %.2f s)",
+           (long long)still, (long long)pyr, (long long)tet, (long long)raised, (long long)kept, nl,
+           (long long)checks, omp_get_wtime() - t0);
+done:
+  vm_free(ctx, fl0);
+  vm_free(ctx, n0);
+  vm_free(ctx, queue);
+  vm_free(ctx, sk0);
   vm_free(ctx, old);
   vm_free(ctx, touch);
   vm_free(ctx, split0);
-  vm_free(ctx, sk0);
-  vm_free(ctx, queue);
-  return VM_OK;
+  return st;
 }

@@ -985,8 +985,8 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     return VM_ERR_NOMEM;
   }
   edge_neighbours(p, nbt);
-  /* the cell centres, and the determinants of the prisms (no column ended
-   * below their top: pr_end_layers) */
+  /* the cell centres, and the cells' determinants (where layers end, the
+   * pyramids' and tets' too: pr_end_layers) */
   int64_t nd = 0;
 #pragma omp parallel for schedule(static) reduction(+ : nd)
   for (int64_t c = 0; c < nc; c++) {
@@ -999,6 +999,8 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
     if (pr_col_top(p, tc[0], nl) > k && pr_col_top(p, tc[1], nl) > k &&
         pr_col_top(p, tc[2], nl) > k)
       nd += prism_det(nbt, t, k, (const double(*)[3])fs) < PR_FOAM_DET_MIN;
+    else
+      nd += pr_cell_foam_det(p, L, t, k, nl) < PR_FOAM_DET_MIN; /* a transition cell */
   }
   const double c70 = cos(70 * PR_PI / 180);
   int64_t over = 0;

@@ -192,6 +192,15 @@ typedef struct pr_params {
   int end_certify_depth;           /* 6: subdivision levels of the Bernstein
                                       certificate of a pyramid where layers end
                                       (vm_jacobian_certify) */
+  double end_short_gain;           /* 0.5: a patch of short columns given the
+                                      layers that fit them (end_short) is kept
+                                      where its faces' cells below OpenFOAM's
+                                      determinant limit fall to at most this
+                                      share of what they were: on vm-gen
+                                      aircraft and plane.stl no patch lowers
+                                      them at all (the transition cells are as
+                                      flat), on two spheres 0.03 apart at T =
+                                      0.10 they fall 2,409 -> 119 */
   double split_max_frac;           /* 0.9: a changed split never takes more than 90 %
                                       of the remainder (the outer sublayer would be a
                                       sliver) */
@@ -413,6 +422,7 @@ static inline pr_params pr_params_default(void) {
       .split_max_frac = 0.9,
       .end_count_round = 0.5,
       .end_certify_depth = 6,
+      .end_short_gain = 0.5,
       .min_target_height = 1e-4,
       .tilt_limit_deg = 5,
       .medial_cap = 4,

@@ -52,6 +52,7 @@ vm_prism_opts vm_prism_opts_default(void) {
   o.check_incremental = 0;
   o.orient = 1;
   o.growth_relief = 1;
+  o.end_short = 1;
   return o;
 }
 

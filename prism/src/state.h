@@ -147,6 +147,13 @@ static inline int pr_cell_at(const vm_prism *p, const double *L, int64_t t, int 
   return type;
 }
 
+/* OpenFOAM's cell determinant of cell (t, k) of nl layers at the levels L
+ * (a prism, or where layers end a pyramid or a tet: pr_cell_at), every
+ * face counted as inside but the wall's (the hybrid mesh's view: the
+ * fill's tets stand on the outer surface); INFINITY where there is no
+ * cell (ends.c). */
+double pr_cell_foam_det(const vm_prism *p, const double *L, int64_t t, int k, int nl);
+
 /* The wall triangle across edge i (tri[i], tri[i + 1]) of triangle t (-1:
  * an open edge). */
 static inline int64_t pr_tri_across(const vm_prism *p, int64_t t, int i) {

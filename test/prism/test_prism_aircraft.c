@@ -50,8 +50,13 @@ static void run(vm_ctx *ctx, const vm_mesh *w, double length, double frac, vm_pr
         (long long)r.intersections);
   CHECK(res, "result: %s", vm_ctx_error(ctx));
   if (res) {
-    CHECK(res->ne == 20 * r.wall_triangles + 2 * r.wall_triangles, "%lld elements",
-          (long long)res->ne);
+    /* the layer's cells (where short columns end, pyramids and tets
+     * beside the whole prisms) and the wall's and outer surface's
+     * triangles */
+    CHECK(res->ne == r.prisms + r.pyramids + r.tets + 2 * r.wall_triangles &&
+              (r.ended_columns > 0 || r.prisms == 20 * r.wall_triangles),
+          "%lld elements: %lld prisms, %lld pyramids, %lld tets", (long long)res->ne,
+          (long long)r.prisms, (long long)r.pyramids, (long long)r.tets);
     CHECK(chk_corner_inverted(res) == 0, "T = %g L: the result has inverted corner tets", frac);
     CHECK(!memcmp(res->xyz, w->xyz, sizeof(double) * 3 * (size_t)w->nv), "T = %g L: the wall moved",
           frac);

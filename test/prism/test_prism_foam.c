@@ -172,6 +172,10 @@ static void check_layer(vm_ctx *ctx, const vm_mesh *w, double length, const char
   o.thickness = 0.05 * length;
   o.nlayers = 20;
   o.growth = 1.2;
+  /* the marching's whole stack, counted here prism by prism (short
+   * columns' layers ending where that halves the small determinants:
+   * test prism_short) */
+  o.end_short = 0;
   vm_prism_report r;
   vm_mesh *m = NULL;
   int st = vm_prism_run(ctx, w, &o, &m, &r);

@@ -143,6 +143,12 @@ typedef struct vm_prism_opts {
                             schedule, where no cell gets worse by any of the
                             checks OpenFOAM and the stage make (prism/src/march.c,
                             growth_relief); 0: off (for comparison) */
+  int end_short;         /* 1 (default): where the layer has cells below
+                            OpenFOAM's determinant limit, the columns shorter
+                            than their aim (a squeeze) are given the
+                            schedule's layers that fit their length, ending in
+                            pyramids and tets as --region-layers does; kept if
+                            that halves those cells (prism/src/ends.c); 0: off */
   int orient;            /* 1 (default): a wall oriented inwards (negative
                             enclosed volume) has its triangles turned, with a
                             warning on the log, so the layer grows outside;
@@ -252,9 +258,10 @@ typedef struct vm_prism_report {
    * outer surface included; checkMesh fails at 4) */
   int64_t nonortho_over70;
   double nonortho_max, skew_max;
-  /* prisms whose OpenFOAM cell determinant is below 0.001 (checkMesh
-   * -allGeometry fails them; over the faces inside the hybrid mesh: the
-   * top of the last layer counts as inside, the fill's tets stand on it) */
+  /* cells (prisms, and where layers end pyramids and tets) whose OpenFOAM
+   * cell determinant is below 0.001 (checkMesh -allGeometry fails them;
+   * over the faces inside the hybrid mesh: the top of the last layer
+   * counts as inside, the fill's tets stand on it) */
   int64_t det_small;
   /* the room the geometry leaves (vm_prism_medial_radius; all 0 if it was
    * not computed): a column has room for T where its wall vertex's
@@ -271,6 +278,7 @@ typedef struct vm_prism_report {
    * ending them would have made a cell invalid, and the cells that end
    * the layers (prisms counts only whole prisms) */
   int64_t ended_columns, ended_kept, pyramids, tets;
+  int64_t short_ended;           /* columns given fewer layers by end_short (kept) */
   double time[VM_PRISM_NPHASES]; /* seconds per phase */
   double time_total;
   double march_time[VM_PRISM_NMARCH_STEPS]; /* seconds per marching step */
