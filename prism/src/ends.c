@@ -188,6 +188,72 @@ static int64_t fit_counts(vm_prism *p, const double *old) {
   return nf;
 }
 
+/* OpenFOAM's centre c and volume *v of cell (t, k) at levels L (its
+ * prism's coordinates, ended columns' levels coinciding). */
+static void centre_volume(const vm_prism *p, const double *L, int64_t t, int k, double *c,
+                          double *v) {
+  double x[18], fc[5][3], fs[5][3];
+  pr_prism_at(p, L, t, k, x);
+  pr_foam_cell_faces(x, c, fc, fs);
+  *v = 0;
+  for (int f = 0; f < 5; f++) {
+    double d[3];
+    for (int r = 0; r < 3; r++) d[r] = fc[f][r] - c[r];
+    *v += vm_dot3(fs[f], d) / 3;
+  }
+}
+
+/* The faces of triangle t's cells at levels L inside the hybrid mesh (each
+ * seen from this side) whose OpenFOAM interpolation weight is below 0.05
+ * (*nw) and whose cells' volume ratio is below 0.01 (*nv), as checkMesh
+ * -allGeometry counts them; faces as tri_skew takes them; over the outer
+ * surface, a regular tet on the outer face stands for the fill's. */
+static void tri_weights(const vm_prism *p, const double *L, int64_t t, int nl, int *nw, int *nv) {
+  const int32_t *tc = p->tri + 3 * t;
+  int top[3];
+  for (int i = 0; i < 3; i++) top[i] = pr_col_top(p, tc[i], nl);
+  *nw = *nv = 0;
+  for (int k = 0; k < nl; k++) {
+    if (top[0] <= k && top[1] <= k && top[2] <= k) break;
+    double x[18], cp[3], cn[3], y[12], vp, vn;
+    pr_prism_at(p, L, t, k, x);
+    centre_volume(p, L, t, k, cp, &vp);
+    int last = k == nl - 1 || (top[0] <= k + 1 && top[1] <= k + 1 && top[2] <= k + 1);
+    for (int f = 0; f < 5; f++) {
+      if (f >= 2 && top[f - 2] <= k && top[(f - 1) % 3] <= k) continue;
+      if (f == 0 && k == 0) continue;
+      int outer = f == 1 && last;
+      int64_t u = f <= 1 ? t : pr_tri_across(p, t, f - 2);
+      if (u < 0) continue;
+      int n = pr_prism_faces[f][3] < 0 ? 3 : 4;
+      for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * pr_prism_faces[f][i], 3 * sizeof *y);
+      double fc[3], fs[3], a[3], b[3];
+      vm_foam_face(y, n, fc, fs);
+      if (outer) {
+        /* the fill's tet over the outer face, as a regular one on it (the
+         * fill grades its tets from the envelope's triangles) */
+        double ls = vm_norm3(fs), e = sqrt(4 * ls / sqrt(3.0)), h = e * sqrt(2.0 / 3.0);
+        if (!(ls > 0)) continue;
+        double sg = vm_dot3(fs, fc) - vm_dot3(fs, cp) > 0 ? 1 : -1;
+        for (int r = 0; r < 3; r++) cn[r] = fc[r] + sg * fs[r] / ls * h / 4;
+        vn = e * e * e / (6 * sqrt(2.0));
+      } else {
+        centre_volume(p, L, u, f == 0 ? k - 1 : f == 1 ? k + 1 : k, cn, &vn);
+      }
+      for (int r = 0; r < 3; r++) {
+        a[r] = fc[r] - cp[r];
+        b[r] = cn[r] - fc[r];
+      }
+      double dp = fabs(vm_dot3(fs, a)), dn = fabs(vm_dot3(fs, b));
+      double w = dp + dn > 0 ? (dp < dn ? dp : dn) / (dp + dn) : 0;
+      *nw += !(w >= 0.05);
+      double lo = fabs(vp) < fabs(vn) ? fabs(vp) : fabs(vn),
+             hi = fabs(vp) < fabs(vn) ? fabs(vn) : fabs(vp);
+      *nv += !(lo >= 0.01 * hi);
+    }
+  }
+}
+
 /* The patches of columns that end below their count n0 after the fit
  * (connected along wall edges), each judged by the faces around its
  * columns: kept if their cells below the determinant limit (fl0 before,
@@ -232,13 +298,28 @@ static int keep_patches(vm_prism *p, const double *old, const int32_t *n0, const
           faces[nf++] = p->vt[j];
         }
     }
+    int64_t w0 = 0, w1 = 0, r0 = 0, r1 = 0;
     for (int64_t i = 0; i < nf; i++) {
       before += fl0[faces[i]];
       after += tri_flat(p, faces[i], nl);
       mark[faces[i]] = 0;
+      int a, b;
+      tri_weights(p, p->lev, faces[i], nl, &a, &b);
+      w1 += a;
+      r1 += b;
     }
+    /* the same faces' weights and volume ratios in the marching's stack */
+    int ended = p->ended;
+    p->ended = 0;
+    for (int64_t i = 0; i < nf; i++) {
+      int a, b;
+      tri_weights(p, old, faces[i], nl, &a, &b);
+      w0 += a;
+      r0 += b;
+    }
+    p->ended = ended;
     (*npatch)++;
-    if (after < before && after <= p->k.end_short_gain * before) {
+    if (after < before && after <= p->k.end_short_gain * before && w1 <= w0 && r1 <= r0) {
       (*nkept)++;
       *ncols += nc;
       continue;
