@@ -1,10 +1,13 @@
 /* bench/bench_prism.c: the prism stage on plane.stl, the generated
- * aircraft and two spheres with a narrow gap at T = 5% and 20% of the model's length, 20 layers:
+ * aircraft, two spheres with a narrow gap and two 0.06 apart (a squeeze) at T = 5% and 20% of
+ * the model's length, 20 layers:
  * per case prisms, time, columns at full thickness, achieved/requested thickness, the room the
  * geometry leaves (columns whose exterior medial radius is at least 1.05 T, the share of those at
  * full thickness, the fill of the allowed thickness), inverted prisms, minimum scaled Jacobian,
  * deviation from the wall normal, intersecting pairs (Embree and, independently, CGAL's exact
- * check) and the largest growth ratio. usage: bench_prism [--data DIR] [--layers N] [--growth R]
+ * check), the growth ratios and OpenFOAM's figures (faces beyond 70 degrees, the largest
+ * non-orthogonality and skewness, cells below checkMesh's determinant limit, short columns
+ * ended). usage: bench_prism [--data DIR] [--layers N] [--growth R]
  * [--res N]
  *                    [--only plane|aircraft|spheres] [--frac F] [--verbose]
  * VM_BENCH_DUMP=FILE writes "x y z thickness/T" per wall vertex of each case
@@ -147,14 +150,16 @@ static int run_case(vm_ctx *ctx, const char *name, const vm_mesh *w, double frac
   printf("| %-14s | %4.0f%% | %7lld | %6.1f / %6.1f | %5.1f%% | %5.1f%% / %6.2f%% (%lld) / %.3f "
          "(%.3f) | %.3f / %.3f / %.3f | %lld / %lld | %lld | "
          "%.3f | %5.2f / %5.2f (%lld > 5) / %5.2f / %5.2f "
-         "| %lld / %lld+%lld | %.3f / %.3f / %.2f%% | %d%s |\n",
+         "| %lld / %lld+%lld | %.3f / %.3f / %.2f%% | %lld / %.1f / %.2f / %lld (%lld) | %d%s |\n",
          name, 100 * frac, (long long)r.prisms, r.time_total, cpu, 100 * r.full_fraction,
          100 * r.medial_room, 100 * r.medial_reach, (long long)r.medial_short, r.medial_fill,
          r.medial_fill_rest, r.thick_min, r.thick_mean, r.thick_max, (long long)r.inverted,
          (long long)cg_bad, (long long)r.split_negative, r.sj_min, r.normal_dev_max,
          r.normal_dev_p99, (long long)r.normal_dev_over5, r.normal_dev_all_max,
          r.normal_dev_all_p99, (long long)emb, (long long)cg_pairs, (long long)cg_wall,
-         r.growth_max, r.growth_p99, 100 * r.growth_band_share, r.layers, st ? " (warn)" : "");
+         r.growth_max, r.growth_p99, 100 * r.growth_band_share, (long long)r.nonortho_over70,
+         r.nonortho_max, r.skew_max, (long long)r.det_small, (long long)r.short_ended, r.layers,
+         st ? " (warn)" : "");
   fflush(stdout);
   if (verbose) {
     fprintf(stderr, "  phases:");
@@ -210,8 +215,9 @@ int main(int argc, char **argv) {
          "(own / CGAL) | 3-tet split negative "
          "| min SJ | first layer off the normal, deg: smooth max / p99 (> 5°) / all max / p99 "
          "| intersecting pairs (Embree / CGAL outer+wall) | growth: max / p99 / columns within "
-         "[1/1.5, 1.5] x | layers |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+         "[1/1.5, 1.5] x | OpenFOAM: faces > 70° / max non-orth. / max skewness / cells "
+         "det < 0.001 (short columns ended) | layers |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   if (!only || !strcmp(only, "plane")) {
     vm_mesh *m = NULL;
     if (vm_mesh_read(ctx, path, VM_FMT_AUTO, &m)) {
@@ -245,6 +251,17 @@ int main(int argc, char **argv) {
     } else {
       for (int f = 0; f < nfrac; f++)
         run_case(ctx, "two spheres", m, fracs[f], layers, growth, verbose);
+    }
+    vm_mesh_destroy(&m);
+    /* a squeeze: the same spheres 0.06 apart (length 4.06), the layers
+     * meeting in the gap at either thickness (test prism_short's shape) */
+    const double sa[3] = {-1.03, 0, 0}, sb[3] = {1.03, 0, 0};
+    if (vm_mesh_create(ctx, &m) || vm_gen_icosphere(m, sa, 1.0, 4, 0, NULL) ||
+        vm_gen_icosphere(m, sb, 1.0, 4, 0, NULL)) {
+      fprintf(stderr, "spheres: %s\n", vm_ctx_error(ctx));
+    } else {
+      for (int f = 0; f < nfrac; f++)
+        run_case(ctx, "spheres 0.06", m, fracs[f], layers, growth, verbose);
     }
     vm_mesh_destroy(&m);
   }
