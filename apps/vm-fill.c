@@ -133,7 +133,8 @@ static void print_json(const args *a, const vm_fill_report *r) {
     printf(", \"inverted\": %lld}", (long long)q[i]->inverted);
   }
   const vm_fill_fv_figures *f[2] = {&r->fv_before, &r->fv_after};
-  printf(", \"fv_moved\": %lld, \"time_fv\": %.3f", (long long)r->fv_moved, r->time_fv);
+  printf(", \"fv_moved\": %lld, \"fv_flips\": %lld, \"time_fv\": %.3f", (long long)r->fv_moved,
+         (long long)r->fv_flips, r->time_fv);
   for (int i = 0; i < 2; i++) {
     printf(", \"fv_%s\": {\"faces\": %lld, \"tets\": %lld, \"nonortho_over70\": %lld, "
            "\"skew_over4\": %lld, \"weight_under005\": %lld, \"volratio_under001\": %lld, "

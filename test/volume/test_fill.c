@@ -316,6 +316,142 @@ static void relief_case(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+static int cmp_tri(const void *a, const void *b) {
+  const int32_t *x = a, *y = b;
+  for (int i = 0; i < 3; i++)
+    if (x[i] != y[i]) return x[i] < y[i] ? -1 : 1;
+  return 0;
+}
+
+/* The faces of m's tets, each sorted, then the list sorted: the boundary
+ * faces (seen once) into *bnd (*nb), and how many faces are seen neither
+ * once nor twice. */
+static int64_t tet_faces(const vm_mesh *m, const int32_t *vmap, int32_t **bnd, int64_t *nb) {
+  static const int F[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  int32_t *f = malloc(12 * (size_t)m->ne * sizeof *f);
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *c = m->conn + m->eoff[e];
+    for (int j = 0; j < 4; j++) {
+      int32_t *t = f + 12 * e + 3 * j;
+      for (int i = 0; i < 3; i++) t[i] = vmap ? vmap[c[F[j][i]]] : c[F[j][i]];
+      for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2 - a; b++)
+          if (t[b] > t[b + 1]) {
+            int32_t x = t[b];
+            t[b] = t[b + 1];
+            t[b + 1] = x;
+          }
+    }
+  }
+  qsort(f, 4 * (size_t)m->ne, 3 * sizeof *f, cmp_tri);
+  int64_t bad = 0, n = 0;
+  *bnd = malloc(12 * (size_t)m->ne * sizeof **bnd);
+  for (int64_t i = 0; i < 4 * m->ne;) {
+    int64_t k = i + 1;
+    while (k < 4 * m->ne && !cmp_tri(f + 3 * k, f + 3 * i)) k++;
+    if (k - i == 1) memcpy(*bnd + 3 * n++, f + 3 * i, 3 * sizeof **bnd);
+    bad += k - i > 2;
+    i = k;
+  }
+  *nb = n;
+  free(f);
+  return bad;
+}
+
+/* The flips on a known case: the relief's pulled cube (every tet
+ * positive; 33 determinants below 0.001, 24 of them the tets with two
+ * faces on the cube's boundary, and 5 faces beyond 70 degrees). Without
+ * moving a vertex (first = nv) and with collapses allowed (first = 0):
+ * fewer failures by every count, none more; every tet positive; the
+ * cube's volume; the same boundary triangles (by the vertices' original
+ * indices); every inner face shared by exactly two tets; the kept
+ * vertices bit-identical, their vertex field and the tets' element field
+ * carried; the same result twice. */
+static void flips_case(vm_ctx *ctx) {
+  vm_rotcube_opts ro = vm_rotcube_opts_default();
+  ro.n = 4;
+  ro.alpha = 0;
+  ro.cells = VM_GEN_TETS;
+  vm_mesh *m0 = NULL;
+  CHECK(vm_gen_rotated_cube(ctx, &ro, &m0, NULL) == VM_OK, "flips: the tet cube");
+  if (!m0) return;
+  int64_t k = 0;
+  for (int64_t v = 0; v < m0->nv; v++) {
+    double *x = m0->xyz + 3 * v;
+    if (fabs(x[0]) < 0.49 && fabs(x[1]) < 0.49 && fabs(x[2]) < 0.49) {
+      x[0] += 0.065 * sin(1.7 * (double)k + 0.3);
+      x[1] += 0.065 * cos(2.3 * (double)k + 1.1);
+      x[2] += 0.065 * sin(3.1 * (double)k + 2.0);
+      k++;
+    }
+  }
+  vm_field *vid = NULL, *tag = NULL;
+  vm_mesh_add_field(m0, "vid", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &vid);
+  vm_mesh_add_field(m0, "tag", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &tag);
+  for (int64_t v = 0; v < m0->nv; v++) ((int32_t *)vid->data)[v] = (int32_t)v;
+  for (int64_t e = 0; e < m0->ne; e++) ((int32_t *)tag->data)[e] = 7;
+  int32_t *b0 = NULL;
+  int64_t nb0 = 0;
+  tet_faces(m0, NULL, &b0, &nb0);
+  for (int pass = 0; pass < 2; pass++) {
+    const char *name = pass ? "flips with collapses" : "flips";
+    vm_mesh *m = NULL, *m2 = NULL;
+    vm_mesh_clone(m0, &m);
+    vm_mesh_clone(m0, &m2);
+    int64_t first = pass ? 0 : m->nv, nf = 0, nf2 = 0, mv;
+    vm_fill_fv_figures b, a, x;
+    vm_fill_fv_relief(ctx, m, 0, 0, 0, &b, &x, &mv);
+    int st = vm_fill_fv_flips(ctx, m, 0, first, &nf);
+    CHECK(st == VM_OK && nf > 0, "%s: %s, %lld made", name, st ? vm_ctx_error(ctx) : "ok",
+          (long long)nf);
+    vm_fill_fv_relief(ctx, m, 0, 0, 0, &a, &x, &mv);
+    CHECK(a.det_under < b.det_under && a.nonortho_over70 <= b.nonortho_over70 &&
+              a.skew_over4 <= b.skew_over4 && a.weight_under <= b.weight_under &&
+              a.volratio_under <= b.volratio_under,
+          "%s: determinants %lld -> %lld, faces > 70 deg %lld -> %lld, skewed %lld -> %lld, "
+          "weights %lld -> %lld, volume ratios %lld -> %lld",
+          name, (long long)b.det_under, (long long)a.det_under, (long long)b.nonortho_over70,
+          (long long)a.nonortho_over70, (long long)b.skew_over4, (long long)a.skew_over4,
+          (long long)b.weight_under, (long long)a.weight_under, (long long)b.volratio_under,
+          (long long)a.volratio_under);
+    int64_t neg = 0, badtag = 0;
+    double vol = 0;
+    for (int64_t e = 0; e < m->ne; e++) {
+      double t = tet_signed(m, e);
+      neg += t <= 0;
+      vol += t;
+      badtag += ((const int32_t *)vm_mesh_find_field(m, "tag", VM_FIELD_ELEMENT)->data)[e] != 7;
+    }
+    CHECK(neg == 0 && fabs(vol - 1) < 1e-12 && badtag == 0,
+          "%s: %lld tets not positive, volume %.15g, %lld tets without the element field", name,
+          (long long)neg, vol, (long long)badtag);
+    /* the vertices: kept in order, bit-identical, carrying their field */
+    const int32_t *id = vm_mesh_find_field(m, "vid", VM_FIELD_VERTEX)->data;
+    int64_t badv = 0;
+    for (int64_t v = 0; v < m->nv; v++)
+      badv += (v && id[v] <= id[v - 1]) ||
+              memcmp(m->xyz + 3 * v, m0->xyz + 3 * (int64_t)id[v], 3 * sizeof(double));
+    CHECK(badv == 0 && (pass ? m->nv <= m0->nv : m->nv == m0->nv),
+          "%s: %lld vertices not kept as they were (%lld of %lld left)", name, (long long)badv,
+          (long long)m->nv, (long long)m0->nv);
+    int32_t *b1 = NULL;
+    int64_t nb1 = 0, over = tet_faces(m, id, &b1, &nb1);
+    CHECK(over == 0 && nb1 == nb0 && !memcmp(b1, b0, 3 * (size_t)nb0 * sizeof *b0),
+          "%s: %lld faces on more than two tets, %lld boundary triangles of %lld, the same: %d",
+          name, (long long)over, (long long)nb1, (long long)nb0,
+          nb1 == nb0 && !memcmp(b1, b0, 3 * (size_t)nb0 * sizeof *b0));
+    free(b1);
+    st = vm_fill_fv_flips(ctx, m2, 0, first, &nf2);
+    CHECK(st == VM_OK && nf2 == nf && m2->ne == m->ne && m2->nv == m->nv &&
+              !memcmp(m2->conn, m->conn, 4 * (size_t)m->ne * sizeof *m->conn),
+          "%s: the same result twice", name);
+    vm_mesh_destroy(&m2);
+    vm_mesh_destroy(&m);
+  }
+  free(b0);
+  vm_mesh_destroy(&m0);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   vm_ctx_create(&ctx);
@@ -323,6 +459,7 @@ int main(void) {
   sphere_case(ctx, VM_FAR_SPHERE);
   layer_case(ctx);
   relief_case(ctx);
+  flips_case(ctx);
   /* no envelope: an empty mesh */
   vm_mesh *e = NULL, *o = NULL;
   vm_mesh_create(ctx, &e);

@@ -2,6 +2,7 @@
  * far field, Gmsh's Delaunay mesher in memory, the merged mesh, and the
  * variational optimization of the tetrahedra next to the layer. */
 #include "varmesh/fill.h"
+#include "varmesh/quality.h"
 
 #include <gmshc.h>
 #include <math.h>
@@ -821,6 +822,24 @@ static int quad_cmp(const void *a, const void *b) {
   return 0;
 }
 
+/* A tet of four envelope vertices is a sliver below this OpenFOAM cell
+ * determinant too (twice checkMesh's limit: the tet's faces are all
+ * internal once merged); the demo aircraft at 5 %: two tets of 10.3 and
+ * 10.9 degrees, each on two envelope faces in a shallow concave crease,
+ * at 5.6e-4 and 8.0e-4 */
+#define FILL_SLIVER_DET 0.002
+
+/* OpenFOAM's determinant of tet p over its four faces. */
+static double tet_foam_det(const double *p[4]) {
+  static const int fc[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  double s[4][3], y[9], c[3];
+  for (int f = 0; f < 4; f++) {
+    for (int i = 0; i < 3; i++) memcpy(y + 3 * i, p[fc[f][i]], 3 * sizeof *y);
+    vm_foam_face(y, 3, c, s[f]);
+  }
+  return vm_foam_cell_determinant(4, (const double(*)[3])s);
+}
+
 /* Points that break Gmsh's slivers of four envelope vertices (flat tets in
  * slightly concave kinks of the envelope, which Delaunay keeps: no other
  * point is in their small circumsphere): one off the envelope above each,
@@ -847,7 +866,7 @@ static int sliver_points(vm_ctx *ctx, const vm_mesh *o, int64_t e0, int64_t nin,
                           o->xyz + 3 * c[3]};
     double lo, hi;
     tet_angles(p, &lo, &hi);
-    if (lo * 180 / PI >= min_deg) continue;
+    if (lo * 180 / PI >= min_deg && tet_foam_det(p) >= FILL_SLIVER_DET) continue;
     (*nsliver)++;
     quad_key key;
     memcpy(key.v, c, sizeof key.v);
@@ -976,12 +995,10 @@ static void gmsh_result_free(gmsh_result *R) {
 /* ---------- edge removal on slivers of envelope vertices ---------- */
 
 /* Rounds of edge removal at most, and the largest ring taken */
-enum { FLIP_ROUNDS = 4, FLIP_RING_MAX = 7 };
+enum { FLIP_ROUNDS = 4, FLIP_RING_MAX = FILL_RING_MAX };
 
-/* The triangulations of the convex polygon 0..n-1 (n <= FLIP_RING_MAX):
- * each a list of n - 2 triangles (i < j < k), into tri (at most 42 of
- * them, Catalan(5)); returns how many. */
-static int polygon_triangulations(int n, int tri[][FLIP_RING_MAX - 2][3]) {
+/* (fill_private.h) */
+int fill_polygon_triangulations(int n, int tri[][FILL_RING_MAX - 2][3]) {
   /* depth first over the choices: the pending edge (lo, hi) with the
    * least depth takes apex lo + 1 + choice[depth]; the choice vectors in
    * lexicographic order give every triangulation once */
@@ -1133,7 +1150,7 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
     goto done;
   }
   int ntri[FLIP_RING_MAX + 1] = {0};
-  for (int n = 3; n <= FLIP_RING_MAX; n++) ntri[n] = polygon_triangulations(n, tris_n[n]);
+  for (int n = 3; n <= FLIP_RING_MAX; n++) ntri[n] = fill_polygon_triangulations(n, tris_n[n]);
   /* the orientation of Gmsh's tets */
   double sgn = tets_sign(R, at);
   for (int round = 0; round < FLIP_ROUNDS; round++) {
@@ -2566,18 +2583,36 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_before,
                                 &rep.fv_after, &rep.fv_moved)))
       goto done;
+    /* what moving vertices left: flips, then the relief again around them */
+    const vm_fill_fv_figures *b = &rep.fv_after;
+    if (o.fv_sweeps > 0 && (b->det_under || b->nonortho_over70 || b->skew_over4 ||
+                            b->weight_under || b->volratio_under)) {
+      if ((st = vm_fill_fv_flips(ctx, res, e0, in->nv + F.nv, &rep.fv_flips))) goto done;
+      rep.new_vertices = res->nv - in->nv;
+      if (rep.fv_flips) {
+        vm_fill_fv_figures mid;
+        int64_t moved = 0;
+        if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &mid, &rep.fv_after,
+                                    &moved)))
+          goto done;
+        rep.fv_moved += moved;
+        rep.tets = mid.tets;
+      }
+    }
     rep.time_fv = now() - t3;
-    const vm_fill_fv_figures *a = &rep.fv_before, *b = &rep.fv_after;
+    const vm_fill_fv_figures *a = &rep.fv_before;
     vm_log(ctx, VM_LOG_INFO,
-           "fill: finite-volume relief moved %lld vertices in %.2f s; faces beyond 70 degrees "
+           "fill: finite-volume relief moved %lld vertices and made %lld flips in %.2f s; faces "
+           "beyond 70 degrees "
            "%lld -> %lld (largest %.1f -> %.1f), skewness > 4 %lld -> %lld (largest %.2f -> "
            "%.2f), weights < 0.05 %lld -> %lld, volume ratios < 0.01 %lld -> %lld, "
            "determinants < 0.001 %lld -> %lld",
-           (long long)rep.fv_moved, rep.time_fv, (long long)a->nonortho_over70,
-           (long long)b->nonortho_over70, a->nonortho_max, b->nonortho_max,
-           (long long)a->skew_over4, (long long)b->skew_over4, a->skew_max, b->skew_max,
-           (long long)a->weight_under, (long long)b->weight_under, (long long)a->volratio_under,
-           (long long)b->volratio_under, (long long)a->det_under, (long long)b->det_under);
+           (long long)rep.fv_moved, (long long)rep.fv_flips, rep.time_fv,
+           (long long)a->nonortho_over70, (long long)b->nonortho_over70, a->nonortho_max,
+           b->nonortho_max, (long long)a->skew_over4, (long long)b->skew_over4, a->skew_max,
+           b->skew_max, (long long)a->weight_under, (long long)b->weight_under,
+           (long long)a->volratio_under, (long long)b->volratio_under, (long long)a->det_under,
+           (long long)b->det_under);
     if ((st = tet_quality_from(ctx, res, e0, &rep.after))) goto done;
   }
   rep.time_total = now() - t0;

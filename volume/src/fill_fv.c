@@ -30,6 +30,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fill_private.h"
 #include "varmesh/quality.h"
@@ -54,6 +55,7 @@ typedef struct {
   vm_mesh *m;
   int64_t e0;    /* first tet of the fill */
   int64_t first; /* first vertex that may move */
+  int64_t e1;    /* the flips: the end of the tets from e0 (dead[] covers e0..e1) */
   int32_t *nbr;  /* per cell, per face (6): the cell across a triangle, -1 none */
   int tf[6][4];  /* a tet's faces (vm_elem_faces) */
   double *cc;    /* cell centres */
@@ -131,25 +133,35 @@ static int worst_ok(const fv_worst *W1, const fv_worst *W0) {
          W1->det >= fmin(W0->det, 0.001);
 }
 
-static double face_penalty(const fv_state *S, int64_t e, int j, fv_worst *W) {
-  double deg, skew, w, vr;
-  face_measures(S, e, j, &deg, &skew, &w, &vr);
-  if (W) {
-    W->deg = fmax(W->deg, deg);
-    W->skew = fmax(W->skew, skew);
-    W->w = fmin(W->w, w);
-    W->vr = fmin(W->vr, vr);
-  }
+/* The penalty of a face with these measures, and of a cell with this
+ * determinant. */
+static double face_pen(double deg, double skew, double w, double vr) {
   double p = sq_pos((deg - FV_ORTHO_DEG) / FV_ORTHO_SCALE) + sq_pos(skew - FV_SKEW);
   p += w > 0 ? sq_pos(FV_WEIGHT / w - 1) : 1e6;
   p += vr > 0 ? 4 * sq_pos(log10(FV_VOLRATIO / vr)) : 1e6;
   return isfinite(p) ? p : 1e6;
 }
 
+static double det_pen(double d) { return d > 0 ? 4 * sq_pos(log10(FV_DET / d)) : 1e6; }
+
+static void worst_face(fv_worst *W, double deg, double skew, double w, double vr) {
+  W->deg = fmax(W->deg, deg);
+  W->skew = fmax(W->skew, skew);
+  W->w = fmin(W->w, w);
+  W->vr = fmin(W->vr, vr);
+}
+
+static double face_penalty(const fv_state *S, int64_t e, int j, fv_worst *W) {
+  double deg, skew, w, vr;
+  face_measures(S, e, j, &deg, &skew, &w, &vr);
+  if (W) worst_face(W, deg, skew, w, vr);
+  return face_pen(deg, skew, w, vr);
+}
+
 static double det_penalty(const fv_state *S, int64_t e, fv_worst *W) {
   double d = tet_det(S, e);
   if (W) W->det = fmin(W->det, d);
-  return d > 0 ? 4 * sq_pos(log10(FV_DET / d)) : 1e6;
+  return det_pen(d);
 }
 
 /* Mean ratio of tet x (1 regular, 0 flat), signed by its volume. */
@@ -302,36 +314,42 @@ static int tet_active(const fv_state *S, int64_t e) {
   return 0;
 }
 
-int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
-                      vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved) {
-  int st = VM_OK;
-  fv_state S;
-  memset(&S, 0, sizeof S);
-  S.m = m;
-  S.e0 = e0;
-  S.first = first;
-  *moved = 0;
+static void fv_release(vm_ctx *ctx, fv_state *S) {
+  vm_free(ctx, S->nbr);
+  vm_free(ctx, S->cc);
+  vm_free(ctx, S->vol);
+  vm_free(ctx, S->fixed);
+  vm_free(ctx, S->rp);
+  vm_free(ctx, S->ve);
+  memset(S, 0, sizeof *S);
+}
+
+/* The state of m: cell centres and volumes, each tet face's neighbour,
+ * the vertices' cells, and the vertices that may not move (below first,
+ * on a boundary face, or with a cell around them that is not a tet). */
+static int fv_setup(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, fv_state *S) {
+  memset(S, 0, sizeof *S);
+  S->m = m;
+  S->e0 = e0;
+  S->first = first;
+  S->e1 = m->ne;
   tface *T = NULL;
   int64_t nt = 0;
-  int8_t *sign = NULL;
-  uint8_t *act = NULL, *mv = NULL;
-  S.nbr = vm_alloc_array(ctx, (size_t)m->ne * 6 + 1, sizeof *S.nbr);
-  S.cc = vm_alloc_array(ctx, (size_t)m->ne * 3 + 1, sizeof *S.cc);
-  S.vol = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *S.vol);
-  S.fixed = vm_calloc(ctx, (size_t)m->nv + 1, 1);
-  sign = vm_calloc(ctx, (size_t)m->ne + 1, 1);
-  act = vm_calloc(ctx, (size_t)m->nv + 1, 1);
-  mv = vm_calloc(ctx, (size_t)m->nv + 1, 1);
-  if (!S.nbr || !S.cc || !S.vol || !S.fixed || !sign || !act || !mv) {
+  int st = VM_OK;
+  S->nbr = vm_alloc_array(ctx, (size_t)m->ne * 6 + 1, sizeof *S->nbr);
+  S->cc = vm_alloc_array(ctx, (size_t)m->ne * 3 + 1, sizeof *S->cc);
+  S->vol = vm_alloc_array(ctx, (size_t)m->ne + 1, sizeof *S->vol);
+  S->fixed = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+  if (!S->nbr || !S->cc || !S->vol || !S->fixed) {
     st = VM_ERR_NOMEM;
     goto done;
   }
-  if ((st = vm_mesh_vertex_elements(m, &S.rp, &S.ve))) goto done;
+  if ((st = vm_mesh_vertex_elements(m, &S->rp, &S->ve))) goto done;
   int nfv[6];
-  vm_elem_faces(VM_TET, S.tf, nfv);
+  vm_elem_faces(VM_TET, S->tf, nfv);
   for (int64_t e = 0; e < m->ne; e++) {
-    for (int j = 0; j < 6; j++) S.nbr[6 * e + j] = -1;
-    if (vm_elem_dim(m->etype[e]) == 3) cell_update(&S, e);
+    for (int j = 0; j < 6; j++) S->nbr[6 * e + j] = -1;
+    if (vm_elem_dim(m->etype[e]) == 3) cell_update(S, e);
   }
   /* the two cells of each interior triangle; a boundary face's vertices
    * stay (quads have no fill tet beside them) */
@@ -340,18 +358,39 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
     int64_t k = i + 1;
     while (k < nt && fill_same_face(&T[k], &T[i])) k++;
     if (k - i == 2) {
-      S.nbr[6 * (int64_t)T[i].cell + T[i].face] = T[i + 1].cell;
-      S.nbr[6 * (int64_t)T[i + 1].cell + T[i + 1].face] = T[i].cell;
+      S->nbr[6 * (int64_t)T[i].cell + T[i].face] = T[i + 1].cell;
+      S->nbr[6 * (int64_t)T[i + 1].cell + T[i + 1].face] = T[i].cell;
     } else if (k - i == 1) {
-      for (int r = 0; r < 3; r++) S.fixed[T[i].v[r]] = 1;
+      for (int r = 0; r < 3; r++) S->fixed[T[i].v[r]] = 1;
     }
     i = k;
   }
-  for (int64_t v = 0; v < first && v < m->nv; v++) S.fixed[v] = 1;
+  for (int64_t v = 0; v < first && v < m->nv; v++) S->fixed[v] = 1;
   /* a vertex moves only if every cell around it is a tet */
   for (int64_t v = first; v < m->nv; v++)
-    for (int64_t k = S.rp[v]; k < S.rp[v + 1]; k++)
-      if (m->etype[S.ve[k]] != VM_TET) S.fixed[v] = 1;
+    for (int64_t k = S->rp[v]; k < S->rp[v + 1]; k++)
+      if (m->etype[S->ve[k]] != VM_TET) S->fixed[v] = 1;
+done:
+  vm_free(ctx, T);
+  if (st) fv_release(ctx, S);
+  return st;
+}
+
+int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                      vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved) {
+  fv_state S;
+  *moved = 0;
+  int8_t *sign = NULL;
+  uint8_t *act = NULL, *mv = NULL;
+  int st = fv_setup(ctx, m, e0, first, &S);
+  if (st) return st;
+  sign = vm_calloc(ctx, (size_t)m->ne + 1, 1);
+  act = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+  mv = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+  if (!sign || !act || !mv) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
   for (int64_t e = 0; e < m->ne; e++) {
     if (m->etype[e] != VM_TET) continue;
     double x[12];
@@ -405,15 +444,635 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
   }
   figures(&S, after);
 done:
-  vm_free(ctx, S.nbr);
-  vm_free(ctx, S.cc);
-  vm_free(ctx, S.vol);
-  vm_free(ctx, S.fixed);
-  vm_free(ctx, S.rp);
-  vm_free(ctx, S.ve);
-  vm_free(ctx, T);
+  fv_release(ctx, &S);
   vm_free(ctx, sign);
   vm_free(ctx, act);
   vm_free(ctx, mv);
+  return st;
+}
+
+/* ---------- flips ----------
+ *
+ * Where moving vertices cannot help (a tet whose four vertices are the
+ * envelope's, or a vertex in a gap so narrow that every place for it
+ * leaves a flat tet), the connectivity changes: for each fill tet that
+ * fails one of checkMesh's checks (its determinant below 0.001, or one of
+ * its faces beyond 70 degrees, skewness 4, weight 0.05 or volume ratio
+ * 0.01), each of its six edges whose tets close a ring of 3..FILL_RING_MAX
+ * fill tets is tried by edge removal (every triangulation of the ring's
+ * polygon, 2(n - 2) tets for n; n = 3 is the 3-2 flip) and each of its
+ * faces shared with another fill tet by the 2-3 flip. The candidates must
+ * keep the ring's outer faces (every outer face of the new tets one of
+ * the ring's, each once; the inner ones shared by two new tets), its
+ * volume and the fill's orientation; their cells and faces (the outer
+ * faces' neighbours as they are) are judged by checkMesh's measures: the
+ * one taken has fewer failures than the ring (or as many and half its
+ * penalty), no worst measure beyond a limit that was within it or worse
+ * than it was, and no tet below min(0.1, the ring's least mean ratio).
+ * In rounds: a ring's vertices wait for the next round once a ring around
+ * them changed; tets in index order, so the same result on every run. */
+
+/* rounds at most; the most tets a candidate has or a collapsed vertex's
+ * star may hold */
+enum { FV_FLIP_ROUNDS = 8, FV_CAND_MAX = 40 };
+
+/* An outer face of a ring: its vertices sorted, the cell beyond (-1: a
+ * boundary face), whether a new tet took it. */
+typedef struct {
+  int32_t v[3];
+  int64_t nb;
+  int used;
+} ring_face;
+
+/* The failures, penalty, worst measures and least mean ratio of a set of
+ * cells and their faces. */
+typedef struct {
+  int fails;
+  double pen, q;
+  fv_worst W;
+} fv_judge;
+
+static void judge_init(fv_judge *J) {
+  J->fails = 0;
+  J->pen = 0;
+  J->q = INFINITY;
+  worst_init(&J->W);
+}
+
+static void judge_face(fv_judge *J, double deg, double skew, double w, double vr) {
+  J->fails += deg > 70 || skew > 4 || w < 0.05 || vr < 0.01;
+  J->pen += face_pen(deg, skew, w, vr);
+  worst_face(&J->W, deg, skew, w, vr);
+}
+
+static void judge_det(fv_judge *J, double d) {
+  J->fails += d < 0.001;
+  J->pen += det_pen(d);
+  J->W.det = fmin(J->W.det, d);
+}
+
+static void sort3(int32_t *v) {
+  int32_t t;
+  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
+  if (v[1] > v[2]) t = v[1], v[1] = v[2], v[2] = t;
+  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
+}
+
+/* Is tet e a fill tet that fails a check? */
+static int tet_fails(const fv_state *S, int64_t e) {
+  if (e < S->e0 || e >= S->e1 || S->m->etype[e] != VM_TET) return 0;
+  if (tet_det(S, e) < 0.001) return 1;
+  for (int j = 0; j < 4; j++) {
+    if (S->nbr[6 * e + j] < 0) continue;
+    double deg, skew, w, vr;
+    face_measures(S, e, j, &deg, &skew, &w, &vr);
+    if (deg > 70 || skew > 4 || w < 0.05 || vr < 0.01) return 1;
+  }
+  return 0;
+}
+
+/* The ring's judge: its tets and their faces (a face between two of them
+ * once); its outer faces into F (*nf), its volume and orientation. */
+static void judge_ring(const fv_state *S, const int64_t *ring, int n, fv_judge *J, ring_face *F,
+                       int *nf, double *vol) {
+  judge_init(J);
+  *nf = 0;
+  *vol = 0;
+  for (int r = 0; r < n; r++) {
+    int64_t e = ring[r];
+    double x[12];
+    cell_coords(S->m, e, x);
+    J->q = fmin(J->q, fabs(mean_ratio(x)));
+    *vol += fabs(S->vol[e]);
+    judge_det(J, tet_det(S, e));
+    const int32_t *c = S->m->conn + S->m->eoff[e];
+    for (int j = 0; j < 4; j++) {
+      int64_t b = S->nbr[6 * e + j];
+      int inner = 0;
+      for (int k = 0; k < n && !inner; k++) inner = ring[k] == b;
+      if (inner) {
+        if (b < e) continue;
+      } else {
+        ring_face *f = &F[(*nf)++];
+        for (int i = 0; i < 3; i++) f->v[i] = c[S->tf[j][i]];
+        sort3(f->v);
+        f->nb = b;
+        f->used = 0;
+      }
+      if (b < 0) continue;
+      double deg, skew, w, vr;
+      face_measures(S, e, j, &deg, &skew, &w, &vr);
+      judge_face(J, deg, skew, w, vr);
+    }
+  }
+}
+
+/* The judge of the new tets t[0..k) (4 vertices each, oriented as the
+ * fill) in place of a ring with outer faces F[0..nf) and volume vol0;
+ * 0 if they do not fill the ring (an outer face not the ring's or taken
+ * twice, an inner face not shared by two, another volume). */
+static int judge_new(const fv_state *S, const int32_t (*t)[4], int k, ring_face *F, int nf,
+                     double vol0, fv_judge *J) {
+  const vm_mesh *m = S->m;
+  double cc[FV_CAND_MAX][3], vol[FV_CAND_MAX], vsum = 0;
+  judge_init(J);
+  for (int i = 0; i < nf; i++) F[i].used = 0;
+  for (int i = 0; i < k; i++) {
+    double x[12];
+    for (int a = 0; a < 4; a++) memcpy(x + 3 * a, m->xyz + 3 * (int64_t)t[i][a], 3 * sizeof *x);
+    vm_cell_foam_centre(VM_TET, x, cc[i], &vol[i]);
+    vsum += fabs(vol[i]);
+    J->q = fmin(J->q, fabs(mean_ratio(x)));
+  }
+  if (!(J->q > 0) || !(fabs(vsum - vol0) <= 1e-9 * vol0)) return 0;
+  /* per tet, per face: the other side (new tet i2 >= 0, or -2 - outer
+   * face index) */
+  int side[FV_CAND_MAX][4];
+  for (int i = 0; i < k; i++) {
+    for (int j = 0; j < 4; j++) {
+      int32_t fv[3];
+      for (int a = 0; a < 3; a++) fv[a] = t[i][S->tf[j][a]];
+      sort3(fv);
+      int found = -1, hits = 0;
+      for (int i2 = 0; i2 < k; i2++) {
+        if (i2 == i) continue;
+        for (int j2 = 0; j2 < 4; j2++) {
+          int32_t gv[3];
+          for (int a = 0; a < 3; a++) gv[a] = t[i2][S->tf[j2][a]];
+          sort3(gv);
+          if (!memcmp(fv, gv, sizeof fv)) found = i2, hits++;
+        }
+      }
+      if (hits > 1) return 0;
+      if (hits == 1) {
+        side[i][j] = found;
+        continue;
+      }
+      int o = -1;
+      for (int q = 0; q < nf && o < 0; q++)
+        if (!memcmp(fv, F[q].v, sizeof fv)) o = q;
+      if (o < 0 || F[o].used) return 0;
+      F[o].used = 1;
+      side[i][j] = -2 - o;
+    }
+  }
+  for (int q = 0; q < nf; q++)
+    if (!F[q].used) return 0;
+  for (int i = 0; i < k; i++) {
+    double s[4][3];
+    int ns = 0;
+    for (int j = 0; j < 4; j++) {
+      const int64_t nb = side[i][j] >= 0 ? -1 : F[-2 - side[i][j]].nb;
+      if (side[i][j] < 0 && nb < 0) continue; /* a boundary face */
+      double y[9], c[3];
+      for (int a = 0; a < 3; a++)
+        memcpy(y + 3 * a, m->xyz + 3 * (int64_t)t[i][S->tf[j][a]], 3 * sizeof *y);
+      vm_foam_face(y, 3, c, s[ns]);
+      const double *cn = side[i][j] >= 0 ? cc[side[i][j]] : S->cc + 3 * nb;
+      double vn = side[i][j] >= 0 ? vol[side[i][j]] : S->vol[nb];
+      if (side[i][j] < 0 || side[i][j] > i) {
+        double cs = vm_foam_ortho_cos(c, s[ns], cc[i], cn);
+        double deg = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / FV_PI;
+        double skew = vm_foam_skew(y, 3, c, s[ns], cc[i], cn);
+        double w = vm_foam_weight(c, s[ns], cc[i], cn);
+        double va = fabs(vol[i]), vb = fabs(vn);
+        double vr = va < vb ? (vb > 0 ? va / vb : 0) : (va > 0 ? vb / va : 0);
+        judge_face(J, deg, skew, w, vr);
+      }
+      ns++;
+    }
+    judge_det(J, vm_foam_cell_determinant(ns, (const double(*)[3])s));
+  }
+  return 1;
+}
+
+/* Is judge N (the new tets) better than O (the ring's)? */
+static int judge_better(const fv_judge *N, const fv_judge *O) {
+  if (!worst_ok(&N->W, &O->W) || N->q < fmin(O->q, FV_QMIN)) return 0;
+  return N->fails < O->fails || (N->fails == O->fails && N->fails > 0 && N->pen < 0.5 * O->pen);
+}
+
+/* Of two candidates both better than the ring, is N the better one
+ * (fewer failures, else a lower penalty)? */
+static int judge_less(const fv_judge *N, const fv_judge *B) {
+  return N->fails < B->fails || (N->fails == B->fails && N->pen < B->pen);
+}
+
+/* The orientation of tet t (the sign of its mean ratio; 0 flat). */
+static int tet_sign(const vm_mesh *m, const int32_t *t) {
+  double x[12];
+  for (int a = 0; a < 4; a++) memcpy(x + 3 * a, m->xyz + 3 * (int64_t)t[a], 3 * sizeof *x);
+  double r = mean_ratio(x);
+  return r > 0 ? 1 : r < 0 ? -1 : 0;
+}
+
+/* Tet t of orientation s turned to the fill's (sgn). */
+static void orient_tet(int32_t *t, int s, int sgn) {
+  if (s == sgn) return;
+  int32_t x = t[0];
+  t[0] = t[1];
+  t[1] = x;
+}
+
+/* The tets of m around vertex u that hold vertex v too, into ring (at
+ * most FILL_RING_MAX + 1); -1 if one is not a fill tet or is dead. */
+static int edge_ring(const fv_state *S, const uint8_t *dead, int32_t u, int32_t v, int64_t *ring) {
+  int n = 0;
+  for (int64_t k = S->rp[u]; k < S->rp[u + 1]; k++) {
+    int64_t e = S->ve[k];
+    const int32_t *c = S->m->conn + S->m->eoff[e];
+    int nv = vm_elem_nverts(S->m->etype[e]), hv = 0;
+    for (int i = 0; i < nv; i++) hv |= c[i] == v;
+    if (!hv) continue;
+    if (S->m->etype[e] != VM_TET || e < S->e0 || e >= S->e1 || dead[e - S->e0] || n > FILL_RING_MAX)
+      return -1;
+    ring[n++] = e;
+  }
+  return n;
+}
+
+/* The best flip for failing tet e: the ring into ring (*nring), the new
+ * tets into t (*nt); 0 if none is better. */
+static int best_flip(const fv_state *S, const uint8_t *dead, int64_t e,
+                     int (*tris)[42][FILL_RING_MAX - 2][3], const int *ntri, int64_t *ring,
+                     int *nring, int32_t (*t)[4], int *nt) {
+  const vm_mesh *m = S->m;
+  const int32_t *c = m->conn + m->eoff[e];
+  double x[12];
+  cell_coords(m, e, x);
+  int sgn = mean_ratio(x) < 0 ? -1 : 1;
+  fv_judge best;
+  judge_init(&best);
+  int found = 0;
+  ring_face F[4 * FV_CAND_MAX];
+  int32_t cand[FV_CAND_MAX][4];
+  /* edge removal */
+  static const int ed[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  for (int q = 0; q < 6; q++) {
+    int32_t u = c[ed[q][0]], v = c[ed[q][1]];
+    int64_t rg[FILL_RING_MAX + 1];
+    int n = edge_ring(S, dead, u, v, rg);
+    if (n < 3 || n > FILL_RING_MAX) continue;
+    /* the ring's other vertices, chained into a cycle w[0..n-1] */
+    int32_t pr[FILL_RING_MAX][2], w[FILL_RING_MAX];
+    for (int r = 0; r < n; r++) {
+      const int32_t *d = m->conn + m->eoff[rg[r]];
+      int h = 0;
+      for (int i = 0; i < 4; i++)
+        if (d[i] != u && d[i] != v) pr[r][h++ & 1] = d[i];
+    }
+    uint8_t used[FILL_RING_MAX] = {0};
+    w[0] = pr[0][0];
+    w[1] = pr[0][1];
+    used[0] = 1;
+    int len = 2, closed = 0;
+    for (;;) {
+      int32_t last = w[len - 1];
+      int nx = -1;
+      for (int r = 0; r < n && nx < 0; r++)
+        if (!used[r] && (pr[r][0] == last || pr[r][1] == last)) nx = r;
+      if (nx < 0) break;
+      used[nx] = 1;
+      int32_t y = pr[nx][0] == last ? pr[nx][1] : pr[nx][0];
+      if (y == w[0]) {
+        closed = len == n;
+        break;
+      }
+      if (len == n) break;
+      w[len++] = y;
+    }
+    if (!closed) continue;
+    fv_judge O, N;
+    int nf;
+    double vol0;
+    judge_ring(S, rg, n, &O, F, &nf, &vol0);
+    for (int k = 0; k < ntri[n]; k++) {
+      int ok = 1, nc = 0;
+      for (int j = 0; j < n - 2 && ok; j++) {
+        const int *tr = tris[n][k][j];
+        int32_t a[4] = {w[tr[0]], w[tr[1]], w[tr[2]], u}, b[4] = {w[tr[0]], w[tr[1]], w[tr[2]], v};
+        /* u and v on either side of the triangle */
+        int sa = tet_sign(m, a), sb = tet_sign(m, b);
+        ok = sa * sb < 0;
+        orient_tet(a, sa, sgn);
+        orient_tet(b, sb, sgn);
+        memcpy(cand[nc++], a, sizeof a);
+        memcpy(cand[nc++], b, sizeof b);
+      }
+      if (!ok || !judge_new(S, (const int32_t(*)[4])cand, nc, F, nf, vol0, &N)) continue;
+      if (!judge_better(&N, &O) || (found && !judge_less(&N, &best))) continue;
+      best = N;
+      found = 1;
+      memcpy(t, cand, (size_t)nc * sizeof *cand);
+      *nt = nc;
+      memcpy(ring, rg, (size_t)n * sizeof *rg);
+      *nring = n;
+    }
+  }
+  /* 2-3 flips */
+  for (int j = 0; j < 4; j++) {
+    int64_t b = S->nbr[6 * e + j];
+    if (b < S->e0 || b >= S->e1 || m->etype[b] != VM_TET || dead[b - S->e0]) continue;
+    int32_t f[3], d = -1, g = -1;
+    for (int i = 0; i < 3; i++) f[i] = c[S->tf[j][i]];
+    for (int i = 0; i < 4; i++) {
+      int in = 0;
+      for (int a = 0; a < 3; a++) in |= c[i] == f[a];
+      if (!in) d = c[i];
+    }
+    const int32_t *cb = m->conn + m->eoff[b];
+    for (int i = 0; i < 4; i++) {
+      int in = 0;
+      for (int a = 0; a < 3; a++) in |= cb[i] == f[a];
+      if (!in) g = cb[i];
+    }
+    if (d < 0 || g < 0) continue;
+    int64_t rg[2] = {e, b};
+    fv_judge O, N;
+    int nf;
+    double vol0;
+    judge_ring(S, rg, 2, &O, F, &nf, &vol0);
+    /* the segment from d to g through the face's inside: the three tets
+     * around it turn the same way */
+    int ok = 1, s0 = 0;
+    for (int i = 0; i < 3 && ok; i++) {
+      int32_t a[4] = {f[i], f[(i + 1) % 3], d, g};
+      int sa = tet_sign(m, a);
+      if (!i) s0 = sa;
+      ok = sa != 0 && sa == s0;
+      orient_tet(a, sa, sgn);
+      memcpy(cand[i], a, sizeof a);
+    }
+    if (!ok || !judge_new(S, (const int32_t(*)[4])cand, 3, F, nf, vol0, &N)) continue;
+    if (!judge_better(&N, &O) || (found && !judge_less(&N, &best))) continue;
+    best = N;
+    found = 1;
+    memcpy(t, cand, 3 * sizeof *cand);
+    *nt = 3;
+    memcpy(ring, rg, sizeof rg);
+    *nring = 2;
+  }
+  /* collapses: a free vertex p of e onto a neighbour q; the tets around
+   * p holding q go, the others take q for p (so keep their orientation) */
+  for (int i = 0; i < 4; i++) {
+    int32_t p = c[i];
+    if (S->fixed[p]) continue;
+    int64_t n = S->rp[p + 1] - S->rp[p], rg[FV_CAND_MAX];
+    if (n > FV_CAND_MAX) continue;
+    int ok = 1;
+    for (int64_t k = 0; k < n && ok; k++) {
+      rg[k] = S->ve[S->rp[p] + k];
+      ok = m->etype[rg[k]] == VM_TET && rg[k] >= S->e0 && rg[k] < S->e1 && !dead[rg[k] - S->e0];
+    }
+    if (!ok) continue;
+    fv_judge O, N;
+    int nf;
+    double vol0;
+    judge_ring(S, rg, (int)n, &O, F, &nf, &vol0);
+    for (int64_t k = 0; k < n; k++) {
+      const int32_t *d = m->conn + m->eoff[rg[k]];
+      for (int a = 0; a < 4; a++) {
+        int32_t q = d[a];
+        if (q == p) continue;
+        /* each neighbour once: at its first tet */
+        int seen = 0;
+        for (int64_t k2 = 0; k2 < k && !seen; k2++) {
+          const int32_t *d2 = m->conn + m->eoff[rg[k2]];
+          for (int b2 = 0; b2 < 4; b2++) seen |= d2[b2] == q;
+        }
+        if (seen) continue;
+        int nc = 0, good = 1;
+        for (int64_t k2 = 0; k2 < n && good; k2++) {
+          const int32_t *d2 = m->conn + m->eoff[rg[k2]];
+          int hq = 0;
+          for (int b2 = 0; b2 < 4; b2++) hq |= d2[b2] == q;
+          if (hq) continue;
+          for (int b2 = 0; b2 < 4; b2++) cand[nc][b2] = d2[b2] == p ? q : d2[b2];
+          good = tet_sign(m, cand[nc]) == sgn;
+          nc++;
+        }
+        if (!good || !judge_new(S, (const int32_t(*)[4])cand, nc, F, nf, vol0, &N)) continue;
+        if (!judge_better(&N, &O) || (found && !judge_less(&N, &best))) continue;
+        best = N;
+        found = 1;
+        memcpy(t, cand, (size_t)nc * sizeof *cand);
+        *nt = nc;
+        memcpy(ring, rg, (size_t)n * sizeof *rg);
+        *nring = (int)n;
+      }
+    }
+  }
+  return found;
+}
+
+/* m's elements from e0 on: the live ones of [e0, e0 + ntet) (dead[]),
+ * then the new tets nw[0..nnew) (each taking its element fields from
+ * parent[]), then the rest, in order; the elements before e0 stay. */
+static int replace_tets(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t ntet, const uint8_t *dead,
+                        const int32_t (*nw)[4], const int64_t *parent, int64_t nnew) {
+  int64_t ndead = 0;
+  for (int64_t i = 0; i < ntet; i++) ndead += dead[i];
+  int64_t ne = m->ne - ndead + nnew, nconn = m->eoff[m->ne] - 4 * ndead + 4 * nnew;
+  int64_t *from = vm_alloc_array(ctx, (size_t)ne + 1, sizeof *from); /* >= 0: an old element */
+  uint8_t *ty = vm_alloc_array(ctx, (size_t)ne + 1, 1);
+  int64_t *off = vm_alloc_array(ctx, (size_t)ne + 1, sizeof *off);
+  int32_t *cn = vm_alloc_array(ctx, (size_t)nconn + 1, sizeof *cn);
+  void **fd = vm_calloc(ctx, (size_t)m->nfield + 1, sizeof *fd);
+  int st = VM_OK;
+  if (!from || !ty || !off || !cn || !fd) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  int64_t n = 0;
+  for (int64_t e = 0; e < e0 + ntet; e++)
+    if (e < e0 || !dead[e - e0]) from[n++] = e;
+  for (int64_t i = 0; i < nnew; i++) from[n++] = -1 - i;
+  for (int64_t e = e0 + ntet; e < m->ne; e++) from[n++] = e;
+  off[0] = 0;
+  for (int64_t i = 0; i < ne; i++) {
+    int64_t e = from[i];
+    if (e >= 0) {
+      int k = vm_elem_nverts(m->etype[e]);
+      ty[i] = m->etype[e];
+      memcpy(cn + off[i], m->conn + m->eoff[e], (size_t)k * sizeof *cn);
+      off[i + 1] = off[i] + k;
+    } else {
+      ty[i] = VM_TET;
+      memcpy(cn + off[i], nw[-1 - e], 4 * sizeof *cn);
+      off[i + 1] = off[i] + 4;
+    }
+  }
+  for (int f = 0; f < m->nfield; f++) {
+    const vm_field *fl = &m->fields[f];
+    if (fl->location != VM_FIELD_ELEMENT) continue;
+    size_t isz = (size_t)fl->ncomp * (fl->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
+    char *d = vm_alloc_array(ctx, (size_t)ne + 1, isz);
+    if (!d) {
+      st = VM_ERR_NOMEM;
+      goto done;
+    }
+    fd[f] = d;
+    for (int64_t i = 0; i < ne; i++) {
+      int64_t e = from[i] >= 0 ? from[i] : parent[-1 - from[i]];
+      memcpy(d + (size_t)i * isz, (const char *)fl->data + (size_t)e * isz, isz);
+    }
+  }
+  /* every allocation made: the mesh takes the new arrays */
+  for (int f = 0; f < m->nfield; f++)
+    if (fd[f]) {
+      vm_free(ctx, m->fields[f].data);
+      m->fields[f].data = fd[f];
+      fd[f] = NULL;
+    }
+  vm_free(ctx, m->etype);
+  vm_free(ctx, m->eoff);
+  vm_free(ctx, m->conn);
+  m->etype = ty;
+  m->eoff = off;
+  m->conn = cn;
+  m->ne = m->ecap = ne;
+  m->ccap = nconn;
+  ty = NULL;
+  off = NULL;
+  cn = NULL;
+done:
+  if (fd)
+    for (int f = 0; f < m->nfield; f++) vm_free(ctx, fd[f]);
+  vm_free(ctx, fd);
+  vm_free(ctx, from);
+  vm_free(ctx, ty);
+  vm_free(ctx, off);
+  vm_free(ctx, cn);
+  return st;
+}
+
+/* The vertices from `first` on that no element uses (a collapse's)
+ * dropped, the others renumbered in order (with their flags, surface ids
+ * and vertex fields); *ndrop of them. */
+static int drop_unused(vm_ctx *ctx, vm_mesh *m, int64_t first, int64_t *ndrop) {
+  *ndrop = 0;
+  int64_t *to = vm_alloc_array(ctx, (size_t)m->nv + 1, sizeof *to);
+  if (!to) return VM_ERR_NOMEM;
+  for (int64_t v = 0; v < m->nv; v++) to[v] = v < first ? v : -1;
+  for (int64_t i = 0; i < m->eoff[m->ne]; i++) to[m->conn[i]] = m->conn[i];
+  int64_t n = 0;
+  for (int64_t v = 0; v < m->nv; v++) {
+    if (to[v] < 0) continue;
+    to[v] = n;
+    if (n != v) {
+      memcpy(m->xyz + 3 * n, m->xyz + 3 * v, 3 * sizeof *m->xyz);
+      if (m->vflag) m->vflag[n] = m->vflag[v];
+      if (m->vsurf) m->vsurf[n] = m->vsurf[v];
+      for (int f = 0; f < m->nfield; f++) {
+        vm_field *fl = &m->fields[f];
+        if (fl->location != VM_FIELD_VERTEX) continue;
+        size_t isz =
+            (size_t)fl->ncomp * (fl->type == VM_FIELD_F64 ? sizeof(double) : sizeof(int32_t));
+        memmove((char *)fl->data + (size_t)n * isz, (char *)fl->data + (size_t)v * isz, isz);
+      }
+    }
+    n++;
+  }
+  for (int64_t i = 0; i < m->eoff[m->ne]; i++) m->conn[i] = (int32_t)to[m->conn[i]];
+  *ndrop = m->nv - n;
+  m->nv = n;
+  vm_free(ctx, to);
+  return VM_OK;
+}
+
+static double fv_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips) {
+  *nflips = 0;
+  int(*tris)[42][FILL_RING_MAX - 2][3] = vm_alloc_array(ctx, FILL_RING_MAX + 1, sizeof *tris);
+  if (!tris) return VM_ERR_NOMEM;
+  int ntri[FILL_RING_MAX + 1] = {0};
+  for (int n = 3; n <= FILL_RING_MAX; n++) ntri[n] = fill_polygon_triangulations(n, tris[n]);
+  int st = VM_OK;
+  int64_t first_flips = 0;
+  for (int round = 0; round < FV_FLIP_ROUNDS && !st; round++) {
+    if (vm_ctx_interrupted(ctx)) {
+      st = vm_error(ctx, VM_ERR_INTERRUPTED, "interrupted");
+      break;
+    }
+    /* the fill's tets: e0 up to the first element that is not a tet */
+    int64_t ntet = 0;
+    while (e0 + ntet < m->ne && m->etype[e0 + ntet] == VM_TET) ntet++;
+    fv_state S;
+    double t0 = fv_now();
+    if ((st = fv_setup(ctx, m, e0, first, &S))) break;
+    double t1 = fv_now(), tsel = 0;
+    S.e1 = e0 + ntet;
+    uint8_t *dead = vm_calloc(ctx, (size_t)ntet + 1, 1),
+            *lock = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+    int32_t(*nw)[4] = NULL;
+    int64_t *parent = NULL, nnew = 0, cap = 0, flips = 0, tried = 0;
+    if (!dead || !lock) st = VM_ERR_NOMEM;
+    for (int64_t e = e0; e < e0 + ntet && !st; e++) {
+      double ts = fv_now();
+      int fails = !dead[e - e0] && tet_fails(&S, e);
+      tsel += fv_now() - ts;
+      if (!fails) continue;
+      const int32_t *c = m->conn + m->eoff[e];
+      if (lock[c[0]] || lock[c[1]] || lock[c[2]] || lock[c[3]]) continue;
+      tried++;
+      int64_t ring[FV_CAND_MAX];
+      int32_t t[FV_CAND_MAX][4];
+      int nring = 0, nt = 0;
+      if (!best_flip(&S, dead, e, tris, ntri, ring, &nring, t, &nt)) continue;
+      /* a ring with a locked vertex waits for the next round */
+      int locked = 0;
+      for (int r = 0; r < nring && !locked; r++) {
+        const int32_t *d = m->conn + m->eoff[ring[r]];
+        for (int i = 0; i < 4; i++) locked |= lock[d[i]];
+      }
+      if (locked) continue;
+      if (nnew + nt > cap) {
+        int64_t c2 = 2 * cap + 64;
+        int32_t(*n2)[4] = vm_realloc(ctx, nw, (size_t)c2 * sizeof *nw);
+        if (n2) nw = n2;
+        int64_t *p2 = n2 ? vm_realloc(ctx, parent, (size_t)c2 * sizeof *p2) : NULL;
+        if (!n2 || !p2) {
+          st = VM_ERR_NOMEM;
+          break;
+        }
+        parent = p2;
+        cap = c2;
+      }
+      for (int i = 0; i < nt; i++) {
+        memcpy(nw[nnew], t[i], sizeof t[i]);
+        parent[nnew++] = ring[0];
+      }
+      for (int r = 0; r < nring; r++) {
+        dead[ring[r] - e0] = 1;
+        const int32_t *d = m->conn + m->eoff[ring[r]];
+        for (int i = 0; i < 4; i++) lock[d[i]] = 1;
+      }
+      flips++;
+    }
+    fv_release(ctx, &S);
+    if (!st && flips)
+      st = replace_tets(ctx, m, e0, ntet, dead, (const int32_t(*)[4])nw, parent, nnew);
+    vm_log(ctx, VM_LOG_DEBUG,
+           "fill: flips round %d: %lld failing tets tried, %lld flips (setup %.2f s, selection "
+           "%.2f s, all %.2f s)",
+           round + 1, (long long)tried, (long long)flips, t1 - t0, tsel, fv_now() - t0);
+    vm_free(ctx, dead);
+    vm_free(ctx, lock);
+    vm_free(ctx, nw);
+    vm_free(ctx, parent);
+    *nflips += flips;
+    /* rounds while they make at least a tenth of the first's flips */
+    if (!round) first_flips = flips;
+    if (!flips || 10 * flips < first_flips) break;
+  }
+  vm_free(ctx, tris);
+  int64_t ndrop = 0;
+  if (!st && *nflips && (st = drop_unused(ctx, m, first, &ndrop)) == VM_OK && ndrop)
+    vm_log(ctx, VM_LOG_DEBUG, "fill: flips: %lld vertices collapsed", (long long)ndrop);
   return st;
 }

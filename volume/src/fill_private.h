@@ -19,4 +19,11 @@ int fill_tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n);
 /* Have a and b the same vertices? */
 int fill_same_face(const tface *a, const tface *b);
 
+/* The largest ring of tets around an edge that edge removal takes */
+enum { FILL_RING_MAX = 7 };
+/* The triangulations of the convex polygon 0..n-1 (n <= FILL_RING_MAX):
+ * each a list of n - 2 triangles (i < j < k), into tri (at most 42 of
+ * them, Catalan(5)); returns how many. */
+int fill_polygon_triangulations(int n, int tri[][FILL_RING_MAX - 2][3]);
+
 #endif

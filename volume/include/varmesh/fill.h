@@ -86,6 +86,7 @@ typedef struct vm_fill_report {
   vm_fill_tet_quality before, after; /* before and after the optimization */
   vm_fill_fv_figures fv_before, fv_after; /* before and after the finite-volume relief */
   int64_t fv_moved;                       /* vertices the relief moved */
+  int64_t fv_flips; /* edge removals and 2-3 flips on tets the relief left failing a check */
   double time_fv;
   double time_mesh, time_opt, time_total; /* seconds */
 } vm_fill_report;
@@ -116,6 +117,19 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
  * vertices moved. */
 int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
                       vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved);
+
+/* Flips where the relief leaves a tet of e0.. failing one of checkMesh's
+ * checks (its determinant below 0.001, or one of its faces beyond 70
+ * degrees, skewness 4, weight 0.05 or volume ratio 0.01): edge removal
+ * (rings of 3 to 7 tets), 2-3 flips and collapses of its vertices from
+ * index `first` on that lie on no boundary face and have only tets
+ * around them, each taken only where it leaves fewer failures (or as
+ * many with half the penalty) and no measure beyond a limit it was within.
+ * The tets e0.. must come before any other element from e0 on; the new
+ * ones follow the kept ones and take their element fields from a tet
+ * they replace; collapsed vertices are dropped (the later ones renumbered,
+ * vertex fields with them); *nflips the operations made. */
+int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips);
 
 /* The tet figures of report's vm_fill_tet_quality for any mesh (the
  * envelope ratio over faces shared by a tet and a non-tet cell). */
