@@ -386,8 +386,11 @@ static void flips_case(vm_ctx *ctx) {
     }
   }
   vm_field *vid = NULL, *tag = NULL;
-  vm_mesh_add_field(m0, "vid", VM_FIELD_VERTEX, VM_FIELD_I32, 1, &vid);
-  vm_mesh_add_field(m0, "tag", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, &tag);
+  vm_mesh_add_field(m0, "vid", VM_FIELD_VERTEX, VM_FIELD_I32, 1, NULL);
+  vm_mesh_add_field(m0, "tag", VM_FIELD_ELEMENT, VM_FIELD_I32, 1, NULL);
+  /* (looked up after both: adding a field may move the others) */
+  vid = vm_mesh_find_field(m0, "vid", VM_FIELD_VERTEX);
+  tag = vm_mesh_find_field(m0, "tag", VM_FIELD_ELEMENT);
   for (int64_t v = 0; v < m0->nv; v++) ((int32_t *)vid->data)[v] = (int32_t)v;
   for (int64_t e = 0; e < m0->ne; e++) ((int32_t *)tag->data)[e] = 7;
   int32_t *b0 = NULL;
@@ -448,6 +451,9 @@ static void flips_case(vm_ctx *ctx) {
     vm_mesh_destroy(&m2);
     vm_mesh_destroy(&m);
   }
+  int64_t nf = 0;
+  CHECK(vm_fill_fv_flips(ctx, m0, m0->ne + 1, 0, &nf) == VM_ERR_ARG && nf == 0,
+        "flips: a first tet past the end refused");
   free(b0);
   vm_mesh_destroy(&m0);
 }

@@ -2587,17 +2587,17 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     const vm_fill_fv_figures *b = &rep.fv_after;
     if (o.fv_sweeps > 0 && (b->det_under || b->nonortho_over70 || b->skew_over4 ||
                             b->weight_under || b->volratio_under)) {
-      if ((st = vm_fill_fv_flips(ctx, res, e0, in->nv + F.nv, &rep.fv_flips))) goto done;
+      double t4 = now();
+      int64_t moved = 0, ntet = 0;
+      if ((st = fill_fv_flips_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_flips,
+                                     &rep.fv_after, &moved)))
+        goto done;
+      for (int64_t e = e0; e < res->ne; e++) ntet += res->etype[e] == VM_TET;
+      rep.fv_moved += moved;
+      rep.tets = ntet;
       rep.new_vertices = res->nv - in->nv;
-      if (rep.fv_flips) {
-        vm_fill_fv_figures mid;
-        int64_t moved = 0;
-        if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &mid, &rep.fv_after,
-                                    &moved)))
-          goto done;
-        rep.fv_moved += moved;
-        rep.tets = mid.tets;
-      }
+      vm_log(ctx, VM_LOG_DEBUG, "fill: relief %.2f s, flips and the relief after them %.2f s",
+             t4 - t3, now() - t4);
     }
     rep.time_fv = now() - t3;
     const vm_fill_fv_figures *a = &rep.fv_before;

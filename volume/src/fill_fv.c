@@ -376,10 +376,18 @@ done:
   return st;
 }
 
-int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
-                      vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved) {
+/* The relief; seed (if not NULL, per vertex): the first sweep takes only
+ * the tets with a seeded vertex and their neighbours (what changed since
+ * a relief before); before may be NULL. */
+static int relief_run(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                      const uint8_t *seed, vm_fill_fv_figures *before, vm_fill_fv_figures *after,
+                      int64_t *moved) {
   fv_state S;
   *moved = 0;
+  if (e0 < 0 || e0 > m->ne || first < 0)
+    return vm_error(ctx, VM_ERR_ARG,
+                    "finite-volume relief: first tet %lld or vertex %lld out of range",
+                    (long long)e0, (long long)first);
   int8_t *sign = NULL;
   uint8_t *act = NULL, *mv = NULL;
   int st = fv_setup(ctx, m, e0, first, &S);
@@ -397,7 +405,7 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
     cell_coords(m, e, x);
     sign[e] = mean_ratio(x) < 0 ? -1 : 1;
   }
-  figures(&S, before);
+  if (before) figures(&S, before);
   for (int sw = 0; sw < sweeps; sw++) {
     if (vm_ctx_interrupted(ctx)) {
       st = vm_error(ctx, VM_ERR_INTERRUPTED, "interrupted");
@@ -410,14 +418,18 @@ int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sw
     int64_t nact = 0;
     for (int64_t e = e0; e < m->ne; e++) {
       if (m->etype[e] != VM_TET) continue;
-      int near = !sw;
+      /* the first sweep: every tet, or those at a seeded vertex or beside
+       * one (the seed stands for a sweep before's moves) */
+      int near = !sw && !seed;
+      const uint8_t *by = sw ? mv : seed;
+      uint8_t at = sw ? (uint8_t)sw : 1;
       const int32_t *c = m->conn + m->eoff[e];
-      for (int i = 0; i < 4 && !near; i++) near = mv[c[i]] == sw;
+      for (int i = 0; i < 4 && !near; i++) near = by[c[i]] == at;
       for (int j = 0; j < 4 && !near; j++) {
         int64_t b = S.nbr[6 * e + j];
         if (b < 0 || m->etype[b] != VM_TET) continue;
         const int32_t *d = m->conn + m->eoff[b];
-        for (int i = 0; i < 4 && !near; i++) near = mv[d[i]] == sw;
+        for (int i = 0; i < 4 && !near; i++) near = by[d[i]] == at;
       }
       if (!near || !tet_active(&S, e)) continue;
       for (int i = 0; i < 4; i++)
@@ -449,6 +461,11 @@ done:
   vm_free(ctx, act);
   vm_free(ctx, mv);
   return st;
+}
+
+int vm_fill_fv_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                      vm_fill_fv_figures *before, vm_fill_fv_figures *after, int64_t *moved) {
+  return relief_run(ctx, m, e0, first, sweeps, NULL, before, after, moved);
 }
 
 /* ---------- flips ----------
@@ -715,12 +732,15 @@ static int best_flip(const fv_state *S, const uint8_t *dead, int64_t e,
     if (n < 3 || n > FILL_RING_MAX) continue;
     /* the ring's other vertices, chained into a cycle w[0..n-1] */
     int32_t pr[FILL_RING_MAX][2], w[FILL_RING_MAX];
-    for (int r = 0; r < n; r++) {
+    int two = 1;
+    for (int r = 0; r < n && two; r++) {
       const int32_t *d = m->conn + m->eoff[rg[r]];
       int h = 0;
       for (int i = 0; i < 4; i++)
-        if (d[i] != u && d[i] != v) pr[r][h++ & 1] = d[i];
+        if (d[i] != u && d[i] != v && h < 2) pr[r][h++] = d[i];
+      two = h == 2; /* not a tet with a repeated vertex */
     }
+    if (!two) continue;
     uint8_t used[FILL_RING_MAX] = {0};
     w[0] = pr[0][0];
     w[1] = pr[0][1];
@@ -948,8 +968,8 @@ done:
 
 /* The vertices from `first` on that no element uses (a collapse's)
  * dropped, the others renumbered in order (with their flags, surface ids
- * and vertex fields); *ndrop of them. */
-static int drop_unused(vm_ctx *ctx, vm_mesh *m, int64_t first, int64_t *ndrop) {
+ * and vertex fields, and mask if not NULL); *ndrop of them. */
+static int drop_unused(vm_ctx *ctx, vm_mesh *m, int64_t first, uint8_t *mask, int64_t *ndrop) {
   *ndrop = 0;
   int64_t *to = vm_alloc_array(ctx, (size_t)m->nv + 1, sizeof *to);
   if (!to) return VM_ERR_NOMEM;
@@ -962,6 +982,7 @@ static int drop_unused(vm_ctx *ctx, vm_mesh *m, int64_t first, int64_t *ndrop) {
     if (n != v) {
       memcpy(m->xyz + 3 * n, m->xyz + 3 * v, 3 * sizeof *m->xyz);
       if (m->vflag) m->vflag[n] = m->vflag[v];
+      if (mask) mask[n] = mask[v];
       if (m->vsurf) m->vsurf[n] = m->vsurf[v];
       for (int f = 0; f < m->nfield; f++) {
         vm_field *fl = &m->fields[f];
@@ -986,13 +1007,25 @@ static double fv_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips) {
+/* The flips; *touched (if touched is not NULL; freed by the caller): per
+ * vertex of the mesh after, 1 on the vertices of every ring changed. */
+static int flips_run(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips,
+                     uint8_t **touched) {
   *nflips = 0;
+  if (touched) *touched = NULL;
+  if (e0 < 0 || e0 > m->ne || first < 0)
+    return vm_error(ctx, VM_ERR_ARG, "flips: first tet %lld or vertex %lld out of range",
+                    (long long)e0, (long long)first);
   int(*tris)[42][FILL_RING_MAX - 2][3] = vm_alloc_array(ctx, FILL_RING_MAX + 1, sizeof *tris);
   if (!tris) return VM_ERR_NOMEM;
   int ntri[FILL_RING_MAX + 1] = {0};
   for (int n = 3; n <= FILL_RING_MAX; n++) ntri[n] = fill_polygon_triangulations(n, tris[n]);
   int st = VM_OK;
+  uint8_t *tv = touched ? vm_calloc(ctx, (size_t)m->nv + 1, 1) : NULL;
+  if (touched && !tv) {
+    vm_free(ctx, tris);
+    return VM_ERR_NOMEM;
+  }
   int64_t first_flips = 0;
   for (int round = 0; round < FV_FLIP_ROUNDS && !st; round++) {
     if (vm_ctx_interrupted(ctx)) {
@@ -1051,6 +1084,8 @@ int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t
         dead[ring[r] - e0] = 1;
         const int32_t *d = m->conn + m->eoff[ring[r]];
         for (int i = 0; i < 4; i++) lock[d[i]] = 1;
+        if (tv)
+          for (int i = 0; i < 4; i++) tv[d[i]] = 1;
       }
       flips++;
     }
@@ -1072,7 +1107,25 @@ int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t
   }
   vm_free(ctx, tris);
   int64_t ndrop = 0;
-  if (!st && *nflips && (st = drop_unused(ctx, m, first, &ndrop)) == VM_OK && ndrop)
+  if (!st && *nflips && (st = drop_unused(ctx, m, first, tv, &ndrop)) == VM_OK && ndrop)
     vm_log(ctx, VM_LOG_DEBUG, "fill: flips: %lld vertices collapsed", (long long)ndrop);
+  if (st || !touched)
+    vm_free(ctx, tv);
+  else
+    *touched = tv;
+  return st;
+}
+
+int vm_fill_fv_flips(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips) {
+  return flips_run(ctx, m, e0, first, nflips, NULL);
+}
+
+int fill_fv_flips_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                         int64_t *nflips, vm_fill_fv_figures *after, int64_t *moved) {
+  uint8_t *touched = NULL;
+  *moved = 0;
+  int st = flips_run(ctx, m, e0, first, nflips, &touched);
+  if (!st && *nflips) st = relief_run(ctx, m, e0, first, sweeps, touched, NULL, after, moved);
+  vm_free(ctx, touched);
   return st;
 }

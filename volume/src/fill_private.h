@@ -3,6 +3,7 @@
 #ifndef VM_FILL_PRIVATE_H
 #define VM_FILL_PRIVATE_H
 
+#include "varmesh/fill.h"
 #include "varmesh/mesh.h"
 
 /* A triangular face of a 3D cell: its vertices sorted, the cell, and the
@@ -25,5 +26,11 @@ enum { FILL_RING_MAX = 7 };
  * each a list of n - 2 triangles (i < j < k), into tri (at most 42 of
  * them, Catalan(5)); returns how many. */
 int fill_polygon_triangulations(int n, int tri[][FILL_RING_MAX - 2][3]);
+
+/* The flips (vm_fill_fv_flips), then, if any, the relief (at most
+ * `sweeps`) starting from the vertices of the rings they changed; the
+ * figures after into *after (unchanged if no flip). */
+int fill_fv_flips_relief(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int sweeps,
+                         int64_t *nflips, vm_fill_fv_figures *after, int64_t *moved);
 
 #endif
