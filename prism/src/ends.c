@@ -227,7 +227,7 @@ static void tri_weights(const vm_prism *p, const double *L, int64_t t, int nl, i
       if (u < 0) continue;
       int n = pr_prism_faces[f][3] < 0 ? 3 : 4;
       for (int i = 0; i < n; i++) memcpy(y + 3 * i, x + 3 * pr_prism_faces[f][i], 3 * sizeof *y);
-      double fc[3], fs[3], a[3], b[3];
+      double fc[3], fs[3];
       vm_foam_face(y, n, fc, fs);
       if (outer) {
         /* the fill's tet over the outer face, as a regular one on it (the
@@ -240,13 +240,7 @@ static void tri_weights(const vm_prism *p, const double *L, int64_t t, int nl, i
       } else {
         centre_volume(p, L, u, f == 0 ? k - 1 : f == 1 ? k + 1 : k, cn, &vn);
       }
-      for (int r = 0; r < 3; r++) {
-        a[r] = fc[r] - cp[r];
-        b[r] = cn[r] - fc[r];
-      }
-      double dp = fabs(vm_dot3(fs, a)), dn = fabs(vm_dot3(fs, b));
-      double w = dp + dn > 0 ? (dp < dn ? dp : dn) / (dp + dn) : 0;
-      *nw += !(w >= 0.05);
+      *nw += !(vm_foam_weight(fc, fs, cp, cn) >= 0.05);
       double lo = fabs(vp) < fabs(vn) ? fabs(vp) : fabs(vn),
              hi = fabs(vp) < fabs(vn) ? fabs(vn) : fabs(vp);
       *nv += !(lo >= 0.01 * hi);
@@ -343,7 +337,7 @@ static int keep_patches(vm_prism *p, const double *old, const int32_t *n0, const
 }
 
 int pr_end_layers(vm_prism *p) {
-  if (p->nlev < 2 || (p->nlev < 3 && !p->nlv)) return VM_OK;
+  if (p->nlev < 2) return VM_OK;
   /* short columns given the layers that fit them (end_short): tried
    * where the layer has cells below OpenFOAM's determinant limit, not
    * with a count per region */

@@ -35,7 +35,7 @@ vm_fill_opts vm_fill_opts_default(void) {
   return o;
 }
 
-static double now(void) {
+double fill_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -50,7 +50,7 @@ static int cmp_tface(const void *a, const void *b) {
   return (x->cell > y->cell) - (x->cell < y->cell);
 }
 
-static void sort3(int32_t v[3]) {
+void fill_sort3(int32_t v[3]) {
   int32_t t;
   if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
   if (v[1] > v[2]) t = v[1], v[1] = v[2], v[2] = t;
@@ -74,7 +74,7 @@ int fill_tri_faces(vm_ctx *ctx, const vm_mesh *m, tface **out, int64_t *n) {
     for (int j = 0; j < nf; j++) {
       if (nfv[j] != 3) continue;
       for (int i = 0; i < 3; i++) f[k].v[i] = c[fl[j][i]];
-      sort3(f[k].v);
+      fill_sort3(f[k].v);
       f[k].face = j;
       f[k++].cell = (int32_t)e;
     }
@@ -94,7 +94,7 @@ int fill_same_face(const tface *a, const tface *b) {
 static int64_t find_face(const tface *f, int64_t n, const int32_t *tri) {
   tface key;
   memcpy(key.v, tri, sizeof key.v);
-  sort3(key.v);
+  fill_sort3(key.v);
   key.cell = -1;
   int64_t lo = 0, hi = n;
   while (lo < hi) {
@@ -466,7 +466,7 @@ static int find_envelope(vm_ctx *ctx, const vm_mesh *m, envelope *E) {
       bf[f].v[0] = bf[f].v[1] = bf[f].v[2] = -1;
     } else {
       memcpy(bf[f].v, bfv + 4 * f, sizeof bf[f].v);
-      sort3(bf[f].v);
+      fill_sort3(bf[f].v);
     }
     bf[f].cell = (int32_t)f;
   }
@@ -997,6 +997,26 @@ static void gmsh_result_free(gmsh_result *R) {
 /* Rounds of edge removal at most, and the largest ring taken */
 enum { FLIP_ROUNDS = 4, FLIP_RING_MAX = FILL_RING_MAX };
 
+int fill_ring_cycle(int n, const int64_t (*pr)[2], int64_t *w) {
+  uint8_t used[FILL_RING_MAX + 1] = {0};
+  w[0] = pr[0][0];
+  w[1] = pr[0][1];
+  used[0] = 1;
+  int len = 2;
+  for (;;) {
+    int64_t last = w[len - 1];
+    int found = -1;
+    for (int k = 0; k < n && found < 0; k++)
+      if (!used[k] && (pr[k][0] == last || pr[k][1] == last)) found = k;
+    if (found < 0) return 0;
+    used[found] = 1;
+    int64_t nx = pr[found][0] == last ? pr[found][1] : pr[found][0];
+    if (nx == w[0]) return len == n;
+    if (len == n) return 0;
+    w[len++] = nx;
+  }
+}
+
 /* (fill_private.h) */
 int fill_polygon_triangulations(int n, int tri[][FILL_RING_MAX - 2][3]) {
   /* depth first over the choices: the pending edge (lo, hi) with the
@@ -1200,28 +1220,11 @@ static int flip_slivers(vm_ctx *ctx, gmsh_result *R, size_t nenv, int64_t *nflip
         }
         if (over || n < 3 || n > FLIP_RING_MAX) continue;
         /* chain the pairs into a cycle w[0..n-1] */
+        int64_t pq[FLIP_RING_MAX + 1][2], wq[FLIP_RING_MAX];
+        for (int k = 0; k < n; k++) pq[k][0] = (int64_t)pr[k][0], pq[k][1] = (int64_t)pr[k][1];
+        if (!fill_ring_cycle(n, (const int64_t(*)[2])pq, wq)) continue;
         size_t w[FLIP_RING_MAX];
-        uint8_t used[FLIP_RING_MAX + 1] = {0};
-        w[0] = pr[0][0];
-        w[1] = pr[0][1];
-        used[0] = 1;
-        int len = 2, closed = 0;
-        while (len <= n) {
-          size_t last = w[len - 1];
-          int found = -1;
-          for (int k = 0; k < n && found < 0; k++)
-            if (!used[k] && (pr[k][0] == last || pr[k][1] == last)) found = k;
-          if (found < 0) break;
-          used[found] = 1;
-          size_t nx = pr[found][0] == last ? pr[found][1] : pr[found][0];
-          if (nx == w[0]) {
-            closed = len == n;
-            break;
-          }
-          if (len == n) break;
-          w[len++] = nx;
-        }
-        if (!closed) continue;
+        for (int k = 0; k < n; k++) w[k] = (size_t)wq[k];
         /* the ring's own least angle and volume */
         double old = PI, vol0 = 0;
         for (int k = 0; k < n; k++) {
@@ -2094,14 +2097,14 @@ static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_sur
     const int32_t *q = o->conn + o->eoff[nkeep + t];
     for (int j = 0; j < 4; j++) {
       for (int i = 0; i < 3; i++) tf[nf].v[i] = q[tf4[j][i]];
-      sort3(tf[nf].v);
+      fill_sort3(tf[nf].v);
       tf[nf++].cell = 0;
     }
   }
   for (int64_t f = 0; f < E->nf + F->nf; f++) {
     for (int i = 0; i < 3; i++)
       tf[nf].v[i] = f < E->nf ? E->fv[3 * f + i] : (int32_t)(base + F->fv[3 * (f - E->nf) + i]);
-    sort3(tf[nf].v);
+    fill_sort3(tf[nf].v);
     tf[nf++].cell = 1; /* a boundary triangle: sorts after the tets' faces */
   }
   qsort(tf, (size_t)nf, sizeof *tf, cmp_tface);
@@ -2241,7 +2244,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   vm_fill_report rep;
   memset(&rep, 0, sizeof rep);
   *out = NULL;
-  double t0 = now();
+  double t0 = fill_now();
   if (!(o.farfield > 0) || !(o.growth > 1) || o.opt_rings < 0 || o.opt_iter < 0 || o.fv_sweeps < 0)
     return vm_error(ctx, VM_ERR_ARG,
                     "fill: farfield > 0, growth > 1, rings, iterations and sweeps >= 0 needed");
@@ -2374,7 +2377,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
          (long long)E.nf, rep.env_size_min, rep.env_size_max,
          o.shape == VM_FAR_SPHERE ? "sphere" : "box", H, o.farfield, L, (long long)F.nf,
          rep.far_size, o.algorithm == 10 ? "HXT" : "Delaunay", o.growth);
-  double t1 = now();
+  double t1 = fill_now();
   double *q = NULL;
   int64_t nq = 0;
   nrm = vm_calloc(ctx, (size_t)(3 * nenv + 3), sizeof *nrm);
@@ -2454,7 +2457,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     gmsh_result R2;
     vm_mesh *res2 = NULL;
     int st2;
-    double tp = now();
+    double tp = fill_now();
     if (pass >= FILL_GMSH_PASSES) {
       int64_t nins = 0;
       st2 = gmsh_result_copy(&R, &R2);
@@ -2463,11 +2466,11 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
       vm_log(ctx, VM_LOG_INFO,
              "fill: %lld of the %lld points inserted in their slivers' cavities (the others "
              "made no better tets or had no star-shaped cavity), %.2f s",
-             (long long)nins, (long long)(nq - nq0), now() - tp);
+             (long long)nins, (long long)(nq - nq0), fill_now() - tp);
     } else {
       st2 = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, reverse, &R2, NULL);
       vm_log(ctx, VM_LOG_DEBUG, "fill: Gmsh again with %lld points, %.2f s", (long long)nq,
-             now() - tp);
+             fill_now() - tp);
     }
     if (!st2) st2 = merge(ctx, in, &E, &F, &R2, &res2);
     if (st2 == VM_OK) {
@@ -2519,7 +2522,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   vm_free(ctx, seen);
   vm_free(ctx, src);
   if (st) goto done;
-  rep.time_mesh = now() - t1;
+  rep.time_mesh = fill_now() - t1;
   if (vm_ctx_interrupted(ctx)) {
     st = vm_error(ctx, VM_ERR_INTERRUPTED, "interrupted");
     goto done;
@@ -2566,9 +2569,9 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
          rep.before.sj_min, rep.before.vol_ratio_env, rep.before.vol_ratio_tets);
   rep.after = rep.before;
   if (o.opt_iter > 0 && o.opt_rings > 0) {
-    double t2 = now();
+    double t2 = fill_now();
     if ((st = optimize_band(ctx, res, &E, in->nv + F.nv, F.nv, &o, &rep.opt_free))) goto done;
-    rep.time_opt = now() - t2;
+    rep.time_opt = fill_now() - t2;
     if ((st = tet_quality_from(ctx, res, e0, &rep.after))) goto done;
     vm_log(ctx, VM_LOG_INFO,
            "fill: optimized %lld vertices within %d rings of the envelope in %.2f s: min "
@@ -2579,7 +2582,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   }
   {
     /* with no sweep, the figures alone (before = after) */
-    double t3 = now();
+    double t3 = fill_now();
     if ((st = vm_fill_fv_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_before,
                                 &rep.fv_after, &rep.fv_moved)))
       goto done;
@@ -2587,7 +2590,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     const vm_fill_fv_figures *b = &rep.fv_after;
     if (o.fv_sweeps > 0 && (b->det_under || b->nonortho_over70 || b->skew_over4 ||
                             b->weight_under || b->volratio_under)) {
-      double t4 = now();
+      double t4 = fill_now();
       int64_t moved = 0, ntet = 0;
       if ((st = fill_fv_flips_relief(ctx, res, e0, in->nv + F.nv, o.fv_sweeps, &rep.fv_flips,
                                      &rep.fv_after, &moved)))
@@ -2597,9 +2600,9 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
       rep.tets = ntet;
       rep.new_vertices = res->nv - in->nv;
       vm_log(ctx, VM_LOG_DEBUG, "fill: relief %.2f s, flips and the relief after them %.2f s",
-             t4 - t3, now() - t4);
+             t4 - t3, fill_now() - t4);
     }
-    rep.time_fv = now() - t3;
+    rep.time_fv = fill_now() - t3;
     const vm_fill_fv_figures *a = &rep.fv_before;
     vm_log(ctx, VM_LOG_INFO,
            "fill: finite-volume relief moved %lld vertices and made %lld flips in %.2f s; faces "
@@ -2615,7 +2618,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
            (long long)b->det_under);
     if ((st = tet_quality_from(ctx, res, e0, &rep.after))) goto done;
   }
-  rep.time_total = now() - t0;
+  rep.time_total = fill_now() - t0;
   *out = res;
   res = NULL;
 done:

@@ -30,7 +30,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "fill_private.h"
 #include "varmesh/quality.h"
@@ -97,20 +96,27 @@ static double tet_det(const fv_state *S, int64_t e) {
   return vm_foam_cell_determinant(k, (const double(*)[3])s);
 }
 
-/* The measures of face j of tet e (an internal face): non-orthogonality
- * in degrees, skewness, weight, volume ratio. */
+/* The measures of triangle y (centre c, area vector s) between the cells
+ * centred at cp and cn of volumes vp and vn: non-orthogonality in
+ * degrees, skewness, weight, volume ratio. */
+static void tri_measures(const double *y, const double *c, const double *s, const double *cp,
+                         const double *cn, double vp, double vn, double *deg, double *skew,
+                         double *w, double *vr) {
+  double cs = vm_foam_ortho_cos(c, s, cp, cn);
+  *deg = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / FV_PI;
+  *skew = vm_foam_skew(y, 3, c, s, cp, cn);
+  *w = vm_foam_weight(c, s, cp, cn);
+  double va = fabs(vp), vb = fabs(vn);
+  *vr = va < vb ? (vb > 0 ? va / vb : 0) : (va > 0 ? vb / va : 0);
+}
+
+/* The measures of face j of tet e (an internal face). */
 static void face_measures(const fv_state *S, int64_t e, int j, double *deg, double *skew, double *w,
                           double *vr) {
   int64_t b = S->nbr[6 * e + j];
   double y[12], c[3], s[3];
   tet_face(S, e, j, y, c, s);
-  const double *cp = S->cc + 3 * e, *cn = S->cc + 3 * b;
-  double cs = vm_foam_ortho_cos(c, s, cp, cn);
-  *deg = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / FV_PI;
-  *skew = vm_foam_skew(y, 3, c, s, cp, cn);
-  *w = vm_foam_weight(c, s, cp, cn);
-  double va = fabs(S->vol[e]), vb = fabs(S->vol[b]);
-  *vr = va < vb ? (vb > 0 ? va / vb : 0) : (va > 0 ? vb / va : 0);
+  tri_measures(y, c, s, S->cc + 3 * e, S->cc + 3 * b, S->vol[e], S->vol[b], deg, skew, w, vr);
 }
 
 static double sq_pos(double x) { return x > 0 ? x * x : 0; }
@@ -528,13 +534,6 @@ static void judge_det(fv_judge *J, double d) {
   J->W.det = fmin(J->W.det, d);
 }
 
-static void sort3(int32_t *v) {
-  int32_t t;
-  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
-  if (v[1] > v[2]) t = v[1], v[1] = v[2], v[2] = t;
-  if (v[0] > v[1]) t = v[0], v[0] = v[1], v[1] = t;
-}
-
 /* Is tet e a fill tet that fails a check? */
 static int tet_fails(const fv_state *S, int64_t e) {
   if (e < S->e0 || e >= S->e1 || S->m->etype[e] != VM_TET) return 0;
@@ -572,7 +571,7 @@ static void judge_ring(const fv_state *S, const int64_t *ring, int n, fv_judge *
       } else {
         ring_face *f = &F[(*nf)++];
         for (int i = 0; i < 3; i++) f->v[i] = c[S->tf[j][i]];
-        sort3(f->v);
+        fill_sort3(f->v);
         f->nb = b;
         f->used = 0;
       }
@@ -609,14 +608,14 @@ static int judge_new(const fv_state *S, const int32_t (*t)[4], int k, ring_face 
     for (int j = 0; j < 4; j++) {
       int32_t fv[3];
       for (int a = 0; a < 3; a++) fv[a] = t[i][S->tf[j][a]];
-      sort3(fv);
+      fill_sort3(fv);
       int found = -1, hits = 0;
       for (int i2 = 0; i2 < k; i2++) {
         if (i2 == i) continue;
         for (int j2 = 0; j2 < 4; j2++) {
           int32_t gv[3];
           for (int a = 0; a < 3; a++) gv[a] = t[i2][S->tf[j2][a]];
-          sort3(gv);
+          fill_sort3(gv);
           if (!memcmp(fv, gv, sizeof fv)) found = i2, hits++;
         }
       }
@@ -648,12 +647,8 @@ static int judge_new(const fv_state *S, const int32_t (*t)[4], int k, ring_face 
       const double *cn = side[i][j] >= 0 ? cc[side[i][j]] : S->cc + 3 * nb;
       double vn = side[i][j] >= 0 ? vol[side[i][j]] : S->vol[nb];
       if (side[i][j] < 0 || side[i][j] > i) {
-        double cs = vm_foam_ortho_cos(c, s[ns], cc[i], cn);
-        double deg = acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / FV_PI;
-        double skew = vm_foam_skew(y, 3, c, s[ns], cc[i], cn);
-        double w = vm_foam_weight(c, s[ns], cc[i], cn);
-        double va = fabs(vol[i]), vb = fabs(vn);
-        double vr = va < vb ? (vb > 0 ? va / vb : 0) : (va > 0 ? vb / va : 0);
+        double deg, skew, w, vr;
+        tri_measures(y, c, s[ns], cc[i], cn, vol[i], vn, &deg, &skew, &w, &vr);
         judge_face(J, deg, skew, w, vr);
       }
       ns++;
@@ -731,7 +726,7 @@ static int best_flip(const fv_state *S, const uint8_t *dead, int64_t e,
     int n = edge_ring(S, dead, u, v, rg);
     if (n < 3 || n > FILL_RING_MAX) continue;
     /* the ring's other vertices, chained into a cycle w[0..n-1] */
-    int32_t pr[FILL_RING_MAX][2], w[FILL_RING_MAX];
+    int64_t pr[FILL_RING_MAX][2], w[FILL_RING_MAX];
     int two = 1;
     for (int r = 0; r < n && two; r++) {
       const int32_t *d = m->conn + m->eoff[rg[r]];
@@ -740,28 +735,7 @@ static int best_flip(const fv_state *S, const uint8_t *dead, int64_t e,
         if (d[i] != u && d[i] != v && h < 2) pr[r][h++] = d[i];
       two = h == 2; /* not a tet with a repeated vertex */
     }
-    if (!two) continue;
-    uint8_t used[FILL_RING_MAX] = {0};
-    w[0] = pr[0][0];
-    w[1] = pr[0][1];
-    used[0] = 1;
-    int len = 2, closed = 0;
-    for (;;) {
-      int32_t last = w[len - 1];
-      int nx = -1;
-      for (int r = 0; r < n && nx < 0; r++)
-        if (!used[r] && (pr[r][0] == last || pr[r][1] == last)) nx = r;
-      if (nx < 0) break;
-      used[nx] = 1;
-      int32_t y = pr[nx][0] == last ? pr[nx][1] : pr[nx][0];
-      if (y == w[0]) {
-        closed = len == n;
-        break;
-      }
-      if (len == n) break;
-      w[len++] = y;
-    }
-    if (!closed) continue;
+    if (!two || !fill_ring_cycle(n, (const int64_t(*)[2])pr, w)) continue;
     fv_judge O, N;
     int nf;
     double vol0;
@@ -770,7 +744,8 @@ static int best_flip(const fv_state *S, const uint8_t *dead, int64_t e,
       int ok = 1, nc = 0;
       for (int j = 0; j < n - 2 && ok; j++) {
         const int *tr = tris[n][k][j];
-        int32_t a[4] = {w[tr[0]], w[tr[1]], w[tr[2]], u}, b[4] = {w[tr[0]], w[tr[1]], w[tr[2]], v};
+        int32_t a[4] = {(int32_t)w[tr[0]], (int32_t)w[tr[1]], (int32_t)w[tr[2]], u},
+                b[4] = {(int32_t)w[tr[0]], (int32_t)w[tr[1]], (int32_t)w[tr[2]], v};
         /* u and v on either side of the triangle */
         int sa = tet_sign(m, a), sb = tet_sign(m, b);
         ok = sa * sb < 0;
@@ -1001,12 +976,6 @@ static int drop_unused(vm_ctx *ctx, vm_mesh *m, int64_t first, uint8_t *mask, in
   return VM_OK;
 }
 
-static double fv_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* The flips; *touched (if touched is not NULL; freed by the caller): per
  * vertex of the mesh after, 1 on the vertices of every ring changed. */
 static int flips_run(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t *nflips,
@@ -1036,9 +1005,9 @@ static int flips_run(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t
     int64_t ntet = 0;
     while (e0 + ntet < m->ne && m->etype[e0 + ntet] == VM_TET) ntet++;
     fv_state S;
-    double t0 = fv_now();
+    double t0 = fill_now();
     if ((st = fv_setup(ctx, m, e0, first, &S))) break;
-    double t1 = fv_now();
+    double t1 = fill_now();
     S.e1 = e0 + ntet;
     uint8_t *dead = vm_calloc(ctx, (size_t)ntet + 1, 1),
             *lock = vm_calloc(ctx, (size_t)m->nv + 1, 1);
@@ -1092,7 +1061,7 @@ static int flips_run(vm_ctx *ctx, vm_mesh *m, int64_t e0, int64_t first, int64_t
     vm_log(ctx, VM_LOG_DEBUG,
            "fill: flips round %d: %lld failing tets tried, %lld flips (%.2f s, %.2f s of it the "
            "neighbours)",
-           round + 1, (long long)tried, (long long)flips, fv_now() - t0, t1 - t0);
+           round + 1, (long long)tried, (long long)flips, fill_now() - t0, t1 - t0);
     vm_free(ctx, dead);
     vm_free(ctx, lock);
     vm_free(ctx, nw);
