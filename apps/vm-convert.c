@@ -12,7 +12,7 @@
 
 typedef struct {
   const char *in, *out;
-  int fin, fout, strict;
+  int fin, fout, strict, mirror;
   vm_write_opts wo;
 } args;
 
@@ -27,6 +27,10 @@ static const vm_opt opts[] = {
      "binary output where the format has both (vtk, msh, stl, ply, foam)", .ival = 1},
     {"--msh22", NULL, VM_OPT_FLAG, A(wo.msh_version), NULL, "write Gmsh 2.2 instead of 4.1",
      .ival = 22},
+    {"--mirror", NULL, VM_OPT_FLAG, A(mirror), NULL,
+     "a half model (its symmetry plane named in the mesh, as the stages write it): write the "
+     "whole, the half and its mirror image, the faces in the plane left out",
+     .ival = 1},
     {"--strict", NULL, VM_OPT_FLAG, A(strict), NULL,
      "exit 3, writing nothing, if the output format cannot carry everything", .ival = 1},
     VM_CLI_OPT_QUIET("no warnings"),
@@ -125,6 +129,13 @@ int main(int argc, char **argv) {
     goto done;
   }
   int st = vm_mesh_read(cli.ctx, a.in, a.fin, &m);
+  if (st >= 0 && a.mirror) {
+    vm_mesh *whole = NULL;
+    if ((st = vm_mesh_mirror(cli.ctx, m, &whole)) >= 0) {
+      vm_mesh_destroy(&m);
+      m = whole;
+    }
+  }
   if (st >= 0 && a.strict) {
     st = strict_trial(&cli, m, a.out, a.fout, &a.wo);
     if (st == VM_WARN_LOSSY) {

@@ -111,6 +111,11 @@ static void print_json(const args *a, const vm_fill_report *r) {
       (long long)r->layer_cells, (long long)r->env_faces, (long long)r->far_faces,
       (long long)r->tets, (long long)r->new_vertices, (long long)r->opt_free,
       (long long)r->flat_env_tets, r->time_mesh, r->time_opt, r->time_total);
+  if (r->sym_axis >= 0)
+    printf(", \"symmetry_plane\": \"%c=%.17g\", \"symmetry_faces\": %lld", "xyz"[r->sym_axis],
+           r -> sym_value, (long long)r -> sym_faces);
+  else
+    printf(", \"symmetry_plane\": null");
   printf(", \"model_length\": ");
   vm_json_double(stdout, r->model_length);
   printf(", \"farfield_distance\": ");
@@ -190,14 +195,18 @@ int main(int argc, char **argv) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
+  char half[96] = "";
+  if (rep.sym_axis >= 0)
+    snprintf(half, sizeof half, "; a half model: the symmetry plane %c = %g, %lld triangles",
+             "xyz"[rep.sym_axis], rep.sym_value, (long long)rep.sym_faces);
   if (!cli.quiet)
     fprintf(stderr,
             "vm-fill: %s: %lld layer cells + %lld tets (%lld new vertices), envelope %lld "
-            "triangles kept exactly; far field %lld triangles at %g; Gmsh %.2f s, "
+            "triangles kept exactly; far field %lld triangles at %g%s; Gmsh %.2f s, "
             "optimization %.2f s, finite-volume relief %.2f s\n",
             a.out, (long long)rep.layer_cells, (long long)rep.tets, (long long)rep.new_vertices,
-            (long long)rep.env_faces, (long long)rep.far_faces, rep.far_distance, rep.time_mesh,
-            rep.time_opt, rep.time_fv);
+            (long long)rep.env_faces, (long long)rep.far_faces, rep.far_distance, half,
+            rep.time_mesh, rep.time_opt, rep.time_fv);
   if (a.json) print_json(&a, &rep);
 done:
   vm_mesh_destroy(&res);

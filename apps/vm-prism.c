@@ -241,6 +241,7 @@ typedef struct {
   const char *in, *out, *report;
   const char *region;        /* --region-thickness FIELD:ID=X,... */
   const char *region_layers; /* --region-layers FIELD:ID=N,... */
+  const char *symmetry;      /* --symmetry auto | none | AXIS=VALUE */
   double T_abs, T_rel;
   double yplus, reynolds, ref_length; /* --yplus: the first height by the flat plate */
   int growth_given;                   /* --growth given (else solved for a first height) */
@@ -597,6 +598,12 @@ static const vm_opt opts[] = {
      "OpenFOAM's determinant limit, a squeezed patch of short columns takes the schedule's "
      "layers that fit it, ending in pyramids and tets, if that halves such cells around it)",
      .ival = 0},
+    {"--symmetry", NULL, VM_OPT_STRING, A(symmetry), "PLANE",
+     "a half model: y=0 (x=C, y=C or z=C) is its symmetry plane, which the wall's open "
+     "boundary must lie in exactly; the columns there stay in it, and the layer's faces on it "
+     "form the boundary 'symmetry' (default auto: an open wall whose border lies in such a "
+     "plane is a half model; none: an open wall is refused)",
+     .error = "expects auto, none or a plane such as y=0"},
     {"--no-orient", NULL, VM_OPT_FLAG, A(o.orient), NULL,
      "refuse a wall oriented inwards (default: its triangles are turned, with a warning, so "
      "the layer grows outside)",
@@ -648,8 +655,10 @@ static const vm_cli_spec spec = {
     2,
     "need IN and OUT"};
 
-/* The model's length: the largest extent of the wall's bounding box. */
-static double model_length(const vm_mesh *m) {
+/* The model's length: the largest extent of the wall's bounding box (a
+ * half model's: of the whole model, its mirror image in its symmetry
+ * plane included). */
+static double model_length(vm_ctx *ctx, const vm_mesh *m) {
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int64_t e = 0; e < m->ne; e++) {
     if (m->etype[e] != VM_TRI && m->etype[e] != VM_QUAD) continue;
@@ -660,7 +669,34 @@ static double model_length(const vm_mesh *m) {
         hi[c] = fmax(hi[c], v);
       }
   }
+  int ax;
+  double c;
+  if (vm_prism_half_plane(ctx, m, &ax, &c) > 0) {
+    double r = fmax(fabs(hi[ax] - c), fabs(lo[ax] - c));
+    lo[ax] = c - r;
+    hi[ax] = c + r;
+  }
   return fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
+}
+
+/* --symmetry: auto, none, or AXIS=VALUE (x, y or z; a finite number). */
+static int symmetry_opt(vm_cli *cli, const char *v, vm_prism_opts *o) {
+  if (!strcmp(v, "auto")) {
+    o->symmetry_axis = 0;
+    return VM_EXIT_OK;
+  }
+  if (!strcmp(v, "none")) {
+    o->symmetry_axis = -1;
+    return VM_EXIT_OK;
+  }
+  const char *ax = strchr("xyz", v[0]);
+  char *end = NULL;
+  double c = v[0] && ax && v[1] == '=' ? strtod(v + 2, &end) : NAN;
+  if (!ax || !end || end == v + 2 || *end || !isfinite(c))
+    return vm_cli_usage_error(cli, "--symmetry '%s': expects auto, none or a plane such as y=0", v);
+  o->symmetry_axis = (int)(ax - "xyz") + 1;
+  o->symmetry_value = c;
+  return VM_EXIT_OK;
 }
 
 /* Intersecting pairs of the written mesh's layers (the final check). */
@@ -745,6 +781,14 @@ static void print_json(const char *in, const char *out, const vm_prism_report *r
          (long long)r.ended_columns, (long long)r.ended_kept, (long long)r.pyramids,
          (long long)r.tets);
   printf(", \"short_ended\": %lld", (long long)r.short_ended);
+  if (r.sym_axis >= 0) {
+    printf(", \"symmetry_plane\": \"%c=%.17g\", \"symmetry_columns\": %lld, "
+           "\"symmetry_snapped\": %lld, \"symmetry_crossing\": %lld",
+           "xyz"[r.sym_axis], r.sym_value, (long long)r.sym_columns, (long long)r.sym_snapped,
+           (long long)r.sym_crossing);
+  } else {
+    printf(", \"symmetry_plane\": null");
+  }
   printf(", \"full_fraction\": ");
   vm_json_double(stdout, r.full_fraction);
   printf(", \"thickness_min\": ");
@@ -964,7 +1008,7 @@ int main(int argc, char **argv) {
     rc = vm_cli_input_error(&cli, NULL);
     goto done;
   }
-  double L = model_length(m);
+  double L = model_length(cli.ctx, m);
   if (!(L > 0)) {
     vm_cli_error(&cli, "%s: no triangles (or all in one point)", a.in);
     rc = VM_EXIT_INPUT;
@@ -1000,7 +1044,7 @@ int main(int argc, char **argv) {
                             sizeof surface_said)) != VM_EXIT_OK)
       goto done;
     surface_ran = 1;
-    L = model_length(m);
+    L = model_length(cli.ctx, m);
   } else if (nneedle > 0 && a.keep_wall) {
     vm_log(cli.ctx, VM_LOG_WARN,
            "%s: %lld triangles under 1 degree (smallest %.3g): columns over needles fall short "
@@ -1017,7 +1061,7 @@ int main(int argc, char **argv) {
                             sizeof surface_said)) != VM_EXIT_OK)
       goto done;
     surface_ran = 1;
-    L = model_length(m);
+    L = model_length(cli.ctx, m);
   }
   /* a wall that folds back on itself somewhere (a triangle turned over
    * onto its neighbours, needles folded against theirs, the rim of a
@@ -1026,6 +1070,7 @@ int main(int argc, char **argv) {
    * surface stage ends with the same step) */
   if (!a.keep_wall && (rc = unblind_wall(&cli, a.in, m, &folds)) != VM_EXIT_OK) goto done;
   vm_prism_opts *o = &a.o;
+  if (a.symmetry && (rc = symmetry_opt(&cli, a.symmetry, o)) != VM_EXIT_OK) goto done;
   o->thickness = a.T_abs > 0 ? a.T_abs : a.T_rel * L;
   /* a thickness lost in rounding against the model's coordinates is a
    * usage error, not a bad wall */

@@ -13,7 +13,19 @@ int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs) {
   if (!p->faces && (st = pr_layer_faces_create(p->ctx, p->rt, &p->k.isect, p->o.check_incremental,
                                                p->nw, p->nt, p->tri, p->ned, p->edge, &p->faces)))
     return st;
-  return pr_layer_faces_query(p->ctx, p->faces, p->layer->xyz, mark, npairs);
+  if ((st = pr_layer_faces_query(p->ctx, p->faces, p->layer->xyz, mark, npairs))) return st;
+  /* a half model: a top on or beyond the symmetry plane (other than its
+   * own columns' there) would meet the mirror image's layer; counted as a
+   * pair, its column cut */
+  if (p->sym_ax >= 0) {
+    const double *top = p->layer->xyz + 3 * p->nw;
+    for (int64_t v = 0; v < p->nw; v++)
+      if (!pr_on_sym(p, v) && !pr_sym_inside(p, top + 3 * v)) {
+        ++*npairs;
+        if (mark) mark[v] = 1;
+      }
+  }
+  return VM_OK;
 }
 
 /* Re-solve only around the marked columns: the top vertices within
@@ -45,13 +57,13 @@ static int local_solve(vm_prism *p, const uint8_t *mark, int max_iter, int *iter
     for (int i = 0; i < 3; i++)
       if (reg[p->tri[3 * t + i]]) act[t] = 1;
   uint8_t *fl = p->layer->vflag + nw;
-  for (int64_t v = 0; v < nw; v++) fl[v] = reg[v] ? VM_VERTEX_FREE : VM_VERTEX_FIXED;
+  for (int64_t v = 0; v < nw; v++) fl[v] = reg[v] ? pr_moving_flag(p, v) : VM_VERTEX_FIXED;
   if ((st = vm_problem_set_active(p->prob, act)) == VM_OK) {
     st = pr_solve(p, p->prob, p->layer, VM_MINIMIZER_IMPLICIT, max_iter, VM_PRISM_PHASE_CUT, iters);
     int s2 = vm_problem_set_active(p->prob, NULL);
     if (st >= 0 && s2) st = s2;
   }
-  for (int64_t v = 0; v < nw; v++) fl[v] = VM_VERTEX_FREE;
+  for (int64_t v = 0; v < nw; v++) fl[v] = pr_moving_flag(p, v);
 done:
   vm_free(ctx, reg);
   vm_free(ctx, tmp);

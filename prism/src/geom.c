@@ -79,11 +79,25 @@ double pr_tilt_deg(const double *o, const double *x, const double *n) {
   return acos(cs < -1 ? -1 : cs > 1 ? 1 : cs) * 180 / PR_PI;
 }
 
+/* Vertex v's incident face normals as the visibility tests see them: its
+ * triangles', and on a half model's symmetry plane their mirror images
+ * too (the whole model's star). How many; normal j into f. */
+static int64_t star_count(const pr_surf *p, int64_t v) {
+  int64_t d = p->vt_off[v + 1] - p->vt_off[v];
+  return p->onsym && p->onsym[v] ? 2 * d : d;
+}
+static void star_normal(const pr_surf *p, int64_t v, const double *fn, int64_t j, double *f) {
+  int64_t d = p->vt_off[v + 1] - p->vt_off[v];
+  memcpy(f, fn + 3 * (int64_t)p->vt[p->vt_off[v] + j % d], 3 * sizeof *f);
+  if (j >= d) f[p->sym_ax] = -f[p->sym_ax];
+}
+
 /* min over the incident faces of n . f */
 static double min_visibility(const pr_surf *p, int64_t v, const double *fn, const double *n) {
-  double m = INFINITY;
-  for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
-    double d = vm_dot3(n, fn + 3 * (int64_t)p->vt[k]);
+  double m = INFINITY, f[3];
+  for (int64_t j = 0, nj = star_count(p, v); j < nj; j++) {
+    star_normal(p, v, fn, j, f);
+    double d = vm_dot3(n, f);
     if (d < m) m = d;
   }
   return m;
@@ -94,23 +108,26 @@ static double min_visibility(const pr_surf *p, int64_t v, const double *fn, cons
 static double best_visible(const pr_surf *p, int64_t v, const double *fn, int iters, double *n) {
   double best[3] = {n[0], n[1], n[2]};
   double bm = min_visibility(p, v, fn, n);
-  double c[3] = {n[0], n[1], n[2]};
+  double c[3] = {n[0], n[1], n[2]}, f[3], fw[3] = {0, 0, 0};
+  int64_t nj = star_count(p, v);
   for (int it = 1; it <= iters; it++) {
     double wm = INFINITY;
-    int32_t wt = -1;
-    for (int64_t k = p->vt_off[v]; k < p->vt_off[v + 1]; k++) {
-      double d = vm_dot3(c, fn + 3 * (int64_t)p->vt[k]);
+    int found = 0;
+    for (int64_t j = 0; j < nj; j++) {
+      star_normal(p, v, fn, j, f);
+      double d = vm_dot3(c, f);
       if (d < wm) {
         wm = d;
-        wt = p->vt[k];
+        memcpy(fw, f, sizeof fw);
+        found = 1;
       }
     }
     if (wm > bm) {
       bm = wm;
       memcpy(best, c, sizeof best);
     }
-    if (wt < 0) break;
-    for (int k = 0; k < 3; k++) c[k] += (fn[3 * (int64_t)wt + k] - c[k]) / (it + 1);
+    if (!found) break;
+    for (int k = 0; k < 3; k++) c[k] += (fw[k] - c[k]) / (it + 1);
     double u[3] = {c[0], c[1], c[2]};
     if (vm_normalize3(u) == 0) break;
     double d = min_visibility(p, v, fn, u);
@@ -129,14 +146,22 @@ static double best_visible(const pr_surf *p, int64_t v, const double *fn, int it
 static int exact_visible(const pr_surf *p, int64_t v, const double *fn, double *n) {
   enum { KMAX = 24 };
   double f[3 * KMAX], e[3];
-  int k = 0;
-  for (int64_t j = p->vt_off[v]; j < p->vt_off[v + 1]; j++) {
-    if (k == KMAX) return 0;
-    memcpy(f + 3 * k++, fn + 3 * (int64_t)p->vt[j], 3 * sizeof *f);
-  }
-  if (!(vm_visible_direction(f, k, e) > 0)) return 0;
+  int64_t nj = star_count(p, v);
+  if (nj > KMAX) return 0;
+  for (int64_t j = 0; j < nj; j++) star_normal(p, v, fn, j, f + 3 * j);
+  if (!(vm_visible_direction(f, (int)nj, e) > 0)) return 0;
   memcpy(n, e, sizeof e);
   return 1;
+}
+
+/* A direction of a vertex in the symmetry plane taken into the plane (the
+ * whole model's is symmetric): over its star with the mirror images, the
+ * projection sees every face at least as well as n did, and the
+ * normalization only raises that. 0 if nothing is left. */
+static int into_plane(const pr_surf *p, int64_t v, double *n) {
+  if (!p->onsym || !p->onsym[v]) return 1;
+  n[p->sym_ax] = 0;
+  return vm_normalize3(n) > 0;
 }
 
 int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, const double *xyz,
@@ -174,10 +199,17 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
   int64_t blind = 0;
   for (int64_t v = 0; v < nw; v++) {
     double *n = dir + 3 * v;
-    if (vm_normalize3(n) == 0) n[2] = 1;
+    if (!into_plane(p, v, n) || vm_normalize3(n) == 0) {
+      memset(n, 0, 3 * sizeof *n);
+      n[p->onsym && p->onsym[v] && p->sym_ax == 2 ? 0 : 2] = 1;
+    }
     if (vnrm) memcpy(vnrm + 3 * v, n, 3 * sizeof *n);
     if (min_visibility(p, v, fn, n) < kp->visible_min &&
         best_visible(p, v, fn, kp->visible_iter, n) <= 0 && !exact_visible(p, v, fn, n)) {
+      if (!blind && first_blind) *first_blind = v;
+      blind++;
+    }
+    if (!into_plane(p, v, n)) {
       if (!blind && first_blind) *first_blind = v;
       blind++;
     }
@@ -199,7 +231,7 @@ int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *p, const pr_dir_params *kp, 
         for (int c = 0; c < 3; c++)
           s[c] += kp->blend_weight * dir[3 * (int64_t)p->vv[k] + c] /
                   (double)(p->vv_off[v + 1] - p->vv_off[v]);
-      if (vm_normalize3(s) == 0) continue;
+      if (!into_plane(p, v, s) || vm_normalize3(s) == 0) continue;
       double m1 = min_visibility(p, v, fn, s);
       if (m1 >= kp->blend_keep || m1 >= m0) memcpy(tmp + 3 * v, s, sizeof s);
     }

@@ -28,7 +28,11 @@ double pr_tilt_deg(const double *o, const double *x, const double *n);
 
 /* A closed triangulated surface's connectivity, as plain arrays: nt
  * triangles (3 vertex indices each) on nv vertices, vertex -> triangles
- * and vertex -> neighbour vertices in CSR form. Borrowed, never owned. */
+ * and vertex -> neighbour vertices in CSR form. Borrowed, never owned.
+ * A half model's surface is closed by its mirror image in the plane
+ * x[sym_ax] = const: its open boundary lies in that plane, and the
+ * vertices there (onsym[v] = 1) see their triangles' mirror images too
+ * (sym_ax -1, onsym NULL: a closed surface). */
 typedef struct pr_surf {
   int64_t nv, nt;
   const int32_t *tri;
@@ -36,6 +40,8 @@ typedef struct pr_surf {
   const int32_t *vt;
   const int64_t *vv_off;
   const int32_t *vv;
+  int sym_ax;
+  const uint8_t *onsym;
 } pr_surf;
 
 /* Unit angle-weighted vertex normals of the surface s at coordinates xyz,
@@ -46,7 +52,9 @@ typedef struct pr_surf {
  * vnrm may be NULL; dir receives the blended directions. Returns the
  * number of vertices where no visible direction was found, the first of
  * them into *first_blind (may be NULL; ctx: scratch memory; without it the
- * blending is skipped). */
+ * blending is skipped). On a half model (s->onsym) the directions of the
+ * vertices in the symmetry plane are those of the whole model: in the
+ * plane, their component across it exactly 0. */
 int64_t pr_surface_dirs(vm_ctx *ctx, const pr_surf *s, const pr_dir_params *k, const double *xyz,
                         double *fn, double *vnrm, double *dir, int blend_passes,
                         int64_t *first_blind);

@@ -931,7 +931,7 @@ static int solve_patch(vm_prism *p, const int8_t *ring, int stack, int *applied)
     for (int k = 0; k <= nl; k++) {
       int64_t i = k * nc + vid[v];
       memcpy(m->xyz + 3 * i, p->lev + k * lsz + 3 * v, 3 * sizeof *m->xyz);
-      m->vflag[i] = k == 0 || k == nl || ring[v] < 0 ? VM_VERTEX_FIXED : 0;
+      m->vflag[i] = k == 0 || k == nl || ring[v] < 0 ? VM_VERTEX_FIXED : pr_moving_flag(p, v);
     }
   }
   for (int k = 0; k < nl; k++) {
@@ -1247,6 +1247,7 @@ int vm_prism_march(vm_prism *p) {
     goto done;
   for (int64_t v = 0; v < nw; v++) {
     m2->vflag[v] = VM_VERTEX_FIXED;
+    m2->vflag[nw + v] = pr_moving_flag(p, v);
     m2->vflag[2 * nw + v] = VM_VERTEX_FIXED;
   }
   for (int64_t s = 0; s < 2; s++)

@@ -130,9 +130,46 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
   int st;
   if (!p->rt && (st = pr_rt_create(ctx, &p->rt))) return st;
   wall_geom g = {NULL, xyz, tri, fnrm};
-  g.box = vm_alloc_array(ctx, (size_t)nt * 6, sizeof *g.box);
-  if (!g.box) return VM_ERR_NOMEM;
-  RTCScene scene = pr_tri_scene(p->rt, xyz, tri, NULL, nt, 0, g.box, &g, NULL, NULL);
+  /* a half model's balls are stopped by its mirror image too: triangles
+   * nt..2nt - 1 are the mirror images of 0..nt - 1 (turned, so that they
+   * face outwards) */
+  double *mx = NULL, *mf = NULL;
+  int32_t *mt = NULL;
+  int64_t ntq = nt;
+  if (p->sym_ax >= 0) {
+    int ax = p->sym_ax;
+    mx = vm_alloc_array(ctx, (size_t)(6 * nv), sizeof *mx);
+    mf = vm_alloc_array(ctx, (size_t)(6 * nt), sizeof *mf);
+    mt = vm_alloc_array(ctx, (size_t)(6 * nt), sizeof *mt);
+    if (!mx || !mf || !mt) {
+      vm_free(ctx, mx);
+      vm_free(ctx, mf);
+      vm_free(ctx, mt);
+      return VM_ERR_NOMEM;
+    }
+    memcpy(mx, xyz, (size_t)(3 * nv) * sizeof *mx);
+    memcpy(mx + 3 * nv, xyz, (size_t)(3 * nv) * sizeof *mx);
+    for (int64_t v = 0; v < nv; v++) mx[3 * (nv + v) + ax] = 2 * p->sym_val - xyz[3 * v + ax];
+    memcpy(mf, fnrm, (size_t)(3 * nt) * sizeof *mf);
+    memcpy(mf + 3 * nt, fnrm, (size_t)(3 * nt) * sizeof *mf);
+    memcpy(mt, tri, (size_t)(3 * nt) * sizeof *mt);
+    for (int64_t t = 0; t < nt; t++) {
+      mf[3 * (nt + t) + ax] = -fnrm[3 * t + ax];
+      mt[3 * (nt + t)] = (int32_t)(tri[3 * t] + nv);
+      mt[3 * (nt + t) + 1] = (int32_t)(tri[3 * t + 2] + nv);
+      mt[3 * (nt + t) + 2] = (int32_t)(tri[3 * t + 1] + nv);
+    }
+    g = (wall_geom){NULL, mx, mt, mf};
+    ntq = 2 * nt;
+  }
+  g.box = vm_alloc_array(ctx, (size_t)ntq * 6, sizeof *g.box);
+  if (!g.box) {
+    vm_free(ctx, mx);
+    vm_free(ctx, mf);
+    vm_free(ctx, mt);
+    return VM_ERR_NOMEM;
+  }
+  RTCScene scene = pr_tri_scene(p->rt, g.xyz, g.tri, NULL, ntq, 0, g.box, &g, NULL, NULL);
   st = pr_rt_check(ctx, p->rt, "scene build (medial radius)");
   const double cos_sep = cos(p->k.medial_sep_deg * PR_PI / 180);
   const int max_iter = p->k.medial_iter;
@@ -178,11 +215,18 @@ int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, cons
   rtcReleaseScene(scene);
   if (st == VM_OK) st = pr_rt_check(ctx, p->rt, "point query (medial radius)");
   vm_free(ctx, g.box);
+  vm_free(ctx, mx);
+  vm_free(ctx, mf);
+  vm_free(ctx, mt);
   return st;
 }
 
 int pr_ball_faces_back(const vm_prism *p, int64_t hit, const double *fnrm, const double *n) {
-  return hit >= 0 && vm_dot3(fnrm + 3 * hit, n) < -cos(p->k.slot_face_deg * PR_PI / 180);
+  if (hit < 0) return 0;
+  double f[3];
+  memcpy(f, fnrm + 3 * (hit % p->nt), sizeof f);
+  if (hit >= p->nt) f[p->sym_ax] = -f[p->sym_ax]; /* a mirror image's */
+  return vm_dot3(f, n) < -cos(p->k.slot_face_deg * PR_PI / 180);
 }
 
 /* The wall vertices in a gap narrower than half their triangles' edges:

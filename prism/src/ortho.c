@@ -529,8 +529,17 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     g[r] = (a1.e - a0.e) / fd;
     xv[r] = x0[r];
   }
+  /* a column in a half model's symmetry plane moves in it: across its
+   * course there (an outer vertex: in the plane and the outer surface's
+   * tangent plane, which the mirror image makes symmetric) */
+  int insym = pr_on_sym(p, v);
+  if (insym) {
+    tc[p->sym_ax] = 0;
+    if (vm_normalize3(tc) == 0) return 0;
+  }
   double gt = vm_dot3(g, tc);
   for (int r = 0; r < 3; r++) g[r] -= gt * tc[r];
+  if (insym) g[p->sym_ax] = 0;
   double lg = vm_norm3(g);
   if (!(lg > 0)) return 0;
   double step = kp->ortho_relief_step * hloc / lg;
@@ -555,6 +564,8 @@ static int relieve(vm_prism *p, const int32_t *nbt, facemap *fm, const double *q
     if (b == nb) step = 1;
     const double *dg = b < nb ? g : kink;
     for (int r = 0; r < 3; r++) xv[r] = x0[r] - step * dg[r];
+    /* nothing else reaches a half model's symmetry plane */
+    if (!insym && !pr_sym_inside(p, xv)) continue;
     if (!eval_around(p, &h, c0, qfloor, split, &a1)) continue;
     if (!(a1.e < a0.e) || a1.skew > skew_max || a1.cmin < cfloor || a1.badtets > a0.badtets ||
         a1.concave > a0.concave || a1.wmin < wfloor || a1.splitbad > a0.splitbad ||

@@ -95,6 +95,10 @@ static int check_opts(vm_ctx *ctx, const vm_prism_opts *o) {
   if (o->springback_iter < 0 || o->resolve_iter < 0 || o->max_cut_rounds < 0 ||
       o->smooth_iter < 0 || o->march_iter < 0)
     return vm_error(ctx, VM_ERR_ARG, "prism: negative iteration limit");
+  if (o->symmetry_axis < -1 || o->symmetry_axis > 3 ||
+      (o->symmetry_axis > 0 && !isfinite(o->symmetry_value)))
+    return vm_error(ctx, VM_ERR_ARG, "prism: symmetry axis %d (-1..3) or value %g",
+                    o->symmetry_axis, o->symmetry_value);
   if (!(o->ortho_weight >= 1) || !isfinite(o->ortho_weight))
     return vm_error(ctx, VM_ERR_ARG, "prism: orthogonality weight %g (>= 1)", o->ortho_weight);
   if (!(o->drop_quality >= 0 && o->drop_quality < 1) || !(o->full_tol >= 0 && o->full_tol < 1))
@@ -167,6 +171,179 @@ static int cmp_he(const void *x, const void *y) {
   if (a->a != b->a) return a->a < b->a ? -1 : 1;
   if (a->b != b->b) return a->b < b->b ? -1 : 1;
   return (a->t > b->t) - (a->t < b->t);
+}
+
+static int cmp_pair(const void *x, const void *y) {
+  const int32_t *a = x, *b = y;
+  if (a[0] != b[0]) return a[0] < b[0] ? -1 : 1;
+  return (a[1] > b[1]) - (a[1] < b[1]);
+}
+
+int vm_prism_half_plane(vm_ctx *ctx, const vm_mesh *wall, int *axis, double *value) {
+  *axis = -1;
+  *value = 0;
+  int64_t ne = 0;
+  for (int64_t e = 0; e < wall->ne; e++)
+    ne += wall->etype[e] == VM_TRI ? 3 : wall->etype[e] == VM_QUAD ? 4 : 0;
+  if (!ne) return 0;
+  int32_t *ed = vm_alloc_array(ctx, (size_t)(2 * ne), sizeof *ed);
+  if (!ed) return VM_ERR_NOMEM;
+  int64_t k = 0;
+  for (int64_t e = 0; e < wall->ne; e++) {
+    int n = wall->etype[e] == VM_TRI ? 3 : wall->etype[e] == VM_QUAD ? 4 : 0;
+    const int32_t *c = wall->conn + wall->eoff[e];
+    for (int i = 0; i < n; i++, k++) {
+      int32_t a = c[i], b = c[(i + 1) % n];
+      ed[2 * k] = a < b ? a : b;
+      ed[2 * k + 1] = a < b ? b : a;
+    }
+  }
+  qsort(ed, (size_t)ne, 2 * sizeof *ed, cmp_pair);
+  int found = 0, live[3] = {1, 1, 1};
+  double c0[3] = {0, 0, 0};
+  for (int64_t i = 0; i < ne;) {
+    int64_t j = i + 1;
+    while (j < ne && ed[2 * j] == ed[2 * i] && ed[2 * j + 1] == ed[2 * i + 1]) j++;
+    if (j - i == 1)
+      for (int s = 0; s < 2; s++) {
+        const double *x = wall->xyz + 3 * (int64_t)ed[2 * i + s];
+        for (int a = 0; a < 3; a++) {
+          if (!found) c0[a] = x[a];
+          live[a] = live[a] && x[a] == c0[a];
+        }
+        found = 1;
+      }
+    i = j;
+  }
+  vm_free(ctx, ed);
+  for (int a = 0; found && a < 3; a++)
+    if (live[a]) {
+      *axis = a;
+      *value = c0[a];
+      return 1;
+    }
+  return 0;
+}
+
+/* An open wall: a half model if its open boundary lies in a plane x, y or
+ * z = const, bit for bit (the one asked for, o.symmetry_axis 1..3, or the
+ * one it lies in, 0), in simple loops, the wall on one side of it. Sets
+ * the plane and the columns in it; refuses anything else with where. */
+static int half_model(vm_prism *p, int64_t open) {
+  vm_ctx *ctx = p->ctx;
+  const vm_prism_opts *o = &p->o;
+  static const char axn[] = "xyz";
+  if (o->symmetry_axis < 0)
+    return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not closed (%lld open edges)",
+                    (long long)open);
+  uint8_t *deg = vm_calloc(ctx, (size_t)p->nw, sizeof *deg);
+  if (!deg) return VM_ERR_NOMEM;
+  int64_t first = -1;
+  for (int64_t e = 0; e < p->ned; e++)
+    if (p->etri[2 * e + 1] < 0)
+      for (int s = 0; s < 2; s++) {
+        int32_t v = p->edge[2 * e + s];
+        if (deg[v] < 255) deg[v]++;
+        if (first < 0) first = v;
+      }
+  int64_t nb = 0;
+  for (int64_t v = 0; v < p->nw; v++) {
+    if (!deg[v]) continue;
+    nb++;
+    if (deg[v] != 2) {
+      const double *x = p->wall + 3 * v;
+      int d = deg[v];
+      vm_free(ctx, deg);
+      return vm_error(ctx, VM_ERR_ARG,
+                      "prism: the wall's open boundary is not a set of simple loops: %d open "
+                      "edges meet at (%g, %g, %g)",
+                      d, x[0], x[1], x[2]);
+    }
+  }
+  /* the plane: asked for, or the axis on which every border vertex has
+   * the first one's coordinate exactly */
+  int ax = o->symmetry_axis - 1;
+  double c = o->symmetry_value;
+  if (ax < 0) {
+    for (int a = 0; a < 3 && ax < 0; a++) {
+      double c0 = p->wall[3 * first + a];
+      int all = 1;
+      for (int64_t v = 0; v < p->nw && all; v++)
+        if (deg[v]) all = p->wall[3 * v + a] == c0;
+      if (all) {
+        ax = a;
+        c = c0;
+      }
+    }
+  }
+  if (ax < 0) {
+    /* no such plane: the nearest one (the axis whose border coordinates
+     * spread least, at their midrange) and its farthest vertex */
+    double best = INFINITY, bc = 0;
+    int ba = 0;
+    for (int a = 0; a < 3; a++) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (int64_t v = 0; v < p->nw; v++)
+        if (deg[v]) {
+          lo = fmin(lo, p->wall[3 * v + a]);
+          hi = fmax(hi, p->wall[3 * v + a]);
+        }
+      if (hi - lo < best) {
+        best = hi - lo;
+        ba = a;
+        bc = 0.5 * (lo + hi);
+      }
+    }
+    int64_t far = first;
+    for (int64_t v = 0; v < p->nw; v++)
+      if (deg[v] && fabs(p->wall[3 * v + ba] - bc) > fabs(p->wall[3 * far + ba] - bc)) far = v;
+    const double *x = p->wall + 3 * far;
+    vm_free(ctx, deg);
+    return vm_error(ctx, VM_ERR_ARG,
+                    "prism: the wall is not closed (%lld open edges) and its open boundary is "
+                    "not in a plane x, y or z = const, as a half model's is: the nearest is "
+                    "%c = %g, and the border vertex (%g, %g, %g) is %g off it (vm-surface puts "
+                    "a half model's border on its plane)",
+                    (long long)open, axn[ba], bc, x[0], x[1], x[2], fabs(x[ba] - bc));
+  }
+  /* every border vertex exactly in it (the plane asked for) */
+  for (int64_t v = 0; v < p->nw; v++)
+    if (deg[v] && p->wall[3 * v + ax] != c) {
+      int64_t far = v;
+      for (int64_t u = v; u < p->nw; u++)
+        if (deg[u] && fabs(p->wall[3 * u + ax] - c) > fabs(p->wall[3 * far + ax] - c)) far = u;
+      const double *x = p->wall + 3 * far;
+      vm_free(ctx, deg);
+      return vm_error(ctx, VM_ERR_ARG,
+                      "prism: the wall's open boundary is not on the symmetry plane %c = %g: "
+                      "the border vertex (%g, %g, %g) is %g off it",
+                      axn[ax], c, x[0], x[1], x[2], fabs(x[ax] - c));
+    }
+  /* the wall on one side: the side of the vertex farthest from the plane */
+  int64_t far = 0;
+  for (int64_t v = 1; v < p->nw; v++)
+    if (fabs(p->wall[3 * v + ax] - c) > fabs(p->wall[3 * far + ax] - c)) far = v;
+  double side = p->wall[3 * far + ax] > c ? 1 : -1;
+  for (int64_t v = 0; v < p->nw; v++) {
+    const double *x = p->wall + 3 * v;
+    if (deg[v] || (x[ax] - c) * side > 0) continue;
+    vm_free(ctx, deg);
+    return vm_error(ctx, VM_ERR_ARG,
+                    "prism: the half model's wall %s its symmetry plane %c = %g at (%g, %g, "
+                    "%g), away from its open boundary",
+                    (x[ax] - c) * side < 0 ? "crosses" : "touches", axn[ax], c, x[0], x[1], x[2]);
+  }
+  for (int64_t v = 0; v < p->nw; v++) deg[v] = deg[v] ? 1 : 0;
+  p->onsym = deg;
+  p->nsym = nb;
+  p->sym_ax = ax;
+  p->sym_val = c;
+  p->sym_side = side;
+  vm_log(ctx, VM_LOG_INFO,
+         "prism: a half model: the wall's open boundary (%lld edges, %lld vertices) lies in the "
+         "symmetry plane %c = %g; its columns stay in it",
+         (long long)open, (long long)nb, axn[ax], c);
+  return VM_OK;
 }
 
 static int build_adjacency(vm_prism *p) {
@@ -257,13 +434,19 @@ static int build_adjacency(vm_prism *p) {
     }
     if (dirs != 1) flipped++;
   }
-  if (open || flipped) {
+  if (flipped) {
     vm_free(ctx, fill);
-    if (open)
-      return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not closed (%lld open edges)",
-                      (long long)open);
     return vm_error(ctx, VM_ERR_ARG, "prism: the wall is not consistently oriented (%lld edges)",
                     (long long)flipped);
+  }
+  int st = open ? half_model(p, open) : VM_OK;
+  if (!open && p->o.symmetry_axis > 0)
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "prism: a symmetry plane was asked for, but the wall is closed (a half "
+                  "model's wall is open, its border in the plane)");
+  if (st < 0) {
+    vm_free(ctx, fill);
+    return st;
   }
   for (int64_t e = 0; e < ned; e++) {
     p->vv_off[p->edge[2 * e] + 1]++;
@@ -478,6 +661,7 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   p->k = pr_params_default();
   p->t0 = omp_get_wtime();
   p->nt = nt;
+  p->sym_ax = -1;
   int32_t *map = vm_alloc_array(ctx, (size_t)(wall->nv ? wall->nv : 1), sizeof *map);
   p->tri = vm_alloc_array(ctx, (size_t)(3 * nt), sizeof *p->tri);
   if (!map || !p->tri) {
@@ -657,12 +841,19 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     }
   }
   /* outward: the enclosed volume is positive */
+  /* (a half model's from a point on its symmetry plane: the plane's cap
+   * closing it adds nothing) */
   double vol = 0;
   for (int64_t t = 0; t < nt; t++) {
-    const double *a = p->wall + 3 * (int64_t)p->tri[3 * t],
-                 *b = p->wall + 3 * (int64_t)p->tri[3 * t + 1],
-                 *c = p->wall + 3 * (int64_t)p->tri[3 * t + 2];
-    double x[3];
+    double a[3], b[3], c[3], x[3];
+    memcpy(a, p->wall + 3 * (int64_t)p->tri[3 * t], sizeof a);
+    memcpy(b, p->wall + 3 * (int64_t)p->tri[3 * t + 1], sizeof b);
+    memcpy(c, p->wall + 3 * (int64_t)p->tri[3 * t + 2], sizeof c);
+    if (p->sym_ax >= 0) {
+      a[p->sym_ax] -= p->sym_val;
+      b[p->sym_ax] -= p->sym_val;
+      c[p->sym_ax] -= p->sym_val;
+    }
     vm_cross3(b, c, x);
     vol += vm_dot3(a, x);
   }
@@ -706,6 +897,9 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
     p->h[v] = p->tv[v];
     p->cap[v] = p->tv[v];
   }
+  p->rep.sym_axis = p->sym_ax;
+  p->rep.sym_value = p->sym_val;
+  p->rep.sym_columns = p->nsym;
   p->rep.wall_vertices = nw;
   p->rep.wall_triangles = nt;
   p->rep.thickness = o.thickness;
@@ -723,7 +917,7 @@ void vm_prism_destroy(vm_prism **pp) {
   vm_mesh_destroy(&p->layer);
   void *arrays[] = {p->wall, p->tri,    p->fnrm,   p->vnrm, p->dir,  p->elen, p->smooth, p->vt_off,
                     p->vt,   p->vv_off, p->vv,     p->edge, p->etri, p->h,    p->cap,    p->cut,
-                    p->lev,  p->sched,  p->medial, p->tv,   p->nlv,  p->h1v};
+                    p->lev,  p->sched,  p->medial, p->tv,   p->nlv,  p->h1v,  p->onsym};
   for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++) vm_free(ctx, arrays[i]);
   vm_free(ctx, p);
   *pp = NULL;
@@ -744,6 +938,7 @@ static int run_phases(vm_prism *p) {
                                       vm_prism_restore, vm_prism_march};
   for (int k = p->done; k < VM_PRISM_NPHASES; k++) {
     st = phase[k](p);
+    pr_sym_settle(p);
     p->rep.peak_mb[k] = vm_peak_memory_mb();
     if (st < 0) return st;
     if (st == VM_WARN_TIME) p->rep.timed_out = 1;

@@ -1,6 +1,7 @@
 /* prism/src/report.c: the result mesh of a run (the levels as prisms, the
  * wall and outer triangles, fields and names) and its measured figures. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,6 +24,66 @@ static const double *levels(const vm_prism *p, int *nlev) {
   }
   *nlev = p->layer ? 2 : 0;
   return p->layer ? p->layer->xyz : NULL;
+}
+
+void pr_sym_settle(vm_prism *p) {
+  if (p->sym_ax < 0) return;
+  int nlev;
+  const double *L = levels(p, &nlev);
+  if (!L) return;
+  double *X = (double *)L;
+  int64_t nw = p->nw, snapped = 0, crossing = 0;
+  int ax = p->sym_ax, top = nlev - 1;
+  for (int k = 1; k < nlev; k++)
+    for (int64_t v = 0; v < nw; v++) {
+      double *x = X + 3 * ((int64_t)k * nw + v);
+      if (pr_on_sym(p, v)) {
+        if (x[ax] != p->sym_val) {
+          x[ax] = p->sym_val;
+          snapped++;
+          if (k == top && p->done >= 5) p->layer->xyz[3 * (nw + v) + ax] = p->sym_val;
+        }
+      } else if (!pr_sym_inside(p, x)) {
+        crossing++;
+      }
+    }
+  p->rep.sym_snapped += snapped;
+  p->rep.sym_crossing = crossing;
+  if (snapped)
+    vm_log(p->ctx, VM_LOG_WARN,
+           "prism: %lld vertices of the columns in the symmetry plane had left it and were put "
+           "back",
+           (long long)snapped);
+}
+
+/* The face on a half model's symmetry plane of cell (t, k) of nl layers
+ * over the wall's open edge a -> b: its nodes as columns and levels (a's
+ * upwards, then b's downwards), how many (3 or 4; 0: the cell has no face
+ * there, its layers ended at both). */
+static int sym_face(const vm_prism *p, int64_t t, int k, int nl, int32_t a, int32_t b, int32_t *col,
+                    int *lv) {
+  int32_t cc[6];
+  int ll[6];
+  int type = pr_cell_nodes(p, t, k, nl, cc, ll);
+  int nv = type == VM_PRISM ? 6 : type == VM_PYRAMID ? 5 : type == VM_TET ? 4 : 0, n = 0;
+  for (int s = 0; s < 2; s++) {
+    int32_t c = s ? b : a;
+    int lo = INT32_MAX, hi = -1;
+    for (int i = 0; i < nv; i++)
+      if (cc[i] == c) {
+        lo = ll[i] < lo ? ll[i] : lo;
+        hi = ll[i] > hi ? ll[i] : hi;
+      }
+    if (hi < 0) continue;
+    int l0 = s ? hi : lo, l1 = s ? lo : hi;
+    col[n] = c;
+    lv[n++] = l0;
+    if (l1 != l0) {
+      col[n] = c;
+      lv[n++] = l1;
+    }
+  }
+  return n >= 3 ? n : 0;
 }
 
 int vm_prism_result(vm_prism *p, vm_mesh **out) {
@@ -57,14 +118,29 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
         nconn += vm_elem_nverts(type);
       }
   }
-  int64_t ne = ncell + 2 * nt;
+  /* a half model's faces on its symmetry plane: one per cell over an
+   * open edge of the wall */
+  int64_t nsf = 0, nsc = 0;
+  for (int64_t ed = 0; p->sym_ax >= 0 && ed < p->ned; ed++) {
+    if (p->etri[2 * ed + 1] >= 0) continue;
+    for (int k = 0; k < nl; k++) {
+      int32_t col[4];
+      int lv[4];
+      int n =
+          sym_face(p, p->etri[2 * ed], k, (int)nl, p->edge[2 * ed], p->edge[2 * ed + 1], col, lv);
+      nsf += n > 0;
+      nsc += n;
+    }
+  }
+  int64_t ne = ncell + 2 * nt + nsf;
   vm_mesh *m = NULL;
   int st = vm_mesh_create(ctx, &m);
   if (st) {
     vm_free(ctx, vid);
     return st;
   }
-  if ((st = vm_mesh_set_vertices(m, nv)) || (st = vm_mesh_set_elements(m, ne, nconn + 6 * nt)))
+  if ((st = vm_mesh_set_vertices(m, nv)) ||
+      (st = vm_mesh_set_elements(m, ne, nconn + 6 * nt + nsc)))
     goto fail;
   if (ends) {
     for (int64_t k = 0; k < nlev; k++)
@@ -129,7 +205,38 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
       ph[e] = s ? VM_PRISM_TAG_OUTER : VM_PRISM_TAG_WALL;
       if (wf) wf[e] = (int32_t)t;
     }
-    /* a vertex field with the value val(v) of its column on every level */
+  for (int64_t ed = 0; nsf && ed < p->ned; ed++) {
+    if (p->etri[2 * ed + 1] >= 0) continue;
+    int64_t t = p->etri[2 * ed];
+    for (int k = 0; k < nl; k++) {
+      int32_t col[4];
+      int lv[4];
+      int n = sym_face(p, t, k, (int)nl, p->edge[2 * ed], p->edge[2 * ed + 1], col, lv);
+      if (!n) continue;
+      /* facing out of the domain, to the mirror image's side: the area
+       * vector of a face in the plane is along its axis */
+      double area = 0;
+      for (int i = 0; i < n; i++) {
+        const double *x0 = L + 3 * ((int64_t)lv[i] * nw + col[i]),
+                     *x1 = L + 3 * ((int64_t)lv[(i + 1) % n] * nw + col[(i + 1) % n]);
+        int a1 = (p->sym_ax + 1) % 3, a2 = (p->sym_ax + 2) % 3;
+        area += x0[a1] * x1[a2] - x1[a1] * x0[a2];
+      }
+      int rev = area * p->sym_side > 0;
+      m->etype[e] = n == 4 ? VM_QUAD : VM_TRI;
+      for (int i = 0; i < n; i++) {
+        int j = rev ? n - 1 - i : i;
+        m->conn[c + i] = VID(lv[j], col[j]);
+      }
+      c += n;
+      m->eoff[e + 1] = c;
+      lay[e] = -1;
+      ph[e] = VM_PRISM_TAG_SYMMETRY;
+      if (wf) wf[e] = (int32_t)t;
+      e++;
+    }
+  }
+  /* a vertex field with the value val(v) of its column on every level */
 #define COLUMN_FIELD(dst, val)                                                                     \
   for (int64_t k_ = 0; k_ < nlev; k_++)                                                            \
     for (int64_t v = 0; v < nw; v++)                                                               \
@@ -178,6 +285,13 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:2:2", "outer")) ||
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
     goto fail;
+  if (p->sym_ax >= 0) {
+    char plane[64];
+    snprintf(plane, sizeof plane, "%c=%.17g", "xyz"[p->sym_ax], p -> sym_val);
+    if ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:4", "symmetry")) ||
+        (st = vm_mesh_set_attr(m, VM_ATTR_SYMMETRY_PLANE, plane)))
+      goto fail;
+  }
   vm_free(ctx, vid);
   *out = m;
   return VM_OK;

@@ -56,6 +56,19 @@ static int budget_spent(void *user, int iter, const double *x) {
   return 1;
 }
 
+/* A half model's symmetry plane as the minimizers' slip surface 0: the
+ * point with its coordinate across the plane set to the plane's, exactly. */
+static int sym_project(void *user, int surf_id, const double x[3], double out[3],
+                       double normals[9]) {
+  const vm_prism *p = user;
+  if (surf_id != 0 || p->sym_ax < 0) return VM_ERR_ARG;
+  memcpy(out, x, 3 * sizeof *out);
+  out[p->sym_ax] = p->sym_val;
+  normals[0] = normals[1] = normals[2] = 0;
+  normals[p->sym_ax] = 1;
+  return 1;
+}
+
 /* One minimizer run of the solve: at most max_iter iterations, hold_tau
  * as given; the slivers settled once if it cannot start. */
 static int solve_run(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kind kind,
@@ -66,6 +79,16 @@ static int solve_run(vm_prism *p, vm_problem *prob, vm_mesh *m, vm_minimizer_kin
   vm_minimizer *mz = NULL;
   int st = vm_minimizer_create(p->ctx, prob, kind, &mz);
   if (st) return st;
+  if (p->sym_ax >= 0) {
+    /* the vertices of the columns in the symmetry plane slide in it */
+    for (int64_t i = 0; i < m->nv; i++)
+      if (m->vflag[i] == VM_VERTEX_SLIP) m->vsurf[i] = 0;
+    vm_surface_ops ops = {sym_project, p, NULL, 1};
+    if ((st = vm_minimizer_set_surfaces(mz, &ops))) {
+      vm_minimizer_destroy(&mz);
+      return st;
+    }
+  }
   vm_minimize_options mo = vm_minimize_options_default();
   mo.max_iter = max_iter;
   mo.time_limit = isfinite(left) ? left : 0;

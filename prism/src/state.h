@@ -38,6 +38,14 @@ struct vm_prism {
   int32_t *vv;
   int32_t *edge; /* 2*ned, a < b */
   int32_t *etri; /* 2*ned triangles on each side (-1: open edge) */
+  /* a half model: the wall's open boundary lies in the symmetry plane
+   * x[sym_ax] = sym_val and the wall on the side sym_side (+1 or -1) of
+   * it; the columns of the vertices in it (onsym[v] = 1, nsym of them)
+   * stay in it, bit for bit (sym_ax -1, onsym NULL: a closed wall) */
+  int sym_ax;
+  double sym_val, sym_side;
+  uint8_t *onsym;
+  int64_t nsym;
 
   pr_rt *rt;             /* the run's Embree device (made at the first query) */
   pr_layer_faces *faces; /* the layer's faces for intersection queries */
@@ -75,8 +83,23 @@ static inline double pr_first_height(const vm_prism *p, int64_t v) {
 
 /* The wall's connectivity as plain arrays (geom.h). */
 static inline pr_surf pr_wall_surf(const vm_prism *p) {
-  pr_surf s = {p->nw, p->nt, p->tri, p->vt_off, p->vt, p->vv_off, p->vv};
+  pr_surf s = {p->nw, p->nt, p->tri, p->vt_off, p->vt, p->vv_off, p->vv, p->sym_ax, p->onsym};
   return s;
+}
+
+/* Is column v one of a half model's columns in the symmetry plane? */
+static inline int pr_on_sym(const vm_prism *p, int64_t v) { return p->onsym && p->onsym[v]; }
+
+/* The class of a moving vertex of column v in a solve: free, or on a half
+ * model's symmetry plane sliding in it (surface 0 of pr_sym_ops). */
+static inline uint8_t pr_moving_flag(const vm_prism *p, int64_t v) {
+  return pr_on_sym(p, v) ? VM_VERTEX_SLIP : VM_VERTEX_FREE;
+}
+
+/* Is point x strictly on the wall's side of the symmetry plane (always,
+ * on a closed wall)? */
+static inline int pr_sym_inside(const vm_prism *p, const double *x) {
+  return p->sym_ax < 0 || (x[p->sym_ax] - p->sym_val) * p->sym_side > 0;
 }
 
 /* Prism of triangle t between levels k and k + 1 of the levels L (nw
@@ -209,6 +232,11 @@ int64_t pr_mark_inverted(vm_prism *p, uint8_t *mark);
  * intersecting top or side face in `mark` (nw, may be NULL); the number of
  * intersecting face pairs in *npairs (cutting.c). */
 int pr_layer_intersections(vm_prism *p, uint8_t *mark, int64_t *npairs);
+/* A half model: the vertices of the columns in the symmetry plane put back
+ * into it where a step left them off it (counted in rep.sym_snapped: 0
+ * when every step kept them there, as each is made to), and the other
+ * vertices on or beyond it counted (rep.sym_crossing); report.c. */
+void pr_sym_settle(vm_prism *p);
 /* The q-quantile of the n values x (sorted in place; report.c). */
 double pr_percentile(double *x, int64_t n, double q);
 
@@ -217,7 +245,9 @@ double pr_percentile(double *x, int64_t n, double q);
 /* The exterior medial radius (see medial.c) of every vertex of a closed
  * triangulation (xyz, tri: nv vertices, nt triangles; fnrm, vnrm unit face
  * and vertex normals; elen a length per vertex for the floor); hit (may be
- * NULL): the triangle that stopped each ball last, -1 if none did. */
+ * NULL): the triangle that stopped each ball last, -1 if none did. On a
+ * half model (p->sym_ax) the mirror image stops balls too: a hit t + nt
+ * is triangle t's image. nt must be p->nt where hit is read. */
 int pr_medial_radius_of(vm_prism *p, const double *xyz, const int32_t *tri, const double *fnrm,
                         const double *vnrm, const double *elen, int64_t nv, int64_t nt, double cap,
                         double *radius, int64_t *hit);

@@ -21,7 +21,10 @@ int vm_prism_thin(vm_prism *p) {
   if ((st = vm_mesh_set_vertices(m, 2 * nw)) || (st = vm_mesh_set_elements(m, nt, 6 * nt)))
     return st;
   memcpy(m->xyz, p->wall, (size_t)(3 * nw) * sizeof *m->xyz);
-  for (int64_t v = 0; v < nw; v++) m->vflag[v] = VM_VERTEX_FIXED;
+  for (int64_t v = 0; v < nw; v++) {
+    m->vflag[v] = VM_VERTEX_FIXED;
+    m->vflag[nw + v] = pr_moving_flag(p, v);
+  }
   for (int64_t t = 0; t < nt; t++) {
     m->etype[t] = VM_PRISM;
     m->eoff[t + 1] = 6 * (t + 1);

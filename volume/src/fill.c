@@ -573,9 +573,26 @@ done:
   return st;
 }
 
+/* A half model's symmetry plane x[ax] = c, the layer on the side `side`
+ * (+1 or -1) of it; ax -1: a closed envelope. */
+typedef struct {
+  int ax;
+  double c, side;
+} sym_plane;
+
 /* The envelope must be a closed, manifold triangulation: every edge on
- * exactly two of its triangles. */
-static int check_closed(vm_ctx *ctx, const envelope *E) {
+ * exactly two of its triangles; or a half model's, whose edges on one
+ * triangle (its border, returned in *bed as nb pairs a -> b, in their
+ * triangle's order) all lie in the symmetry plane (the input's attribute
+ * VM_ATTR_SYMMETRY_PLANE, "y=0", or the plane x, y or z = const they all
+ * lie in, bit for bit): *sp, the layer on one side of it. */
+static int check_closed(vm_ctx *ctx, const vm_mesh *m, const envelope *E, sym_plane *sp,
+                        int32_t **bed, int64_t *nb) {
+  sp->ax = -1;
+  sp->c = 0;
+  sp->side = 1;
+  *bed = NULL;
+  *nb = 0;
   int64_t ne = 3 * E->nf;
   tface *ed = vm_alloc_array(ctx, (size_t)(ne + 1), sizeof *ed);
   if (!ed) return VM_ERR_NOMEM;
@@ -586,25 +603,99 @@ static int check_closed(vm_ctx *ctx, const envelope *E) {
       t->v[0] = a < b ? a : b;
       t->v[1] = a < b ? b : a;
       t->v[2] = 0;
-      t->cell = (int32_t)f;
+      t->cell = (int32_t)(3 * f + i);
     }
   qsort(ed, (size_t)ne, sizeof *ed, cmp_tface);
-  int64_t bad = 0, first = -1;
+  int64_t bad = 0, open = 0;
+  int32_t fa = -1, fb = -1;
   for (int64_t i = 0; i < ne;) {
     int64_t j = i + 1;
     while (j < ne && fill_same_face(&ed[i], &ed[j])) j++;
-    if (j - i != 2) {
-      if (first < 0) first = i;
-      bad++;
+    if (j - i == 1 && !E->surface) {
+      ed[open++].cell = ed[i].cell; /* (open <= i: the border's corners, in order) */
+    } else if (j - i != 2) {
+      if (!bad++) fa = ed[i].v[0], fb = ed[i].v[1];
     }
     i = j;
   }
   int st = VM_OK;
-  if (bad)
+  if (bad) {
     st = vm_error(ctx, VM_ERR_ARG,
-                  "the envelope is not closed: %lld edges are on one triangle or on more than "
-                  "two (the first: vertices %d and %d)",
-                  (long long)bad, ed[first].v[0], ed[first].v[1]);
+                  "the envelope is not closed: %lld edges are on %s (the first: vertices %d and "
+                  "%d)",
+                  (long long)bad,
+                  E->surface ? "one triangle or on more than two" : "more than two triangles",
+                  (int)fa, (int)fb);
+    goto done;
+  }
+  if (!open) goto done;
+  /* a half model: its border edges, in their triangles' order */
+  int32_t *b = vm_alloc_array(ctx, (size_t)(2 * open), sizeof *b);
+  if (!b) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t k = 0; k < open; k++) {
+    int32_t c = ed[k].cell;
+    b[2 * k] = E->fv[c];
+    b[2 * k + 1] = E->fv[3 * (c / 3) + (c % 3 + 1) % 3];
+  }
+  const char *a = vm_mesh_get_attr(m, VM_ATTR_SYMMETRY_PLANE);
+  const char *axn = "xyz";
+  if (a && a[0] && strchr(axn, a[0]) && a[1] == '=') {
+    char *end = NULL;
+    sp->c = strtod(a + 2, &end);
+    sp->ax = end && end != a + 2 && !*end && isfinite(sp->c) ? (int)(strchr(axn, a[0]) - axn) : -1;
+  }
+  for (int x = 0; x < 3 && sp->ax < 0; x++) {
+    int all = 1;
+    for (int64_t k = 0; k < 2 * open && all; k++)
+      all = m->xyz[3 * b[k] + x] == m->xyz[3 * b[0] + x];
+    if (all) {
+      sp->ax = x;
+      sp->c = m->xyz[3 * b[0] + x];
+    }
+  }
+  if (sp->ax < 0) {
+    const double *x = m->xyz + 3 * b[0];
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "the envelope is not closed (%lld edges on one triangle) and its border is not "
+                  "in a plane x, y or z = const, as a half model's (e.g. the vertex %d at %g %g "
+                  "%g)",
+                  (long long)open, (int)b[0], x[0], x[1], x[2]);
+    vm_free(ctx, b);
+    goto done;
+  }
+  for (int64_t k = 0; k < 2 * open; k++) {
+    const double *x = m->xyz + 3 * b[k];
+    if (x[sp->ax] == sp->c) continue;
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "the envelope's border is not on the symmetry plane %c = %g: its vertex %d "
+                  "at %g %g %g is %g off it",
+                  axn[sp->ax], sp->c, (int)b[k], x[0], x[1], x[2], fabs(x[sp->ax] - sp->c));
+    vm_free(ctx, b);
+    goto done;
+  }
+  /* the side: the farthest envelope vertex's; none beyond the plane */
+  int64_t far = -1;
+  double dmax = 0;
+  for (int64_t i = 0; i < ne; i++) {
+    double d = fabs(m->xyz[3 * E->fv[i] + sp->ax] - sp->c);
+    if (d > dmax) dmax = d, far = E->fv[i];
+  }
+  sp->side = far >= 0 && m->xyz[3 * far + sp->ax] < sp->c ? -1 : 1;
+  for (int64_t i = 0; i < ne; i++) {
+    const double *x = m->xyz + 3 * E->fv[i];
+    if ((x[sp->ax] - sp->c) * sp->side >= 0) continue;
+    st = vm_error(ctx, VM_ERR_ARG,
+                  "the envelope crosses its symmetry plane %c = %g at its vertex %d (%g %g %g)",
+                  axn[sp->ax], sp->c, (int)E->fv[i], x[0], x[1], x[2]);
+    vm_free(ctx, b);
+    goto done;
+  }
+  *bed = b;
+  *nb = open;
+done:
   vm_free(ctx, ed);
   return st;
 }
@@ -614,29 +705,48 @@ static int check_closed(vm_ctx *ctx, const envelope *E) {
 typedef struct {
   int64_t nv, nf;
   double *xyz;
-  int32_t *fv; /* 3 per triangle, local vertex indices, outward */
+  int32_t *fv; /* 3 per triangle, outward (away from the fill): >= 0 a local vertex, < 0
+                  the input's vertex -1 - fv (a half model's envelope border) */
+  /* a half model: the far field is the half on the layer's side of the
+   * symmetry plane, closed by the plane's own triangles (the last nsym);
+   * rim: its 4 n vertices in the plane, in order around */
+  int64_t nsym, nrim;
+  int32_t *rim;
 } far_surface;
+
+/* The output vertex of far-field corner value i (base: the input's vertex
+ * count). */
+static inline int64_t far_vertex(int32_t i, int64_t base) {
+  return i >= 0 ? base + i : -1 - (int64_t)i;
+}
 
 static void far_free(vm_ctx *ctx, far_surface *F) {
   vm_free(ctx, F->xyz);
   vm_free(ctx, F->fv);
+  vm_free(ctx, F->rim);
 }
 
 /* A cube of half-width H about c, n x n quads per side, each split in two
  * triangles along alternating diagonals; or the sphere of radius H, the
  * same cube's vertices projected onto it (a cube-sphere). */
-static int far_build(vm_ctx *ctx, far_surface *F, const double c[3], double H, int n, int sphere) {
-  /* a (n+1)^3 lattice's surface vertices, numbered through a lattice index */
-  int64_t N = n + 1;
+static int far_build(vm_ctx *ctx, far_surface *F, const double c[3], double H, int n, int sphere,
+                     const sym_plane *sp) {
+  /* a (n+1)^3 lattice's surface vertices, numbered through a lattice index;
+   * a half model's (n even, c in the plane) only those on the layer's
+   * side of the plane (g[ax] = n / 2 is in it, exactly) */
+  int64_t N = n + 1, h = n / 2;
+  int hax = sp->ax;
   int32_t *id = vm_alloc_array(ctx, (size_t)(N * N * N), sizeof *id);
   if (!id) return VM_ERR_NOMEM;
   int64_t nv = 0;
+#define FAR_KEEP(g) (hax < 0 || (sp->side > 0 ? (g)[hax] >= h : (g)[hax] <= h))
   for (int64_t i = 0; i < N * N * N; i++) {
-    int64_t x = i % N, y = (i / N) % N, z = i / (N * N);
-    id[i] = (x == 0 || y == 0 || z == 0 || x == n || y == n || z == n) ? (int32_t)nv++ : -1;
+    int64_t g[3] = {i % N, (i / N) % N, i / (N * N)};
+    int on = g[0] == 0 || g[1] == 0 || g[2] == 0 || g[0] == n || g[1] == n || g[2] == n;
+    id[i] = on && FAR_KEEP(g) ? (int32_t)nv++ : -1;
   }
   F->nv = nv;
-  F->nf = 12 * (int64_t)n * n;
+  F->nf = (hax < 0 ? 12 : 8) * (int64_t)n * n;
   F->xyz = vm_alloc_array(ctx, (size_t)(3 * nv), sizeof *F->xyz);
   F->fv = vm_alloc_array(ctx, (size_t)(3 * F->nf), sizeof *F->fv);
   if (!F->xyz || !F->fv) {
@@ -660,9 +770,15 @@ static int far_build(vm_ctx *ctx, far_surface *F, const double c[3], double H, i
   for (int ax = 0; ax < 3; ax++)
     for (int side = 0; side < 2; side++) {
       int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
+      if (ax == hax && (side ? -1 : 1) == sp->side) continue; /* the mirror image's side */
       for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
           int32_t v[4];
+          int64_t gc[3]; /* the quad's lower corner */
+          gc[ax] = side ? n : 0;
+          gc[a1] = i;
+          gc[a2] = j;
+          if (hax >= 0 && hax != ax && (sp->side > 0 ? gc[hax] < h : gc[hax] >= h)) continue;
           for (int k = 0; k < 4; k++) {
             int64_t g[3];
             g[ax] = side ? n : 0;
@@ -686,8 +802,224 @@ static int far_build(vm_ctx *ctx, far_surface *F, const double c[3], double H, i
           memcpy(F->fv + 3 * f++, t2, sizeof t2);
         }
     }
+  F->nf = f;
+  if (hax >= 0) {
+    /* the rim: the lattice's vertices in the plane on the box's edges, in
+     * order around (a1 up, a2 up, a1 down, a2 down) */
+    int a1 = (hax + 1) % 3, a2 = (hax + 2) % 3;
+    F->nrim = 4 * (int64_t)n;
+    F->rim = vm_alloc_array(ctx, (size_t)F->nrim, sizeof *F->rim);
+    if (!F->rim) {
+      vm_free(ctx, id);
+      return VM_ERR_NOMEM;
+    }
+    int64_t r = 0;
+    for (int leg = 0; leg < 4; leg++)
+      for (int64_t t = 0; t < n; t++) {
+        int64_t g[3];
+        g[hax] = h;
+        g[a1] = leg == 0 ? t : leg == 1 ? n : leg == 2 ? n - t : 0;
+        g[a2] = leg == 0 ? 0 : leg == 1 ? t : leg == 2 ? n : n - t;
+        F->rim[r++] = id[g[0] + N * g[1] + N * N * g[2]];
+      }
+  }
+#undef FAR_KEEP
   vm_free(ctx, id);
   return VM_OK;
+}
+
+/* ---------- a half model's symmetry plane ---------- */
+
+static int gmsh_status(vm_ctx *ctx, int ierr, const char *what);
+
+/* The far field's triangles in the symmetry plane, appended to F: the
+ * region between the far field's rim (F->rim) and the envelope's border
+ * loops (bed: nb edges a -> b), meshed by Gmsh in 2D with the size field
+ * S; every border edge and every rim edge kept whole (its two vertices,
+ * no point between), the new vertices appended to F's, the triangles
+ * facing out of the fill (to the mirror image's side). */
+static int sym_face(vm_ctx *ctx, const vm_mesh *m, const int32_t *bed, int64_t nb,
+                    const sym_plane *sp, size_field *S, far_surface *F) {
+  int st = VM_OK, ierr = 0;
+  /* the border's loops: next[a] = b, each border vertex once in and out */
+  int32_t *next = vm_alloc_array(ctx, (size_t)m->nv + 1, sizeof *next);
+  uint8_t *seen = vm_calloc(ctx, (size_t)m->nv + 1, 1);
+  int *ptag = vm_alloc_array(ctx, (size_t)(nb + F->nrim) + 1, sizeof *ptag);
+  int32_t *pref = vm_alloc_array(ctx, (size_t)(nb + F->nrim) + 1, sizeof *pref);
+  int *ltag = vm_alloc_array(ctx, (size_t)(nb + F->nrim) + 1, sizeof *ltag);
+  int *loops = vm_alloc_array(ctx, (size_t)nb + 2, sizeof *loops);
+  size_t *ntag = NULL, *etag = NULL, *enode = NULL, nn = 0, ncoord = 0, npc = 0, ne = 0, nen = 0;
+  double *coord = NULL, *pc = NULL;
+  int gmsh_up = 0;
+  if (!next || !seen || !ptag || !pref || !ltag || !loops) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (int64_t v = 0; v < m->nv; v++) next[v] = -1;
+  for (int64_t k = 0; k < nb; k++) {
+    int32_t a = bed[2 * k], b = bed[2 * k + 1];
+    if (next[a] >= 0 || seen[b]) {
+      const double *x = m->xyz + 3 * (next[a] >= 0 ? a : b);
+      st = vm_error(ctx, VM_ERR_ARG,
+                    "the envelope's border in the symmetry plane is not a set of simple loops "
+                    "(at %g %g %g)",
+                    x[0], x[1], x[2]);
+      goto done;
+    }
+    next[a] = b;
+    seen[b] = 1;
+  }
+  gmshInitialize(0, NULL, 0, &ierr);
+  if (ierr) {
+    st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh could not be initialized");
+    goto done;
+  }
+  gmsh_up = 1;
+  gmshOptionSetNumber("General.Terminal", 0, &ierr);
+  gmshOptionSetNumber("General.Verbosity", 2, &ierr);
+  gmshModelAdd("varmesh-symmetry", &ierr);
+  int64_t np = 0, nl = 0, nloop = 0;
+  /* the rim, then each border loop: points, segments, a curve loop */
+  for (int64_t i = 0; i < F->nrim && !ierr; i++) {
+    const double *x = F->xyz + 3 * F->rim[i];
+    pref[np] = F->rim[i];
+    ptag[np++] = gmshModelGeoAddPoint(x[0], x[1], x[2], 0, -1, &ierr);
+  }
+  for (int64_t i = 0; i < F->nrim && !ierr; i++)
+    ltag[nl++] = gmshModelGeoAddLine(ptag[i], ptag[(i + 1) % F->nrim], -1, &ierr);
+  if (!ierr) loops[nloop++] = gmshModelGeoAddCurveLoop(ltag, (size_t)F->nrim, -1, 1, &ierr);
+  memset(seen, 0, (size_t)m->nv + 1);
+  for (int64_t k = 0; k < nb && !ierr; k++) {
+    int32_t a0 = bed[2 * k];
+    if (seen[a0]) continue;
+    int64_t p0 = np, l0 = nl;
+    for (int32_t a = a0; !seen[a] && !ierr; a = next[a]) {
+      if (next[a] < 0) {
+        const double *x = m->xyz + 3 * a;
+        st = vm_error(ctx, VM_ERR_ARG,
+                      "the envelope's border in the symmetry plane does not close (at %g %g %g)",
+                      x[0], x[1], x[2]);
+        goto done;
+      }
+      seen[a] = 1;
+      pref[np] = -1 - a;
+      ptag[np++] =
+          gmshModelGeoAddPoint(m->xyz[3 * a], m->xyz[3 * a + 1], m->xyz[3 * a + 2], 0, -1, &ierr);
+    }
+    for (int64_t i = p0; i < np && !ierr; i++)
+      ltag[nl++] = gmshModelGeoAddLine(ptag[i], ptag[i + 1 < np ? i + 1 : p0], -1, &ierr);
+    if (!ierr)
+      loops[nloop++] = gmshModelGeoAddCurveLoop(ltag + l0, (size_t)(nl - l0), -1, 1, &ierr);
+  }
+  int surf = 0;
+  if (!ierr) surf = gmshModelGeoAddPlaneSurface(loops, (size_t)nloop, -1, &ierr);
+  for (int64_t i = 0; i < nl && !ierr; i++)
+    gmshModelGeoMeshSetTransfiniteCurve(ltag[i], 2, "Progression", 1.0, &ierr);
+  if (!ierr) gmshModelGeoSynchronize(&ierr);
+  if ((st = gmsh_status(ctx, ierr, "setting up the symmetry plane"))) goto done;
+  gmshOptionSetNumber("Mesh.MeshSizeExtendFromBoundary", 0, &ierr);
+  gmshOptionSetNumber("Mesh.MeshSizeFromPoints", 0, &ierr);
+  gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 0, &ierr);
+  gmshModelMeshSetSizeCallback(gmsh_size_cb, S, &ierr);
+  gmshModelMeshGenerate(2, &ierr);
+  if ((st = gmsh_status(
+           ctx, ierr, "meshing the symmetry plane (does the layer's border in it cross itself?)")))
+    goto done;
+  /* no node on a segment: every border and rim edge kept whole */
+  gmshModelMeshGetNodes(&ntag, &nn, &coord, &ncoord, &pc, &npc, 1, -1, 0, 0, &ierr);
+  if (!ierr && nn) {
+    st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh split %zu edges of the symmetry plane's border", nn);
+    goto done;
+  }
+  gmshFree(ntag), gmshFree(coord), gmshFree(pc);
+  ntag = NULL, coord = pc = NULL;
+  /* node tag -> vertex: the points', then the surface's own */
+  size_t maxtag = 0;
+  gmshModelMeshGetNodes(&ntag, &nn, &coord, &ncoord, &pc, &npc, 2, surf, 1, 0, &ierr);
+  if ((st = gmsh_status(ctx, ierr, "returning the symmetry plane's mesh"))) goto done;
+  for (size_t i = 0; i < nn; i++) maxtag = ntag[i] > maxtag ? ntag[i] : maxtag;
+  int64_t *map = vm_alloc_array(ctx, maxtag + 1, sizeof *map);
+  if (!map) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  for (size_t t = 0; t <= maxtag; t++) map[t] = INT64_MIN;
+  for (int64_t i = 0; i < np && !ierr; i++) {
+    size_t *pt = NULL, pn = 0, pnc = 0, ppn = 0;
+    double *pcoord = NULL, *ppc = NULL;
+    gmshModelMeshGetNodes(&pt, &pn, &pcoord, &pnc, &ppc, &ppn, 0, ptag[i], 0, 0, &ierr);
+    if (!ierr && pn == 1 && pt[0] <= maxtag) {
+      const double *x = pref[i] >= 0 ? F->xyz + 3 * pref[i] : m->xyz + 3 * (-1 - (int64_t)pref[i]);
+      if (memcmp(pcoord, x, 3 * sizeof *x)) ierr = -1;
+      map[pt[0]] = pref[i];
+    } else if (!ierr) {
+      ierr = -1;
+    }
+    gmshFree(pt), gmshFree(pcoord), gmshFree(ppc);
+  }
+  int64_t nnew = 0;
+  for (size_t i = 0; i < nn && !ierr; i++)
+    if (map[ntag[i]] == INT64_MIN) nnew++;
+  double *xyz = ierr ? NULL : vm_realloc(ctx, F->xyz, (size_t)(3 * (F->nv + nnew)) * sizeof *xyz);
+  if (!xyz) {
+    vm_free(ctx, map);
+    st = ierr ? vm_error(ctx, VM_ERR_BACKEND, "Gmsh moved a point of the symmetry plane's border")
+              : VM_ERR_NOMEM;
+    goto done;
+  }
+  F->xyz = xyz;
+  for (size_t i = 0; i < nn; i++) {
+    if (map[ntag[i]] != INT64_MIN) continue;
+    memcpy(F->xyz + 3 * F->nv, coord + 3 * i, 3 * sizeof *coord);
+    F->xyz[3 * F->nv + sp->ax] = sp->c; /* in the plane, bit for bit */
+    map[ntag[i]] = F->nv++;
+  }
+  gmshModelMeshGetElementsByType(2, &etag, &ne, &enode, &nen, surf, 0, 1, &ierr);
+  int32_t *fv =
+      ierr ? NULL : vm_realloc(ctx, F->fv, (size_t)(3 * (F->nf + (int64_t)ne)) * sizeof *fv);
+  if (!fv) {
+    vm_free(ctx, map);
+    st = ierr ? gmsh_status(ctx, ierr, "returning the symmetry plane's triangles") : VM_ERR_NOMEM;
+    goto done;
+  }
+  F->fv = fv;
+  int a1 = (sp->ax + 1) % 3, a2 = (sp->ax + 2) % 3;
+  for (size_t t = 0; t < ne; t++) {
+    int32_t *c = F->fv + 3 * (F->nf + (int64_t)t);
+    const double *x[3];
+    for (int i = 0; i < 3; i++) {
+      size_t g = enode[3 * t + i];
+      int64_t v = g <= maxtag ? map[g] : INT64_MIN;
+      if (v == INT64_MIN) {
+        vm_free(ctx, map);
+        st = vm_error(ctx, VM_ERR_BACKEND, "Gmsh's symmetry-plane triangle names node %zu", g);
+        goto done;
+      }
+      c[i] = (int32_t)v;
+      x[i] = v >= 0 ? F->xyz + 3 * v : m->xyz + 3 * (-1 - v);
+    }
+    /* facing out of the fill: its area vector against the layer's side */
+    double a = (x[1][a1] - x[0][a1]) * (x[2][a2] - x[0][a2]) -
+               (x[1][a2] - x[0][a2]) * (x[2][a1] - x[0][a1]);
+    if (a * sp->side > 0) {
+      int32_t s1 = c[1];
+      c[1] = c[2];
+      c[2] = s1;
+    }
+  }
+  F->nf += (int64_t)ne;
+  F->nsym = (int64_t)ne;
+  vm_free(ctx, map);
+done:
+  gmshFree(ntag), gmshFree(coord), gmshFree(pc), gmshFree(etag), gmshFree(enode);
+  if (gmsh_up) gmshFinalize(&ierr);
+  vm_free(ctx, next);
+  vm_free(ctx, seen);
+  vm_free(ctx, ptag);
+  vm_free(ctx, pref);
+  vm_free(ctx, ltag);
+  vm_free(ctx, loops);
+  return st;
 }
 
 /* ---------- points off the envelope ---------- */
@@ -1671,11 +2003,13 @@ static int gmsh_fill(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far
 #undef FILL_CORNER
   if (!ierr) gmshModelMeshAddElementsByType(s1, 2, NULL, 0, tri, (size_t)(3 * E->nf), &ierr);
   if ((st = gmsh_status(ctx, ierr, "adding the envelope"))) goto done;
+  /* a half model's far field and symmetry plane close the envelope: one
+   * surface with it (their triangles share its border's vertices) */
   for (int64_t i = 0; i < F->nv; i++) tags[i] = (size_t)(base + i + 1);
-  int s2 = gmshModelAddDiscreteEntity(2, -1, NULL, 0, &ierr);
+  int s2 = F->nsym ? s1 : gmshModelAddDiscreteEntity(2, -1, NULL, 0, &ierr);
   if (!ierr)
     gmshModelMeshAddNodes(2, s2, tags, (size_t)F->nv, F->xyz, (size_t)(3 * F->nv), NULL, 0, &ierr);
-  for (int64_t i = 0; i < 3 * F->nf; i++) tri[i] = (size_t)(base + F->fv[i] + 1);
+  for (int64_t i = 0; i < 3 * F->nf; i++) tri[i] = (size_t)far_vertex(F->fv[i], base) + 1;
   if (!ierr) gmshModelMeshAddElementsByType(s2, 2, NULL, 0, tri, (size_t)(3 * F->nf), &ierr);
   int loops[2] = {s1, s2}, shell = 0, vol = 0;
   int *ptag = vm_alloc_array(ctx, (size_t)nq + 1, sizeof *ptag);
@@ -1685,7 +2019,7 @@ static int gmsh_fill(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far
   }
   for (int64_t i = 0; i < nq && !ierr; i++)
     ptag[i] = gmshModelGeoAddPoint(q[3 * i], q[3 * i + 1], q[3 * i + 2], 0, -1, &ierr);
-  if (!ierr) shell = gmshModelGeoAddSurfaceLoop(loops, 2, -1, &ierr);
+  if (!ierr) shell = gmshModelGeoAddSurfaceLoop(loops, F->nsym ? 1 : 2, -1, &ierr);
   if (!ierr) vol = gmshModelGeoAddVolume(&shell, 1, -1, &ierr);
   if (!ierr) gmshModelGeoSynchronize(&ierr);
   if (!ierr && nq) gmshModelMeshEmbed(0, ptag, (size_t)nq, 3, vol, &ierr);
@@ -2037,7 +2371,7 @@ static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_sur
   }
   for (int64_t f = 0; f < F->nf; f++) {
     o->etype[k] = VM_TRI;
-    for (int i = 0; i < 3; i++) o->conn[c++] = (int32_t)(base + F->fv[3 * f + i]);
+    for (int i = 0; i < 3; i++) o->conn[c++] = (int32_t)far_vertex(F->fv[3 * f + i], base);
     o->eoff[++k] = c;
   }
   if (ninv) {
@@ -2084,6 +2418,12 @@ static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_sur
   for (int64_t e = nkeep; e < nkeep + nt; e++) tag[e] = t_fill;
   for (int64_t e = nkeep + nt; e < ne; e++) tag[e] = t_far;
   if ((st = set_name(o, 2, t_far, "farfield")) || (st = set_name(o, 3, t_fill, "fill"))) goto done;
+  if (F->nsym) {
+    /* a half model's symmetry plane: the layer's faces there are named so */
+    int32_t t_sym = tag_named(m, "symmetry");
+    if (t_sym < 0 && (st = set_name(o, 2, t_sym = top + 4, "symmetry"))) goto done;
+    for (int64_t e = ne - F->nsym; e < ne; e++) tag[e] = t_sym;
+  }
   /* Gmsh kept the boundary: the tets' unshared faces are exactly the
    * envelope's and the far field's triangles */
   tf = vm_alloc_array(ctx, (size_t)(4 * nt + E->nf + F->nf), sizeof *tf);
@@ -2103,7 +2443,8 @@ static int merge(vm_ctx *ctx, const vm_mesh *m, const envelope *E, const far_sur
   }
   for (int64_t f = 0; f < E->nf + F->nf; f++) {
     for (int i = 0; i < 3; i++)
-      tf[nf].v[i] = f < E->nf ? E->fv[3 * f + i] : (int32_t)(base + F->fv[3 * (f - E->nf) + i]);
+      tf[nf].v[i] =
+          f < E->nf ? E->fv[3 * f + i] : (int32_t)far_vertex(F->fv[3 * (f - E->nf) + i], base);
     fill_sort3(tf[nf].v);
     tf[nf++].cell = 1; /* a boundary triangle: sorts after the tets' faces */
   }
@@ -2259,8 +2600,13 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
   double *hv = NULL, *pts = NULL, *hs = NULL, *nrm = NULL;
   int32_t *vid = NULL;
   vm_mesh *res = NULL;
+  sym_plane sp;
+  int32_t *bed = NULL;
+  int64_t nbed = 0, nshell = 0;
   int st = find_envelope(ctx, in, &E);
-  if (st || (st = check_closed(ctx, &E))) goto done;
+  if (st || (st = check_closed(ctx, in, &E, &sp, &bed, &nbed))) goto done;
+  rep.sym_axis = sp.ax;
+  rep.sym_value = sp.c;
   int64_t counts[VM_NTYPES];
   rep.surface_input = E.surface;
   vm_mesh_count_types(in, counts);
@@ -2289,11 +2635,18 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
         lo[k] = x < lo[k] ? x : lo[k];
         hi[k] = x > hi[k] ? x : hi[k];
       }
+  /* (a half model's: the whole model's, its mirror image included) */
+  if (sp.ax >= 0) {
+    double r = fmax(fabs(hi[sp.ax] - sp.c), fabs(lo[sp.ax] - sp.c));
+    lo[sp.ax] = sp.c - r;
+    hi[sp.ax] = sp.c + r;
+  }
   double c[3], L = 0;
   for (int k = 0; k < 3; k++) {
     c[k] = (lo[k] + hi[k]) / 2;
     if (hi[k] - lo[k] > L) L = hi[k] - lo[k];
   }
+  if (sp.ax >= 0) c[sp.ax] = sp.c;
   if (!(L > 0) || !isfinite(L)) {
     st = vm_error(ctx, VM_ERR_ARG, "the model has no extent (length %g)", L);
     goto done;
@@ -2368,9 +2721,20 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     }
   int n = (int)ceil(2 * H / hfar);
   n = n < 2 ? 2 : n > 400 ? 400 : n;
+  if (sp.ax >= 0 && n % 2) n++; /* a row of vertices in the symmetry plane */
   rep.far_size = 2 * H / n;
-  if ((st = far_build(ctx, &F, c, H, n, o.shape == VM_FAR_SPHERE))) goto done;
-  rep.far_faces = F.nf;
+  if ((st = far_build(ctx, &F, c, H, n, o.shape == VM_FAR_SPHERE, &sp))) goto done;
+  nshell = F.nv;
+  if (sp.ax >= 0) {
+    double ts = fill_now();
+    if ((st = sym_face(ctx, in, bed, nbed, &sp, &S, &F))) goto done;
+    vm_log(ctx, VM_LOG_INFO,
+           "fill: a half model: the symmetry plane %c = %g between the far field and the layer's "
+           "%lld border edges in it, %lld triangles, %.2f s",
+           "xyz"[sp.ax], sp.c, (long long)nbed, (long long)F.nsym, fill_now() - ts);
+  }
+  rep.far_faces = F.nf - F.nsym;
+  rep.sym_faces = F.nsym;
   vm_log(ctx, VM_LOG_INFO,
          "fill: envelope %lld triangles (sizes %.3g to %.3g), far field %s at %g (%g model "
          "lengths of %g), %lld triangles of %.3g; Gmsh %s, growth %g",
@@ -2386,12 +2750,20 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     goto done;
   }
   if ((st = offset_points(ctx, in, &E, vid, hs, nenv, nrm, &q, &nq))) goto done;
+  if (sp.ax >= 0) {
+    /* a half model: only points well inside its side of the plane */
+    int64_t kept = 0;
+    for (int64_t i = 0; i < nq; i++)
+      if ((q[3 * i + sp.ax] - sp.c) * sp.side > 0.5 * size_at(&S, q + 3 * i))
+        memmove(q + 3 * kept++, q + 3 * i, 3 * sizeof *q);
+    nq = kept;
+  }
   /* a shell just inside the far field (its vertices moved in by half a
    * triangle size): without it Delaunay leaves tets with two or three faces
    * on the far field along the box's edges, and OpenFOAM's cell
    * determinant, made of a cell's interior faces only, is 0 there */
   {
-    double *t = vm_realloc(ctx, q, (size_t)(3 * (nq + F.nv)) * sizeof *t);
+    double *t = vm_realloc(ctx, q, (size_t)(3 * (nq + nshell)) * sizeof *t);
     if (!t) {
       vm_free(ctx, q);
       st = VM_ERR_NOMEM;
@@ -2399,12 +2771,16 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
     }
     q = t;
     double f = (H - 0.5 * rep.far_size) / H;
-    for (int64_t i = 0; i < F.nv; i++, nq++)
+    for (int64_t i = 0; i < nshell; i++, nq++) {
       for (int k = 0; k < 3; k++) q[3 * nq + k] = c[k] + f * (F.xyz[3 * i + k] - c[k]);
+      /* (a half model's rim: moved off the symmetry plane as well) */
+      if (sp.ax >= 0 && F.xyz[3 * i + sp.ax] == sp.c)
+        q[3 * nq + sp.ax] = sp.c + sp.side * 0.5 * rep.far_size;
+    }
   }
   vm_log(ctx, VM_LOG_INFO,
          "fill: %lld points off the envelope and %lld inside the far field embedded",
-         (long long)(nq - F.nv), (long long)F.nv);
+         (long long)(nq - nshell), (long long)nshell);
   /* Gmsh; if its process crashes (its boundary recovery aborts on some
    * envelopes) with the points off the envelope, once more without them,
    * then with the envelope's triangles in the reverse order (the recovery
@@ -2415,13 +2791,13 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
    * the run. */
   int crashed = 0, reverse = 0;
   st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, reverse, &R, &crashed);
-  if (st == VM_ERR_BACKEND && crashed && nq > F.nv) {
+  if (st == VM_ERR_BACKEND && crashed && nq > nshell) {
     vm_log(ctx, VM_LOG_WARN, "fill: %s; meshing again without the points off the envelope",
            vm_ctx_error(ctx));
     vm_ctx_clear_error(ctx);
-    int64_t noff = nq - F.nv;
-    memmove(q, q + 3 * noff, (size_t)(3 * F.nv) * sizeof *q);
-    nq = F.nv;
+    int64_t noff = nq - nshell;
+    memmove(q, q + 3 * noff, (size_t)(3 * nshell) * sizeof *q);
+    nq = nshell;
     st = gmsh_fill_isolated(ctx, in, &E, &F, in->nv, q, nq, &S, &o, reverse, &R, &crashed);
   }
   if (st == VM_ERR_BACKEND && crashed) {
@@ -2624,6 +3000,7 @@ int vm_fill_run(vm_ctx *ctx, const vm_mesh *in, const vm_fill_opts *opts, vm_mes
 done:
   vm_mesh_destroy(&res);
   gmsh_result_free(&R);
+  vm_free(ctx, bed);
   far_free(ctx, &F);
   size_free(ctx, &S);
   envelope_free(ctx, &E);

@@ -41,9 +41,10 @@ extern "C" {
 #define VM_PRISM_FIELD_COLUMN "column"
 #define VM_PRISM_FIELD_WALL_FACE "wall_face"
 enum {
-  VM_PRISM_TAG_WALL = 1,  /* wall triangles (the input surface) */
-  VM_PRISM_TAG_OUTER = 2, /* outer boundary triangles */
-  VM_PRISM_TAG_VOLUME = 3 /* the prisms */
+  VM_PRISM_TAG_WALL = 1,    /* wall triangles (the input surface) */
+  VM_PRISM_TAG_OUTER = 2,   /* outer boundary triangles */
+  VM_PRISM_TAG_VOLUME = 3,  /* the prisms */
+  VM_PRISM_TAG_SYMMETRY = 4 /* a half model's faces on its symmetry plane */
 };
 
 /* Phases, in order (progress and timings). */
@@ -149,10 +150,18 @@ typedef struct vm_prism_opts {
                             schedule's layers that fit their length, ending in
                             pyramids and tets as --region-layers does; kept if
                             that halves those cells (prism/src/ends.c); 0: off */
-  int orient;            /* 1 (default): a wall oriented inwards (negative
-                            enclosed volume) has its triangles turned, with a
-                            warning on the log, so the layer grows outside;
-                            0: such a wall is refused */
+  int symmetry_axis;     /* a half model: 0 (default), an open wall whose open
+                            boundary lies in a plane x, y or z = const (bit for
+                            bit) is a half model cut there, and the layer ends
+                            on that plane (the side faces of its border columns
+                            form the boundary `symmetry`); 1, 2, 3: the plane is
+                            x, y or z = symmetry_value, as asked (a border off
+                            it is refused); -1: an open wall is refused */
+  double symmetry_value;
+  int orient; /* 1 (default): a wall oriented inwards (negative
+                 enclosed volume) has its triangles turned, with a
+                 warning on the log, so the layer grows outside;
+                 0: such a wall is refused */
   /* NULL (default): every column aims at `thickness`. Else one thickness
    * per element of the wall (its triangles' and quads'; other elements'
    * entries are not read), each in (0, thickness]: a column aims at the
@@ -287,7 +296,14 @@ typedef struct vm_prism_report {
    * above its predecessor's (0: the phase did not run) */
   double peak_mb[VM_PRISM_NPHASES];
   int reoriented; /* the wall was oriented inwards and its triangles were turned */
-  int timed_out;  /* 1: the time limit stopped a phase (vm_prism_run returns VM_WARN_TIME) */
+  /* a half model: the symmetry plane x[sym_axis] = sym_value (sym_axis -1:
+   * a closed wall), the columns in it, how many of their vertices had to
+   * be put back into it after a step (0: every step kept them there
+   * exactly) and how many other vertices of the layer are on or beyond it */
+  int sym_axis;
+  double sym_value;
+  int64_t sym_columns, sym_snapped, sym_crossing;
+  int timed_out; /* 1: the time limit stopped a phase (vm_prism_run returns VM_WARN_TIME) */
 } vm_prism_report;
 
 /* The stage in one call: the layers on the wall `wall` (see
@@ -365,6 +381,13 @@ int vm_prism_result(vm_prism *p, vm_mesh **out);
  * vm_prism_create); the figures of vm_prism_get_report use it. Errors:
  * VM_ERR_NOMEM, VM_ERR_BACKEND. */
 int vm_prism_medial_radius(vm_prism *p, const double **radius);
+
+/* The symmetry plane of a half model's wall (its triangles and quads):
+ * 1 with *axis (0, 1, 2: x, y, z) and *value where the wall has open
+ * edges and every vertex on them has the same coordinate on that axis,
+ * bit for bit; 0 where the wall is closed or its border is not so; a
+ * negative status (out of memory). */
+int vm_prism_half_plane(vm_ctx *ctx, const vm_mesh *wall, int *axis, double *value);
 
 /* Figures of the run so far (final figures after vm_prism_march). */
 int vm_prism_get_report(vm_prism *p, vm_prism_report *r);

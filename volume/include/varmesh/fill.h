@@ -73,9 +73,15 @@ typedef struct vm_fill_fv_figures {
 } vm_fill_fv_figures;
 
 typedef struct vm_fill_report {
-  int64_t layer_cells;  /* 3D cells of the input */
-  int64_t env_faces;    /* envelope triangles */
-  int64_t far_faces;    /* far-field triangles */
+  int64_t layer_cells; /* 3D cells of the input */
+  int64_t env_faces;   /* envelope triangles */
+  int64_t far_faces;   /* far-field triangles */
+  /* a half model (the envelope open, its border in a plane x, y or z =
+   * const): the plane (sym_axis 0, 1, 2; -1: a closed envelope) and the
+   * triangles that mesh it between the far field and the layer */
+  int sym_axis;
+  double sym_value;
+  int64_t sym_faces;
   int64_t tets;         /* tetrahedra made */
   int64_t new_vertices; /* vertices added (inside and on the far field) */
   int surface_input;    /* the input was a closed surface: it became the wall */

@@ -135,9 +135,22 @@ int vm_mesh_remove_field(vm_mesh *m, const char *name, int location);
 /* Items of a field: m->nv or m->ne. */
 int64_t vm_field_count(const vm_mesh *m, const vm_field *f);
 
+/* A half model's symmetry plane, a mesh attribute the stages write and
+ * read: "y=0" (the axis x, y or z, '=', the coordinate, 17 significant
+ * digits): the model is the mirror image's other half, its open boundary
+ * in that plane. */
+#define VM_ATTR_SYMMETRY_PLANE "symmetry_plane"
 /* Attributes. set replaces an existing key; get returns NULL if absent. */
 int vm_mesh_set_attr(vm_mesh *m, const char *key, const char *value);
 const char *vm_mesh_get_attr(const vm_mesh *m, const char *key);
+
+/* A half model (attribute VM_ATTR_SYMMETRY_PLANE) and its mirror image in
+ * that plane as one mesh: the vertices in the plane shared (bit for bit:
+ * those whose coordinate across it is the plane's), the others and every
+ * element doubled (the image's corners reordered so that it keeps its
+ * orientation; fields copied to the images), the faces in the plane left
+ * out (they are inside the whole). VM_ERR_ARG if m names no plane. */
+int vm_mesh_mirror(vm_ctx *ctx, const vm_mesh *m, vm_mesh **out);
 
 /* Deep copy of src into a new mesh. */
 int vm_mesh_clone(const vm_mesh *src, vm_mesh **out);
