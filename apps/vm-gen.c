@@ -44,6 +44,7 @@ typedef struct {
   double radius;
   int chordwise, spanwise; /* wing */
   double thickness_ratio;
+  int half;
   vm_write_opts wo;
 } args;
 
@@ -102,6 +103,11 @@ static const vm_opt opts[] = {
     {"--level", NULL, VM_OPT_INT, A(level), "N",
      "subdivisions of the icosahedron, 0..8 (default 3: 1280 triangles)", .lo = 0, .hi = 8},
     {"--radius", NULL, VM_OPT_DOUBLE, A(radius), "R", "radius (default 1)", .lo = 1e-6, .hi = 1e6},
+    {"--half", NULL, VM_OPT_FLAG, A(half), NULL,
+     "a half model instead: the upper half (z >= 0) of a cube-sphere with 2^(level+1) intervals "
+     "along each cube edge (level 3: 1,536 triangles), its open border exactly in the symmetry "
+     "plane z = 0",
+     .ival = 1},
     {.kind = VM_OPT_HEADING,
      .help = "\n"
              "usage: vm-gen wing [options] OUT\n"
@@ -159,7 +165,15 @@ int main(int argc, char **argv) {
     goto done;
   }
   int grc;
-  if (sphere) {
+  if (a.half && !sphere) {
+    rc = vm_cli_usage_error(&cli, "--half is for vm-gen sphere");
+    goto done;
+  }
+  if (sphere && a.half) {
+    grc = vm_mesh_create(cli.ctx, &m);
+    if (grc == VM_OK) grc = vm_gen_hemisphere(m, a.radius, 2 << a.level);
+    if (grc == VM_OK) grc = vm_mesh_set_attr(m, VM_ATTR_SYMMETRY_PLANE, "z=0");
+  } else if (sphere) {
     grc = vm_mesh_create(cli.ctx, &m);
     if (grc == VM_OK) grc = vm_gen_icosphere(m, NULL, a.radius, a.level, 0, NULL);
   } else if (wing) {

@@ -410,6 +410,61 @@ int vm_gen_box(vm_mesh *m, const double lo[3], const double hi[3], const int n[3
   return st ? rollback(m, nv0, ne0, st) : VM_OK;
 }
 
+/* ---- hemisphere ---- */
+
+int vm_gen_hemisphere(vm_mesh *m, double radius, int n) {
+  vm_ctx *ctx = m->ctx;
+  if (n < 2 || n % 2 || n > 1000 || !(radius > 0))
+    return vm_error(ctx, VM_ERR_ARG, "hemisphere: n %d (even, 2..1000), radius %g", n, radius);
+  int64_t nv0 = m->nv, ne0 = m->ne, N = n + 1, h = n / 2;
+  int32_t *id = vm_alloc_array(ctx, (size_t)(N * N * N), sizeof *id);
+  if (!id) return VM_ERR_NOMEM;
+  for (int64_t i = 0; i < N * N * N; i++) id[i] = -1;
+  int st = VM_OK;
+  for (int a = 0; a < 3 && !st; a++) {
+    int u = (a + 1) % 3, w = (a + 2) % 3; /* e_u x e_w = e_a */
+    for (int side = 0; side < 2 && !st; side++) {
+      if (a == 2 && !side) continue; /* the cube's bottom: below the plane */
+      for (int j = 0; j <= n && !st; j++)
+        for (int i = 0; i <= n && !st; i++) {
+          int c[3];
+          c[a] = side ? n : 0;
+          c[u] = i;
+          c[w] = j;
+          if (c[2] < h) continue;
+          int32_t *p = id + (c[0] * N + c[1]) * N + c[2];
+          if (*p >= 0) continue;
+          /* the equal-angle cube-sphere: the row c[2] = n / 2 at z = 0 exactly */
+          double t[3];
+          for (int k = 0; k < 3; k++) t[k] = tan((2.0 * c[k] / n - 1) * M_PI / 4);
+          double r = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]), x[3];
+          for (int k = 0; k < 3; k++) x[k] = radius * t[k] / r;
+          if (c[2] == h) x[2] = 0;
+          int64_t v;
+          st = vm_mesh_add_vertex(m, x[0], x[1], x[2], &v);
+          *p = (int32_t)v;
+        }
+      for (int j = 0; j < n && !st; j++)
+        for (int i = 0; i < n && !st; i++) {
+          static const int du[4] = {0, 1, 1, 0}, dw[4] = {0, 0, 1, 1};
+          int32_t v[4];
+          int below = 0;
+          for (int r = 0; r < 4; r++) {
+            int c[3];
+            c[a] = side ? n : 0;
+            c[u] = i + du[r];
+            c[w] = j + dw[r];
+            below |= c[2] < h;
+            v[r] = below ? -1 : id[(c[0] * N + c[1]) * N + c[2]];
+          }
+          if (!below) st = add_square(m, v, !side);
+        }
+    }
+  }
+  vm_free(ctx, id);
+  return st ? rollback(m, nv0, ne0, st) : VM_OK;
+}
+
 /* ---- lens ---- */
 
 /* Stitch ring a (na vertices from a0, angles 2 pi (i + oa) / na) to ring b

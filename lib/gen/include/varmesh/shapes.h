@@ -104,6 +104,13 @@ int vm_gen_cube(vm_mesh *m, int n);
  * low side first) on first use. */
 int vm_gen_box(vm_mesh *m, const double lo[3], const double hi[3], const int n[3]);
 
+/* A half model: the upper half (z >= 0) of the equal-angle cube-sphere of
+ * `radius` about the origin, n (even, 2..1000) intervals along each cube
+ * edge: its open border, 4 n vertices, lies in the plane z = 0 exactly,
+ * the rest above it; oriented outward. Its mirror image in z = 0 closes
+ * it into the whole cube-sphere. */
+int vm_gen_hemisphere(vm_mesh *m, double radius, int n);
+
 /* A lens: two spherical caps of radius R, centres (0, 0, -d) (the upper
  * cap, z >= 0) and (0, 0, d) (the lower), 0 <= d < R, meeting at the sharp
  * circular ridge z = 0, radius sqrt(R^2 - d^2), where the normal turns by
