@@ -5,14 +5,20 @@
  * facing -z. Its mirror image then closes it into a valid whole: every
  * vertex in the plane is its own image, every other one strictly above
  * it. Walls that are open but not half models, and a plane that does not
- * fit, are refused with where. */
+ * fit, are refused with where. The fill closes the layer with a half far
+ * field (box and sphere) and the plane's own triangles: every boundary
+ * face is a wall, far-field or symmetry face, those in the plane exactly
+ * so; an envelope whose border leaves the plane, or that crosses it, is
+ * refused. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "support/check_prism.h"
+#include "varmesh/fill.h"
 #include "varmesh/prism.h"
+#include "varmesh/topology.h"
 #include "vmtest.h"
 
 #define PI 3.14159265358979323846
@@ -66,6 +72,122 @@ static vm_mesh *hemisphere(vm_ctx *ctx, int nr, double tilt) {
 }
 
 static double radius3(const double *x) { return sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]); }
+
+/* The fill of the hemisphere's layer: a half far field (a box, or a
+ * sphere) at 4 model lengths closed by the symmetry plane's triangles. */
+static void fill_half(vm_ctx *ctx, const vm_mesh *layer, int sphere) {
+  vm_fill_opts fo = vm_fill_opts_default();
+  fo.farfield = 4;
+  fo.shape = sphere ? VM_FAR_SPHERE : VM_FAR_BOX;
+  vm_mesh *out = NULL;
+  vm_fill_report fr;
+  int st = vm_fill_run(ctx, layer, &fo, &out, &fr);
+  const char *name = sphere ? "fill (sphere)" : "fill (box)";
+  CHECK(st == 0, "%s: %d %s", name, st, vm_ctx_error(ctx));
+  if (st < 0) return;
+  fprintf(stderr, "%s: %lld tets, %lld far-field and %lld symmetry triangles, plane %d %g\n", name,
+          (long long)fr.tets, (long long)fr.far_faces, (long long)fr.sym_faces, fr.sym_axis,
+          fr.sym_value);
+  CHECK(fr.sym_axis == 2 && fr.sym_value == 0 && fr.sym_faces > 0, "%s: the plane z = 0 meshed",
+        name);
+  /* the boundary faces of the cells are exactly the named faces: wall,
+   * far field, symmetry (the layer's quads and the fill's triangles), the
+   * symmetry ones in z = 0 bit for bit, nothing below it */
+  const vm_field *ph = vm_mesh_find_field(out, "gmsh:physical", VM_FIELD_ELEMENT);
+  int32_t t_sym = -1, t_far = -1, t_wall = -1;
+  for (int i = 0; i < out->nattr; i++) {
+    const char *k = out->attrs[i].key, *v = out->attrs[i].value;
+    if (strncmp(k, "gmsh:physical_name:2:", 21)) continue;
+    int32_t t = (int32_t)atoi(k + 21);
+    if (!strcmp(v, "symmetry")) t_sym = t;
+    if (!strcmp(v, "farfield")) t_far = t;
+    if (!strcmp(v, "wall")) t_wall = t;
+  }
+  int64_t nb = 0, nface = 0, off = 0, other = 0, below = 0, nsymf = 0;
+  int32_t *bfv = NULL;
+  uint8_t *bnv = NULL;
+  CHECK(vm_mesh_boundary(out, &nb, &bfv, &bnv, NULL, NULL) == 0, "%s: boundary", name);
+  for (int64_t e = 0; e < out->ne; e++) {
+    if (vm_elem_dim(out->etype[e]) != 2) continue;
+    int32_t t = ((const int32_t *)ph->data)[e];
+    if (t == t_sym) {
+      nsymf++;
+      for (int64_t k = out->eoff[e]; k < out->eoff[e + 1]; k++)
+        off += out->xyz[3 * (int64_t)out->conn[k] + 2] != 0.0;
+    } else if (t != t_far && t != t_wall) {
+      other++;
+    }
+    nface++;
+  }
+  for (int64_t v = 0; v < out->nv; v++) below += out->xyz[3 * v + 2] < 0;
+  CHECK(t_sym >= 0 && t_far >= 0 && t_wall >= 0, "%s: named %d %d %d", name, t_sym, t_far, t_wall);
+  CHECK(nb == nface && other == 0, "%s: %lld boundary faces, %lld named faces (%lld others)", name,
+        (long long)nb, (long long)nface, (long long)other);
+  CHECK(off == 0 && below == 0, "%s: %lld symmetry-face corners off z = 0, %lld vertices below",
+        name, (long long)off, (long long)below);
+  /* the whole, mirrored: closed, no symmetry face left, every cell positive */
+  vm_mesh *whole = NULL;
+  CHECK(vm_mesh_mirror(ctx, out, &whole) == 0, "%s: mirror", name);
+  if (whole) {
+    int64_t wb = 0;
+    int32_t *wfv = NULL;
+    uint8_t *wnv = NULL;
+    vm_mesh_boundary(whole, &wb, &wfv, &wnv, NULL, NULL);
+    int64_t wsym = 0, tneg = 0;
+    const vm_field *wph = vm_mesh_find_field(whole, "gmsh:physical", VM_FIELD_ELEMENT);
+    for (int64_t e = 0; e < whole->ne; e++) {
+      wsym += vm_elem_dim(whole->etype[e]) == 2 && ((const int32_t *)wph->data)[e] == t_sym;
+      if (whole->etype[e] != VM_TET) continue;
+      const int32_t *c = whole->conn + whole->eoff[e];
+      double a[3], b[3], d[3], x[3];
+      for (int k = 0; k < 3; k++) {
+        a[k] = whole->xyz[3 * c[1] + k] - whole->xyz[3 * c[0] + k];
+        b[k] = whole->xyz[3 * c[2] + k] - whole->xyz[3 * c[0] + k];
+        d[k] = whole->xyz[3 * c[3] + k] - whole->xyz[3 * c[0] + k];
+      }
+      chk_cross(a, b, x);
+      tneg += !(chk_dot(x, d) > 0);
+    }
+    CHECK(wsym == 0 && wb == 2 * (nb - nsymf),
+          "%s: whole: %lld symmetry faces, %lld boundary faces (the half's %lld off the plane, "
+          "twice)",
+          name, (long long)wsym, (long long)wb, (long long)(nb - nsymf));
+    CHECK(chk_corner_inverted(whole) == 0 && tneg == 0, "%s: whole: every cell positive (%lld tets)",
+          name, (long long)tneg);
+    vm_free(ctx, wfv);
+    vm_free(ctx, wnv);
+  }
+  vm_mesh_destroy(&whole);
+  vm_free(ctx, bfv);
+  vm_free(ctx, bnv);
+  vm_mesh_destroy(&out);
+}
+
+/* The fill refuses an envelope whose border leaves the plane, or which
+ * crosses it. */
+static void fill_refused(vm_ctx *ctx, const vm_mesh *layer, int64_t np) {
+  vm_fill_opts fo = vm_fill_opts_default();
+  fo.farfield = 4;
+  for (int c = 0; c < 2; c++) {
+    vm_mesh *m = NULL, *out = NULL;
+    vm_fill_report fr;
+    CHECK(vm_mesh_clone(layer, &m) == 0, "clone");
+    if (!m) return;
+    /* the outer level's first equator vertex lifted off the plane, or a
+     * vertex of the ring above it pulled below */
+    int64_t top = m->nv - (m->nv / 6); /* the outer level (6 levels of nw) */
+    m->xyz[3 * (top + (c ? np : 0)) + 2] = c ? -0.01 : 1e-3;
+    int st = vm_fill_run(ctx, m, &fo, &out, &fr);
+    const char *msg = vm_ctx_error(ctx);
+    const char *says = c ? "crosses its symmetry plane" : "not on the symmetry plane z = 0";
+    CHECK(st == VM_ERR_ARG && !out && msg && strstr(msg, says), "fill refuses (%d): %s", st,
+          msg ? msg : "");
+    fprintf(stderr, "fill refused: %s\n", msg ? msg : "");
+    vm_ctx_clear_error(ctx);
+    vm_mesh_destroy(&out);
+    vm_mesh_destroy(&m);
+  }
+}
 
 /* The exact answer and the mirror check on the hemisphere. */
 static void concentric(vm_ctx *ctx) {
@@ -153,6 +275,9 @@ static void concentric(vm_ctx *ctx) {
   const char *plane = vm_mesh_get_attr(res, VM_ATTR_SYMMETRY_PLANE);
   CHECK(plane && !strcmp(plane, "z=0"), "attribute %s = %s", VM_ATTR_SYMMETRY_PLANE,
         plane ? plane : "(none)");
+  fill_half(ctx, res, 0);
+  fill_half(ctx, res, 1);
+  fill_refused(ctx, res, np);
   vm_mesh_destroy(&res);
   vm_mesh_destroy(&w);
 }
