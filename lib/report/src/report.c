@@ -437,6 +437,28 @@ static int near_wall_slices(vm_report *r, const char *prefix, const char *label,
              : VM_ERR_NOMEM;
     vm_free(ctx, cap);
   }
+  /* a half model: its symmetry plane, the layer's cells and the tets on it
+   * (cut a hair inside the domain) */
+  const char *sp = vm_mesh_get_attr(m, VM_ATTR_SYMMETRY_PLANE);
+  const char *axn = "xyz", *at = sp && sp[0] ? strchr(axn, sp[0]) : NULL;
+  char *end = NULL;
+  double c = at && sp[1] == '=' ? strtod(sp + 2, &end) : NAN;
+  if (st >= 0 && at && end && end != sp + 2 && !*end && isfinite(c)) {
+    int ax = (int)(at - axn);
+    double side = hi[ax] - c >= c - lo[ax] ? 1 : -1;
+    double v = c + side * 1e-7 * ext;
+    snprintf(name, sizeof name, "%ssymmetry", prefix);
+    int layer = vm_mesh_find_field(m, "layer", VM_FIELD_ELEMENT) != NULL;
+    cap = format(ctx,
+                 "%s: the symmetry plane %c = %.6g of the half model: the cells on it (cut %.3g "
+                 "inside), in a window of the wall's bounding box and a sixth of its size around "
+                 "it, coloured by %s.",
+                 label, axn[ax], c, 1e-7 * ext,
+                 layer ? "the element field 'layer' (-1: the fill)" : "their scaled Jacobian");
+    st = cap ? vm_report_slice_window(r, name, cap, m, ax, v, layer ? "layer" : NULL, wlo, whi)
+             : VM_ERR_NOMEM;
+    vm_free(ctx, cap);
+  }
   return st;
 }
 
