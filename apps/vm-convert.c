@@ -13,6 +13,7 @@
 
 typedef struct {
   const char *in, *out, *cut;
+  double cut_snap;
   int fin, fout, strict;
   vm_write_opts wo;
 } args;
@@ -35,6 +36,11 @@ static const vm_opt opts[] = {
      "where the coordinate is above C, :- below; default the side the model reaches farther "
      "into): a half model, its open border exactly in the plane",
      .error = "expects a plane, e.g. y=0 or y=0:-"},
+    {"--cut-snap", NULL, VM_OPT_DOUBLE, A(cut_snap), "F",
+     "with --cut: where the plane would cut an edge within F of its length from an end, that "
+     "vertex is moved onto the plane instead (no needle beside the cut; the surface moves by "
+     "at most F of the edge there); default 0: only vertices within 1e-9 of the diagonal",
+     .lo = 0, .hi = 0.49},
     VM_CLI_OPT_QUIET("no warnings"),
     VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
@@ -120,19 +126,20 @@ static int strict_trial(vm_cli *cli, const vm_mesh *m, const char *out, int fmt,
 
 /* --cut: m cut by the plane, one side kept (varmesh/symmetry.h), said on
  * stderr. */
-static int cut(vm_cli *cli, vm_mesh *m, int axis, double level, int side) {
+static int cut(vm_cli *cli, vm_mesh *m, int axis, double level, int side, double snap) {
   vm_cut_report r;
-  int st = vm_mesh_cut_plane(m, axis, level, side, &r);
+  int st = vm_mesh_cut_plane(m, axis, level, side, snap, &r);
   if (st < 0) return st;
   char pl[64];
   vm_axis_plane_format(axis, level, pl, sizeof pl);
   vm_log(cli->ctx, VM_LOG_INFO,
          "cut at %s, the %s side kept: %lld -> %lld triangles, %lld -> %lld vertices; %lld "
-         "triangles clipped, %lld edges split, %lld vertices within %.3g snapped onto the plane, "
+         "triangles clipped, %lld edges split, %lld vertices within %.3g and %lld near a cut "
+         "snapped onto the plane, "
          "%lld zero-area triangles left out; %lld border edges",
          pl, r.side > 0 ? "+" : "-", (long long)r.nf_in, (long long)r.nf, (long long)r.nv_in,
          (long long)r.nv, (long long)r.clipped, (long long)r.split_edges, (long long)r.snapped,
-         r.tol, (long long)r.degenerate, (long long)r.border_edges);
+         r.tol, (long long)r.snapped_near, (long long)r.degenerate, (long long)r.border_edges);
   if (r.border_off)
     vm_log(cli->ctx, VM_LOG_WARN,
            "cut: %lld border edges are not in the plane %s (the input was not closed)",
@@ -154,12 +161,16 @@ int main(int argc, char **argv) {
     rc = vm_cli_usage_error(&cli, "--cut %s", vm_ctx_error(cli.ctx));
     goto done;
   }
+  if (a.cut_snap > 0 && !a.cut) {
+    rc = vm_cli_usage_error(&cli, "--cut-snap needs --cut");
+    goto done;
+  }
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO) {
     rc = vm_cli_usage_error(&cli, "%s: cannot tell the output format; use --format", a.out);
     goto done;
   }
   int st = vm_mesh_read(cli.ctx, a.in, a.fin, &m);
-  if (st >= 0 && a.cut) st = cut(&cli, m, axis, level, side);
+  if (st >= 0 && a.cut) st = cut(&cli, m, axis, level, side, a.cut_snap);
   if (st >= 0 && a.strict) {
     st = strict_trial(&cli, m, a.out, a.fout, &a.wo);
     if (st == VM_WARN_LOSSY) {

@@ -25,6 +25,7 @@
 
 #include "support/check_surface.h"
 #include "varmesh/shapes.h"
+#include "varmesh/surface.h"
 #include "varmesh/symmetry.h"
 #include "vmtest.h"
 
@@ -157,7 +158,7 @@ static void test_cube(vm_ctx *ctx) {
   const int64_t nf0 = m->ne;
   vm_mesh_clone(m, &m2);
   vm_cut_report r;
-  int st = vm_mesh_cut_plane(m, 2, 0.3, 1, &r);
+  int st = vm_mesh_cut_plane(m, 2, 0.3, 1, 0, &r);
   CHECK(st == VM_OK, "cut: %s", vm_ctx_error(ctx));
   int64_t chi, nb, off, zero, nbv = 0;
   topo(m, 2, 0.3, &chi, &nb, &off, &zero);
@@ -182,7 +183,7 @@ static void test_cube(vm_ctx *ctx) {
   for (int64_t e = 0; g && e < m->ne; e++)
     gok &= ((int32_t *)g->data)[e] >= 0 && ((int32_t *)g->data)[e] < nf0;
   CHECK(f && g && ferr < 1e-14 && gok, "fields: linear off by %g", ferr);
-  vm_mesh_cut_plane(m2, 2, 0.3, 1, NULL);
+  vm_mesh_cut_plane(m2, 2, 0.3, 1, 0, NULL);
   CHECK(m2->nv == m->nv && m2->ne == m->ne &&
             !memcmp(m2->xyz, m->xyz, 3 * (size_t)m->nv * sizeof *m->xyz) &&
             !memcmp(m2->conn, m->conn, 3 * (size_t)m->ne * sizeof *m->conn),
@@ -193,12 +194,12 @@ static void test_cube(vm_ctx *ctx) {
   /* on a grid line, and just off it: snapped */
   m = chk_grid_cube(ctx, n, 1, vid);
   m2 = chk_grid_cube(ctx, n, 1, vid);
-  st = vm_mesh_cut_plane(m, 2, 0.5, 1, &r);
+  st = vm_mesh_cut_plane(m, 2, 0.5, 1, 0, &r);
   CHECK(st == VM_OK && r.split_edges == 0 && r.snapped == 0 && m->ne == 6 * n * n &&
             r.border_edges == 4 * n && r.border_off == 0,
         "cube z=0.5: %lld triangles, %lld split", (long long)m->ne, (long long)r.split_edges);
   CHECK_NEAR(half_volume(m, 2, 0.5), 0.5, 1e-15, "cube z=0.5 volume");
-  st = vm_mesh_cut_plane(m2, 2, 0.5 + 1e-12, 1, &r);
+  st = vm_mesh_cut_plane(m2, 2, 0.5 + 1e-12, 1, 0, &r);
   CHECK(st == VM_OK && r.snapped == 4 * n && r.split_edges == 0 && m2->nv == m->nv &&
             m2->ne == m->ne && !memcmp(m2->conn, m->conn, 3 * (size_t)m->ne * sizeof *m->conn),
         "cube z=0.5+1e-12: %lld snapped", (long long)r.snapped);
@@ -211,18 +212,18 @@ static void test_cube(vm_ctx *ctx) {
   /* the default side is the larger one: z = 0.3 keeps z >= 0.3 (0.7 deep) */
   vm_mesh_destroy(&m);
   m = chk_grid_cube(ctx, n, 1, vid);
-  vm_mesh_cut_plane(m, 2, 0.8, 0, &r);
+  vm_mesh_cut_plane(m, 2, 0.8, 0, 0, &r);
   CHECK(r.side == -1, "z=0.8: default side %d", r.side);
   CHECK_NEAR(half_volume(m, 2, 0.8), 0.8, 1e-14, "cube z=0.8 - side: volume");
   /* nothing on the side asked for */
   vm_mesh_destroy(&m);
   m = chk_grid_cube(ctx, n, 1, vid);
-  CHECK(vm_mesh_cut_plane(m, 0, 2.0, 1, NULL) == VM_ERR_ARG && m->ne == 12 * n * n,
+  CHECK(vm_mesh_cut_plane(m, 0, 2.0, 1, 0, NULL) == VM_ERR_ARG && m->ne == 12 * n * n,
         "x=2 + side: refused, m unchanged");
   vm_ctx_clear_error(ctx);
   int32_t q[4] = {0, 1, 2, 3};
   vm_mesh_add_element(m, VM_QUAD, q);
-  CHECK(vm_mesh_cut_plane(m, 0, 0.5, 0, NULL) == VM_ERR_ARG, "a quad: refused");
+  CHECK(vm_mesh_cut_plane(m, 0, 0.5, 0, 0, NULL) == VM_ERR_ARG, "a quad: refused");
   vm_ctx_clear_error(ctx);
   vm_mesh_destroy(&m);
   vm_mesh_destroy(&m2);
@@ -237,7 +238,8 @@ static void test_sphere(vm_ctx *ctx) {
   vm_mesh_clone(m, &p);
   vm_mesh_clone(m, &q);
   vm_cut_report rp, rq;
-  CHECK(vm_mesh_cut_plane(p, 1, 0, 1, &rp) == VM_OK && vm_mesh_cut_plane(q, 1, 0, -1, &rq) == 0,
+  CHECK(vm_mesh_cut_plane(p, 1, 0, 1, 0, &rp) == VM_OK &&
+            vm_mesh_cut_plane(q, 1, 0, -1, 0, &rq) == 0,
         "sphere y=0: %s", vm_ctx_error(ctx));
   int64_t chi, nb, off, zero;
   topo(p, 1, 0, &chi, &nb, &off, &zero);
@@ -252,7 +254,7 @@ static void test_sphere(vm_ctx *ctx) {
   /* an offset plane clips triangles: still a disc, its border in it */
   vm_mesh_destroy(&p);
   vm_mesh_clone(m, &p);
-  CHECK(vm_mesh_cut_plane(p, 2, 0.3, 0, &rp) == VM_OK && rp.side == -1 && rp.clipped > 0,
+  CHECK(vm_mesh_cut_plane(p, 2, 0.3, 0, 0, &rp) == VM_OK && rp.side == -1 && rp.clipped > 0,
         "sphere z=0.3");
   topo(p, 2, 0.3, &chi, &nb, &off, &zero);
   CHECK(chi == 1 && off == 0 && zero == 0, "sphere z=0.3: chi %lld, %lld off, %lld zero",
@@ -267,12 +269,219 @@ static void test_sphere(vm_ctx *ctx) {
   vm_mesh_destroy(&q);
 }
 
+/* border vertices of m (nface 1 edges), how many are off x[axis] = c */
+static int64_t border_off(const vm_mesh *m, int axis, double c, int64_t *nbv) {
+  int64_t chi, nb, off, zero;
+  topo(m, axis, c, &chi, &nb, &off, &zero);
+  *nbv = nb; /* a single loop: as many vertices as edges */
+  return off;
+}
+
+/* a + b as one mesh */
+static vm_mesh *merged(vm_ctx *ctx, const vm_mesh *a, const vm_mesh *b) {
+  vm_mesh *m = NULL;
+  vm_mesh_clone(a, &m);
+  int64_t base = m->nv;
+  for (int64_t v = 0; v < b->nv; v++)
+    vm_mesh_add_vertex(m, b->xyz[3 * v], b->xyz[3 * v + 1], b->xyz[3 * v + 2], NULL);
+  for (int64_t e = 0; e < b->ne; e++) {
+    int32_t t[3];
+    for (int i = 0; i < 3; i++) t[i] = (int32_t)(b->conn[3 * e + i] + base);
+    vm_mesh_add_element(m, VM_TRI, t);
+  }
+  (void)ctx;
+  return m;
+}
+
+static vm_mesh *hemisphere(vm_ctx *ctx, int level, double cx) {
+  const double o[3] = {cx, 0, 0};
+  vm_mesh *m = NULL;
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, o, 1, level, 0, NULL);
+  vm_mesh_cut_plane(m, 2, 0, 1, 0, NULL);
+  return m;
+}
+
+static void test_detect(vm_ctx *ctx) {
+  vm_symmetry_report r;
+  vm_symmetry_opts o = {0};
+  /* a hemisphere: z = 0 found, nothing to snap */
+  vm_mesh *m = hemisphere(ctx, 3, 0);
+  int st = vm_symmetry_detect(m, &o, &r);
+  int axis = -1;
+  double c = 1;
+  CHECK(st == VM_OK && r.found && r.axis == 2 && r.value == 0 && r.side == 1 && r.loops == 1 &&
+            r.border_edges == r.border_vertices && r.border_edges > 0 && r.snapped == 0 &&
+            vm_mesh_get_symmetry_plane(m, &axis, &c) == 1 && axis == 2 && c == 0,
+        "hemisphere: found %d axis %d value %g side %d, %lld loops", r.found, r.axis, r.value,
+        r.side, (long long)r.loops);
+  /* every other border vertex 1e-8 off (within 1e-6 of the diagonal): snapped */
+  vm_mesh_remove_field(m, "x", VM_FIELD_VERTEX);
+  int64_t k = 0, nbv = 0;
+  for (int64_t v = 0; v < m->nv; v++)
+    if (m->xyz[3 * v + 2] == 0 && k++ % 2) m->xyz[3 * v + 2] = 1e-8;
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_OK && r.found && r.value == 0 && r.snapped == k / 2 &&
+            border_off(m, 2, 0, &nbv) == 0 && fabs(r.max_offset - 1e-8) < 1e-20,
+        "hemisphere, border 1e-8 off: %lld snapped of %lld", (long long)r.snapped, (long long)k);
+  /* given: z = 0 accepted; z = 0.01 refused, saying the farthest vertex */
+  o.given = 1, o.axis = 2, o.value = 0;
+  CHECK(vm_symmetry_detect(m, &o, &r) == VM_OK && r.found && r.given == 1, "given z=0");
+  o.value = 0.01;
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "not in the symmetry plane z=0.01") &&
+            strstr(vm_ctx_error(ctx), "by 0.01"),
+        "given z=0.01: %s", vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  o.given = 0;
+  /* the attribute names the plane: taken as given */
+  vm_mesh_set_attr(m, VM_SYMMETRY_PLANE_ATTR, "z=0.5");
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "attribute symmetry_plane"),
+        "attribute z=0.5: %s", vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  vm_mesh_set_attr(m, VM_SYMMETRY_PLANE_ATTR, "z=0");
+  /* the wall on both sides: a few vertices pushed below the plane */
+  vm_mesh *w = NULL;
+  vm_mesh_clone(m, &w);
+  for (int64_t v = 0; v < w->nv; v++)
+    if (w->xyz[3 * v + 2] > 0.9) w->xyz[3 * v + 2] -= 2.5;
+  st = vm_symmetry_detect(w, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "both sides"), "both sides: %s",
+        vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  vm_mesh_destroy(&w);
+  /* tilted: the hemisphere turned by 20 degrees about x: no plane */
+  vm_mesh_destroy(&m);
+  m = hemisphere(ctx, 3, 0);
+  const double ca = cos(20 * M_PI / 180), sa = sin(20 * M_PI / 180);
+  for (int64_t v = 0; v < m->nv; v++) {
+    double y = m->xyz[3 * v + 1], z = m->xyz[3 * v + 2];
+    m->xyz[3 * v + 1] = ca * y - sa * z;
+    m->xyz[3 * v + 2] = sa * y + ca * z;
+  }
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_OK && !r.found && strstr(r.why, "in no plane") &&
+            !vm_mesh_get_attr(m, VM_SYMMETRY_PLANE_ATTR),
+        "tilted: found %d: %s", r.found, r.why);
+  o.given = 1, o.axis = 2, o.value = 0;
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "the farthest ("), "tilted, given: %s",
+        vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  o.given = 0;
+  vm_mesh_destroy(&m);
+  /* two planes: the cube without its top and bottom faces */
+  const int n = 4;
+  int32_t vid[(n + 1) * (n + 1) * (n + 1)];
+  vm_mesh *cube = chk_grid_cube(ctx, n, 1, vid);
+  vm_mesh_create(ctx, &m);
+  vm_mesh_set_vertices(m, cube->nv);
+  memcpy(m->xyz, cube->xyz, 3 * (size_t)cube->nv * sizeof *m->xyz);
+  for (int64_t e = 0; e < cube->ne; e++) {
+    const int32_t *t = cube->conn + 3 * e;
+    int top = 1, bottom = 1;
+    for (int i = 0; i < 3; i++)
+      top &= cube->xyz[3 * (int64_t)t[i] + 2] == 1, bottom &= cube->xyz[3 * (int64_t)t[i] + 2] == 0;
+    if (!top && !bottom) vm_mesh_add_element(m, VM_TRI, t);
+  }
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_OK && !r.found && r.loops == 2 && strstr(r.why, "different planes: z=0") &&
+            strstr(r.why, "z=1"),
+        "two planes: %s", r.why);
+  vm_mesh_destroy(&m);
+  vm_mesh_destroy(&cube);
+  /* crossing loops: two hemispheres 1 apart */
+  vm_mesh *h1 = hemisphere(ctx, 3, 0), *h2 = hemisphere(ctx, 3, 1);
+  m = merged(ctx, h1, h2);
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "cross each other"), "crossing: %s",
+        vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  vm_mesh_destroy(&m);
+  vm_mesh_destroy(&h2);
+  /* two hemispheres apart: one plane, two loops, accepted */
+  h2 = hemisphere(ctx, 3, 3);
+  m = merged(ctx, h1, h2);
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_OK && r.found && r.loops == 2, "two loops in z=0: found %d, %lld loops", r.found,
+        (long long)r.loops);
+  vm_mesh_destroy(&m);
+  vm_mesh_destroy(&h1);
+  vm_mesh_destroy(&h2);
+  /* closed, plane given: refused; closed, not given: nothing */
+  const double oo[3] = {0, 0, 0};
+  vm_mesh_create(ctx, &m);
+  vm_gen_icosphere(m, oo, 1, 2, 0, NULL);
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_OK && !r.found && r.border_edges == 0 && !r.why[0], "closed sphere");
+  o.given = 1;
+  st = vm_symmetry_detect(m, &o, &r);
+  CHECK(st == VM_ERR_FORMAT && strstr(vm_ctx_error(ctx), "closed"), "closed, given: %s",
+        vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  vm_mesh_destroy(&m);
+}
+
+/* The surface stage on a hemisphere (icosphere level 4 cut at z = 0), its
+ * equator on z = 0, turned inside out first: found, turned outward,
+ * remeshed (uniform, to about 2,000 triangles) and adapted; every border
+ * vertex of the result at z == 0 bit for bit, none below, the volume it
+ * bounds with the plane 2 pi / 3 within 1 %. */
+static void test_stage(vm_ctx *ctx) {
+  vm_mesh *m = hemisphere(ctx, 4, 0);
+  for (int64_t e = 0; e < m->ne; e++) {
+    int32_t t = m->conn[3 * e + 1];
+    m->conn[3 * e + 1] = m->conn[3 * e + 2];
+    m->conn[3 * e + 2] = t;
+  }
+  vm_surface_opts o = vm_surface_opts_default();
+  o.size = VM_SURFACE_SIZE_UNIFORM;
+  o.remesh = VM_SURFACE_YES;
+  o.triangles = 2000;
+  o.adapt.max_iter = 40;
+  vm_surface_summary s;
+  int st = vm_surface_run(ctx, m, &o, &s);
+  int64_t nbv = 0, below = 0;
+  int64_t off = border_off(m, 2, 0, &nbv);
+  for (int64_t v = 0; v < m->nv; v++) below += m->xyz[3 * v + 2] < 0;
+  int axis = -1;
+  double c = 1;
+  CHECK(st == VM_OK && s.symmetry.found && s.symmetry_reoriented && s.remeshed && s.adapted &&
+            off == 0 && below == 0 && nbv > 0 && s.symmetry_border == nbv && s.symmetry_off == 0 &&
+            vm_mesh_get_symmetry_plane(m, &axis, &c) == 1 && axis == 2 && c == 0,
+        "hemisphere through the stage: %d (%s), found %d, reoriented %d, %lld of %lld border "
+        "vertices off, %lld below",
+        st, vm_ctx_error(ctx), s.symmetry.found, s.symmetry_reoriented, (long long)off,
+        (long long)nbv, (long long)below);
+  CHECK_NEAR(vm_symmetry_half_volume(m, 2, 0) / (2 * M_PI / 3), 1, 0.01, "hemisphere volume");
+  CHECK(vm_surface_min_angle(m) > 25, "smallest angle %g", vm_surface_min_angle(m));
+  fprintf(stderr,
+          "hemisphere: %lld triangles, %lld border vertices, smallest angle %.2f, "
+          "volume/(2pi/3) %.5f, %lld border vertices put back, drift %g\n",
+          (long long)m->ne, (long long)nbv, vm_surface_min_angle(m),
+          vm_symmetry_half_volume(m, 2, 0) / (2 * M_PI / 3), (long long)s.symmetry_resnapped,
+          s.symmetry_drift);
+  /* a wrap asked for: refused */
+  vm_mesh_destroy(&m);
+  m = hemisphere(ctx, 3, 0);
+  o = vm_surface_opts_default();
+  o.wrap = 0.01;
+  st = vm_surface_run(ctx, m, &o, &s);
+  CHECK(st == VM_ERR_ARG && strstr(vm_ctx_error(ctx), "not wrapped"), "wrap: %s",
+        vm_ctx_error(ctx));
+  vm_ctx_clear_error(ctx);
+  vm_mesh_destroy(&m);
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   vm_ctx_create(&ctx);
   test_parse(ctx);
   test_cube(ctx);
   test_sphere(ctx);
+  test_detect(ctx);
+  test_stage(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("test_symmetry");
 }

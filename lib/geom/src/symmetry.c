@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "trimesh_private.h"
+#include "varmesh/surface_mesh.h"
 
 int vm_axis_plane_parse(vm_ctx *ctx, const char *s, int *axis, double *value, int *side) {
   const char *what = side ? "x=C, y=C or z=C, optionally :+ or :-" : "x=C, y=C or z=C";
@@ -155,12 +156,15 @@ static int count_border(vm_ctx *ctx, const int32_t *tri, int64_t nt, const doubl
   return VM_OK;
 }
 
-int vm_mesh_cut_plane(vm_mesh *m, int axis, double c, int side, vm_cut_report *rep) {
+int vm_mesh_cut_plane(vm_mesh *m, int axis, double c, int side, double snap_rel,
+                      vm_cut_report *rep) {
   vm_ctx *ctx = m->ctx;
   vm_cut_report r;
   memset(&r, 0, sizeof r);
-  if (axis < 0 || axis > 2 || !isfinite(c) || side < -1 || side > 1)
-    return vm_error(ctx, VM_ERR_ARG, "cut: axis %d, value %g, side %d", axis, c, side);
+  if (axis < 0 || axis > 2 || !isfinite(c) || side < -1 || side > 1 || !(snap_rel >= 0) ||
+      snap_rel >= 0.5)
+    return vm_error(ctx, VM_ERR_ARG, "cut: axis %d, value %g, side %d, snap_rel %g", axis, c, side,
+                    snap_rel);
   for (int64_t e = 0; e < m->ne; e++)
     if (m->etype[e] != VM_TRI)
       return vm_error(ctx, VM_ERR_ARG, "cut: element %lld is a %s; only triangle surfaces are cut",
@@ -196,6 +200,22 @@ int vm_mesh_cut_plane(vm_mesh *m, int axis, double c, int side, vm_cut_report *r
       k[v] = 0;
     } else {
       k[v] = (int8_t)((s > 0 ? 1 : -1) * side);
+    }
+  }
+  /* an edge the plane would cut within snap_rel of its length from an end:
+   * that end onto the plane instead (no needle between it and the cut) */
+  for (int64_t e = 0; snap_rel > 0 && e < nf0; e++) {
+    const int32_t *t = m->conn + m->eoff[e];
+    for (int i = 0; i < 3; i++) {
+      int32_t a = t[i], q = t[(i + 1) % 3];
+      if (k[a] * k[q] >= 0) continue;
+      double *pa = b.x + 3 * (int64_t)a, *pq = b.x + 3 * (int64_t)q;
+      double f = (c - pa[axis]) / (pq[axis] - pa[axis]);
+      int32_t v = f <= 0.5 ? a : q;
+      if ((f <= 0.5 ? f : 1 - f) >= snap_rel) continue;
+      b.x[3 * (int64_t)v + axis] = c;
+      k[v] = 0;
+      r.snapped_near++;
     }
   }
   for (int64_t e = 0; e < nf0 && !st; e++) {
@@ -338,5 +358,396 @@ done:
   vm_free(ctx, b.tri);
   vm_free(ctx, b.parent);
   vm_mesh_destroy(&n);
+  return st;
+}
+
+/* ---- an open wall's symmetry plane ---- */
+
+static int64_t uf_find(int64_t *p, int64_t v) {
+  while (p[v] != v) {
+    p[v] = p[p[v]];
+    v = p[v];
+  }
+  return v;
+}
+
+static int cmp_f64(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+
+static double orient2(const double *a, const double *b, const double *c, int u, int v) {
+  return (b[u] - a[u]) * (c[v] - a[v]) - (b[v] - a[v]) * (c[u] - a[u]);
+}
+
+/* c on the segment ab, given that the three are collinear */
+static int on_seg(const double *a, const double *b, const double *c, int u, int v) {
+  return fmin(a[u], b[u]) <= c[u] && c[u] <= fmax(a[u], b[u]) && fmin(a[v], b[v]) <= c[v] &&
+         c[v] <= fmax(a[v], b[v]);
+}
+
+/* Do the segments ab and cd of the plane (coordinates u, v) meet? */
+static int segs_meet(const double *a, const double *b, const double *c, const double *d, int u,
+                     int v) {
+  double d1 = orient2(a, b, c, u, v), d2 = orient2(a, b, d, u, v);
+  double d3 = orient2(c, d, a, u, v), d4 = orient2(c, d, b, u, v);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0)))
+    return 1;
+  return (d1 == 0 && on_seg(a, b, c, u, v)) || (d2 == 0 && on_seg(a, b, d, u, v)) ||
+         (d3 == 0 && on_seg(c, d, a, u, v)) || (d4 == 0 && on_seg(c, d, b, u, v));
+}
+
+typedef struct {
+  double lo, hi;
+  int64_t e;
+} span;
+
+static int cmp_span(const void *a, const void *b) {
+  const span *p = a, *q = b;
+  if (p->lo != q->lo) return p->lo < q->lo ? -1 : 1;
+  return p->e < q->e ? -1 : p->e > q->e;
+}
+
+/* The first pair of border edges (bv: 2 vertices each, nb) that meet in
+ * the plane without sharing a vertex (a sweep along the first in-plane
+ * coordinate); 1 and the pair in *e1, *e2, else 0, or VM_ERR_NOMEM. */
+static int border_crossing(vm_ctx *ctx, const double *x, const int32_t *bv, int64_t nb, int axis,
+                           int64_t *e1, int64_t *e2) {
+  int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  span *s = vm_alloc_array(ctx, (size_t)(nb > 0 ? nb : 1), sizeof *s);
+  if (!s) return VM_ERR_NOMEM;
+  for (int64_t e = 0; e < nb; e++) {
+    double p = x[3 * (int64_t)bv[2 * e] + u], q = x[3 * (int64_t)bv[2 * e + 1] + u];
+    s[e] = (span){fmin(p, q), fmax(p, q), e};
+  }
+  qsort(s, (size_t)nb, sizeof *s, cmp_span);
+  int found = 0;
+  for (int64_t i = 0; i < nb && !found; i++)
+    for (int64_t j = i + 1; j < nb && s[j].lo <= s[i].hi && !found; j++) {
+      const int32_t *a = bv + 2 * s[i].e, *b = bv + 2 * s[j].e;
+      if (a[0] == b[0] || a[0] == b[1] || a[1] == b[0] || a[1] == b[1]) continue;
+      if (segs_meet(x + 3 * (int64_t)a[0], x + 3 * (int64_t)a[1], x + 3 * (int64_t)b[0],
+                    x + 3 * (int64_t)b[1], u, v)) {
+        found = 1;
+        *e1 = s[i].e < s[j].e ? s[i].e : s[j].e;
+        *e2 = s[i].e < s[j].e ? s[j].e : s[i].e;
+      }
+    }
+  vm_free(ctx, s);
+  return found;
+}
+
+double vm_symmetry_half_volume(const vm_mesh *m, int axis, double c) {
+  double vol = 0;
+  int p = (axis + 1) % 3, q = (axis + 2) % 3;
+  for (int64_t e = 0; e < m->ne; e++) {
+    const int32_t *cn = m->conn + m->eoff[e];
+    int k = (int)(m->eoff[e + 1] - m->eoff[e]);
+    if (vm_elem_dim(m->etype[e]) != 2) continue;
+    /* a polygon as the fan from its first vertex */
+    for (int i = 1; i + 1 < k; i++) {
+      const double *a = m->xyz + 3 * (int64_t)cn[0], *b = m->xyz + 3 * (int64_t)cn[i],
+                   *d = m->xyz + 3 * (int64_t)cn[i + 1];
+      double n = (b[p] - a[p]) * (d[q] - a[q]) - (b[q] - a[q]) * (d[p] - a[p]);
+      vol += ((a[axis] + b[axis] + d[axis]) / 3 - c) * n / 2;
+    }
+  }
+  return vol;
+}
+
+int vm_symmetry_keep(vm_mesh *m, int axis, double c, double tol, int64_t *snapped, double *max_off,
+                     int64_t *off, double at[3]) {
+  vm_surf_edges E;
+  int st = vm_surf_edges_build(m->ctx, m, &E);
+  if (st) return st;
+  int64_t ns = 0, no = 0;
+  double mx = 0;
+  for (int64_t e = 0; e < E.ne; e++) {
+    if (E.nface[e] != 1) continue;
+    for (int i = 0; i < 2; i++) {
+      double *p = m->xyz + 3 * (int64_t)E.ev[2 * e + i], d = fabs(p[axis] - c);
+      if (d == 0) continue;
+      if (d <= tol) {
+        p[axis] = c;
+        ns++;
+        mx = fmax(mx, d);
+      } else {
+        if (!no && at) memcpy(at, p, 3 * sizeof *p);
+        no++;
+      }
+    }
+  }
+  vm_surf_edges_free(m->ctx, &E);
+  if (snapped) *snapped = ns;
+  if (max_off) *max_off = mx;
+  if (off) *off = no;
+  return VM_OK;
+}
+
+int vm_symmetry_detect(vm_mesh *m, const vm_symmetry_opts *o, vm_symmetry_report *rep) {
+  vm_ctx *ctx = m->ctx;
+  vm_symmetry_report r;
+  memset(&r, 0, sizeof r);
+  double lo[3], hi[3], diag = vm_mesh_bounds(m, lo, hi);
+  double tol = (o && o->tol_rel > 0 ? o->tol_rel : VM_SYMMETRY_DETECT_TOL) * diag;
+  int axis = -1, given = 0;
+  double c = 0;
+  r.tol = tol;
+  if (o && o->given) {
+    if (o->axis < 0 || o->axis > 2 || !isfinite(o->value))
+      return vm_error(ctx, VM_ERR_ARG, "symmetry plane: axis %d, value %g", o->axis, o->value);
+    axis = o->axis;
+    c = o->value;
+    given = 1;
+  } else {
+    int k = vm_mesh_get_symmetry_plane(m, &axis, &c);
+    if (k < 0) return k;
+    if (k == 1) given = 2;
+  }
+  char pl[64] = "";
+  if (given) vm_axis_plane_format(axis, c, pl, sizeof pl);
+  const char *by = given == 1 ? "given" : "named by the attribute " VM_SYMMETRY_PLANE_ATTR;
+  vm_surf_edges E;
+  memset(&E, 0, sizeof E);
+  int32_t *bv = NULL;
+  int64_t *uf = NULL, *loop_of = NULL;
+  double *vals = NULL;
+  uint8_t *isb = NULL;
+  int st = vm_surf_edges_build(ctx, m, &E);
+  if (st) return st;
+  int64_t nb = 0, nbv = 0;
+  for (int64_t e = 0; e < E.ne; e++) nb += E.nface[e] == 1;
+  r.border_edges = nb;
+  if (nb == 0) {
+    if (given)
+      st = vm_error(ctx, VM_ERR_FORMAT,
+                    "the symmetry plane %s is %s, but the surface is closed (a half model's wall "
+                    "is open, its border in the plane)",
+                    pl, by);
+    goto done;
+  }
+  const size_t nv1 = (size_t)(m->nv > 0 ? m->nv : 1);
+  bv = vm_alloc_array(ctx, 2 * (size_t)nb, sizeof *bv);
+  uf = vm_alloc_array(ctx, nv1, sizeof *uf);
+  loop_of = vm_alloc_array(ctx, nv1, sizeof *loop_of);
+  vals = vm_alloc_array(ctx, nv1, sizeof *vals);
+  isb = vm_calloc(ctx, nv1, 1);
+  if (!bv || !uf || !loop_of || !vals || !isb) {
+    st = VM_ERR_NOMEM;
+    goto done;
+  }
+  nb = 0;
+  for (int64_t v = 0; v < m->nv; v++) uf[v] = v;
+  for (int64_t e = 0; e < E.ne; e++) {
+    if (E.nface[e] != 1) continue;
+    int32_t a = E.ev[2 * e], b = E.ev[2 * e + 1];
+    bv[2 * nb] = a;
+    bv[2 * nb + 1] = b;
+    nb++;
+    isb[a] = isb[b] = 1;
+    int64_t ra = uf_find(uf, a), rb = uf_find(uf, b);
+    if (ra != rb) uf[ra > rb ? ra : rb] = ra < rb ? ra : rb;
+  }
+  /* the loops, numbered by their smallest vertex */
+  for (int64_t v = 0; v < m->nv; v++) loop_of[v] = -1;
+  for (int64_t v = 0; v < m->nv; v++) {
+    if (!isb[v]) continue;
+    nbv++;
+    int64_t rt = uf_find(uf, v);
+    if (loop_of[rt] < 0) loop_of[rt] = r.loops++;
+    loop_of[v] = loop_of[rt];
+  }
+  r.border_vertices = nbv;
+  if (!given) {
+    /* the flattest axis of the border */
+    double spread = INFINITY, blo = 0, bhi = 0;
+    for (int a = 0; a < 3; a++) {
+      double l = INFINITY, h = -INFINITY;
+      for (int64_t v = 0; v < m->nv; v++)
+        if (isb[v]) l = fmin(l, m->xyz[3 * v + a]), h = fmax(h, m->xyz[3 * v + a]);
+      if (h - l < spread) spread = h - l, axis = a, blo = l, bhi = h;
+    }
+    if (spread > 2 * tol) {
+      /* not planar: each loop in a plane but not the same one, or a loop
+       * in none (said with its flattest axis) */
+      int64_t first = -1, second = -1, bad = -1;
+      int fa = 0, sa = 0, ba = 0;
+      double fc = 0, sc = 0, bl = 0, bh = 0;
+      for (int64_t L = 0; L < r.loops && bad < 0 && second < 0; L++) {
+        int la = 0;
+        double ls = INFINITY, ll = 0, lh = 0;
+        for (int a = 0; a < 3; a++) {
+          double l = INFINITY, h = -INFINITY;
+          for (int64_t v = 0; v < m->nv; v++)
+            if (isb[v] && loop_of[v] == L)
+              l = fmin(l, m->xyz[3 * v + a]), h = fmax(h, m->xyz[3 * v + a]);
+          if (h - l < ls) ls = h - l, la = a, ll = l, lh = h;
+        }
+        if (ls > 2 * tol)
+          bad = L, ba = la, bl = ll, bh = lh;
+        else if (first < 0)
+          first = L, fa = la, fc = (ll + lh) / 2;
+        else if (la != fa || fabs((ll + lh) / 2 - fc) > 2 * tol)
+          second = L, sa = la, sc = (ll + lh) / 2;
+      }
+      const double *p1 = NULL, *p2 = NULL;
+      int64_t n1 = 0, n2 = 0;
+      for (int64_t v = 0; v < m->nv; v++) {
+        if (!isb[v]) continue;
+        if (loop_of[v] == (bad >= 0 ? bad : first)) n1++, p1 = p1 ? p1 : m->xyz + 3 * v;
+        if (loop_of[v] == second) n2++, p2 = p2 ? p2 : m->xyz + 3 * v;
+      }
+      if (bad >= 0) {
+        snprintf(r.why, sizeof r.why,
+                 "its border is in no plane x, y or z = C: %s%lld vertices through (%g, %g, %g) "
+                 "spans %c from %g to %g even along its flattest axis (%.3g of the model's "
+                 "diagonal; tolerance %.3g)",
+                 r.loops > 1 ? "a border loop of " : "the border loop of ", (long long)n1, p1[0],
+                 p1[1], p1[2], 'x' + ba, bl, bh, diag > 0 ? (bh - bl) / diag : 0,
+                 diag > 0 ? tol / diag : 0);
+      } else if (second >= 0) {
+        char s1[64], s2[64];
+        snprintf(r.why, sizeof r.why,
+                 "its %lld border loops lie in different planes: %s (%lld vertices, e.g. (%g, %g, "
+                 "%g)) and %s (%lld vertices, e.g. (%g, %g, %g))",
+                 (long long)r.loops, vm_axis_plane_format(fa, fc, s1, sizeof s1), (long long)n1,
+                 p1[0], p1[1], p1[2], vm_axis_plane_format(sa, sc, s2, sizeof s2), (long long)n2,
+                 p2[0], p2[1], p2[2]);
+      } else {
+        snprintf(r.why, sizeof r.why,
+                 "its border loops lie in planes %.3g of the model's diagonal apart (tolerance "
+                 "%.3g)",
+                 diag > 0 ? spread / diag : 0, diag > 0 ? tol / diag : 0);
+      }
+      goto done;
+    }
+    /* the plane: the value most border vertices have exactly (the
+     * smallest of equals), else the middle of their span */
+    int64_t n = 0, best = 0;
+    for (int64_t v = 0; v < m->nv; v++)
+      if (isb[v]) vals[n++] = m->xyz[3 * v + axis];
+    qsort(vals, (size_t)n, sizeof *vals, cmp_f64);
+    c = vals[0];
+    for (int64_t i = 0; i < n;) {
+      int64_t j = i + 1;
+      while (j < n && vals[j] == vals[i]) j++;
+      if (j - i > best) best = j - i, c = vals[i];
+      i = j;
+    }
+    if (fabs(bhi - c) > tol || fabs(c - blo) > tol) c = (blo + bhi) / 2;
+    if (c == 0) c = 0; /* -0 -> +0 */
+    vm_axis_plane_format(axis, c, pl, sizeof pl);
+  } else {
+    double far = -1;
+    int64_t nfar = 0, fv = -1;
+    for (int64_t v = 0; v < m->nv; v++) {
+      if (!isb[v]) continue;
+      double d = fabs(m->xyz[3 * v + axis] - c);
+      nfar += d > tol;
+      if (d > far) far = d, fv = v;
+    }
+    if (far > tol) {
+      const double *p = m->xyz + 3 * fv;
+      st = vm_error(ctx, VM_ERR_FORMAT,
+                    "the border is not in the symmetry plane %s (%s): %lld of its %lld border "
+                    "vertices are farther than %.3g from it, the farthest (%g, %g, %g) by %g",
+                    pl, by, (long long)nfar, (long long)nbv, tol, p[0], p[1], p[2], far);
+      goto done;
+    }
+  }
+  /* the wall on one side of the plane, not in it */
+  {
+    int64_t npos = 0, nneg = 0, vpos = -1, vneg = -1, inplane = 0, fin = -1;
+    double dpos = 0, dneg = 0;
+    for (int64_t v = 0; v < m->nv; v++) {
+      double d = m->xyz[3 * v + axis] - c;
+      if (d > tol) {
+        npos++;
+        if (d > dpos) dpos = d, vpos = v;
+      } else if (d < -tol) {
+        nneg++;
+        if (-d > dneg) dneg = -d, vneg = v;
+      }
+    }
+    for (int64_t e = 0; e < m->ne; e++) {
+      const int32_t *cn = m->conn + m->eoff[e];
+      int k = (int)(m->eoff[e + 1] - m->eoff[e]), in = vm_elem_dim(m->etype[e]) == 2;
+      for (int i = 0; i < k && in; i++) in = fabs(m->xyz[3 * (int64_t)cn[i] + axis] - c) <= tol;
+      if (in && !inplane++) fin = e;
+    }
+    if (!npos && !nneg) {
+      if (given)
+        st = vm_error(ctx, VM_ERR_FORMAT,
+                      "the whole surface lies in the symmetry plane %s (%s): no wall to keep", pl,
+                      by);
+      else
+        snprintf(r.why, sizeof r.why, "the whole surface lies in its border's plane %s", pl);
+      goto done;
+    }
+    if (npos && nneg) {
+      const double *p = m->xyz + 3 * vpos, *q = m->xyz + 3 * vneg;
+      st = vm_error(ctx, VM_ERR_FORMAT,
+                    "half model (symmetry plane %s): the wall lies on both sides of the plane, "
+                    "%lld vertices above it and %lld below, e.g. (%g, %g, %g) %g above and (%g, "
+                    "%g, %g) %g below",
+                    pl, (long long)npos, (long long)nneg, p[0], p[1], p[2], dpos, q[0], q[1], q[2],
+                    dneg);
+      goto done;
+    }
+    r.side = npos ? 1 : -1;
+    if (inplane) {
+      const int32_t *cn = m->conn + m->eoff[fin];
+      const double *p = m->xyz + 3 * (int64_t)cn[0];
+      st = vm_error(ctx, VM_ERR_FORMAT,
+                    "half model (symmetry plane %s): %lld faces lie in the plane, e.g. the one at "
+                    "(%g, %g, %g): a half model's wall has no face in its symmetry plane",
+                    pl, (long long)inplane, p[0], p[1], p[2]);
+      goto done;
+    }
+  }
+  {
+    int64_t e1 = -1, e2 = -1;
+    int k = border_crossing(ctx, m->xyz, bv, nb, axis, &e1, &e2);
+    if (k < 0) {
+      st = k;
+      goto done;
+    }
+    if (k) {
+      const double *a = m->xyz + 3 * (int64_t)bv[2 * e1], *b = m->xyz + 3 * (int64_t)bv[2 * e1 + 1];
+      const double *p = m->xyz + 3 * (int64_t)bv[2 * e2], *q = m->xyz + 3 * (int64_t)bv[2 * e2 + 1];
+      st = vm_error(ctx, VM_ERR_FORMAT,
+                    "half model (symmetry plane %s): its border loops cross each other in the "
+                    "plane: the border edges (%g, %g, %g)-(%g, %g, %g) and (%g, %g, %g)-(%g, %g, "
+                    "%g) meet",
+                    pl, a[0], a[1], a[2], b[0], b[1], b[2], p[0], p[1], p[2], q[0], q[1], q[2]);
+      goto done;
+    }
+  }
+  /* a half model: its border onto the plane, bit for bit */
+  for (int64_t v = 0; v < m->nv; v++) {
+    if (!isb[v]) continue;
+    double d = fabs(m->xyz[3 * v + axis] - c);
+    if (d == 0) continue;
+    r.snapped++;
+    r.max_offset = fmax(r.max_offset, d);
+    m->xyz[3 * v + axis] = c;
+  }
+  if ((st = vm_mesh_set_symmetry_plane(m, axis, c))) goto done;
+  r.found = 1;
+  r.given = given;
+  r.axis = axis;
+  r.value = c;
+done:
+  if (!r.found) {
+    r.axis = given ? axis : -1;
+    r.value = given ? c : 0;
+  }
+  if (rep) *rep = r;
+  vm_surf_edges_free(ctx, &E);
+  vm_free(ctx, bv);
+  vm_free(ctx, uf);
+  vm_free(ctx, loop_of);
+  vm_free(ctx, vals);
+  vm_free(ctx, isb);
   return st;
 }
