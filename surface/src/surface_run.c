@@ -255,6 +255,8 @@ static int clean(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_s
                  vm_surface_features *f) {
   vm_cleanup_opts co = o->cleanup_opts;
   co.angle = o->sliver_angle < 59 ? o->sliver_angle : 59;
+  /* a half model's border lies in its plane: collapsing along it keeps it there */
+  co.border_collapse = s->symmetry.found;
   if (!all_triangles(m)) {
     vm_log(ctx, VM_LOG_INFO, "remesh: slivers not removed: the surface has quads");
     return VM_OK;
@@ -263,11 +265,14 @@ static int clean(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_s
   if (st) return st;
   const vm_cleanup_report *c = &s->cleanup;
   s->cleaned = 1;
+  char bc[64] = "";
+  if (co.border_collapse)
+    snprintf(bc, sizeof bc, " (%lld along the border)", (long long)c->border_collapses);
   vm_log(ctx, VM_LOG_INFO,
-         "remesh: slivers: %lld flips, %lld collapses: %lld -> %lld vertices, %lld -> %lld "
+         "remesh: slivers: %lld flips, %lld collapses%s: %lld -> %lld vertices, %lld -> %lld "
          "triangles under %g deg; smallest angle %.2f -> %.2f deg (%.2f -> %.2f away from %lld "
          "feature corners, %lld of them cone points); surface moved <= %.3g",
-         (long long)c->flips, (long long)c->collapses, (long long)c->nv_in, (long long)c->nv,
+         (long long)c->flips, (long long)c->collapses, bc, (long long)c->nv_in, (long long)c->nv,
          (long long)c->below_in, (long long)c->below, co.angle, c->min_angle_in, c->min_angle,
          c->min_angle_free_in, c->min_angle_free, (long long)f->ncorner, (long long)s->cones,
          c->max_dev);

@@ -25,6 +25,8 @@
 
 #include "support/check_surface.h"
 #include "varmesh/shapes.h"
+#include "varmesh/cleanup.h"
+#include "varmesh/features.h"
 #include "varmesh/surface.h"
 #include "varmesh/symmetry.h"
 #include "vmtest.h"
@@ -474,6 +476,56 @@ static void test_stage(vm_ctx *ctx) {
   vm_mesh_destroy(&m);
 }
 
+/* The sliver removal along a half model's border (border_collapse): a
+ * hemisphere's border edge split 1 % from an end makes a needle there;
+ * with border_collapse the new vertex is collapsed along the border (the
+ * vertex count back, the border at z == 0 exactly, the smallest angle the
+ * hemisphere's); without it the border vertex stays and so does the
+ * needle. */
+static void test_border_collapse(vm_ctx *ctx) {
+  for (int on = 0; on < 2; on++) {
+    vm_mesh *m = hemisphere(ctx, 3, 0);
+    const int64_t nv0 = m->nv;
+    const double amin0 = vm_surface_min_angle(m);
+    int64_t f = -1;
+    int i0 = 0;
+    for (int64_t e = 0; e < m->ne && f < 0; e++)
+      for (int i = 0; i < 3 && f < 0; i++)
+        if (m->xyz[3 * (int64_t)m->conn[3 * e + i] + 2] == 0 &&
+            m->xyz[3 * (int64_t)m->conn[3 * e + (i + 1) % 3] + 2] == 0)
+          f = e, i0 = i;
+    int32_t a = m->conn[3 * f + i0], b = m->conn[3 * f + (i0 + 1) % 3],
+            c = m->conn[3 * f + (i0 + 2) % 3];
+    const double *pa = m->xyz + 3 * (int64_t)a, *pb = m->xyz + 3 * (int64_t)b;
+    int64_t sv = -1;
+    vm_mesh_add_vertex(m, pa[0] + 0.01 * (pb[0] - pa[0]), pa[1] + 0.01 * (pb[1] - pa[1]), 0, &sv);
+    m->conn[3 * f + (i0 + 1) % 3] = (int32_t)sv; /* (a, s, c) */
+    int32_t t2[3] = {(int32_t)sv, b, c};
+    vm_mesh_add_element(m, VM_TRI, t2);
+    vm_surface_features ft;
+    vm_surface_detect_features(m, 20, 50, &ft);
+    vm_cleanup_opts o = vm_cleanup_opts_default();
+    o.border_collapse = on;
+    vm_cleanup_report r;
+    int st = vm_surface_cleanup(m, &ft, &o, &r);
+    vm_surface_features_free(ctx, &ft);
+    int64_t nbv = 0, off = border_off(m, 2, 0, &nbv);
+    if (on)
+      CHECK(st == VM_OK && r.border_collapses >= 1 && m->nv == nv0 && off == 0 &&
+                vm_surface_min_angle(m) >= amin0 - 1e-9,
+            "border collapse: %lld along the border, %lld vertices (%lld), %lld off, smallest "
+            "angle %g (%g)",
+            (long long)r.border_collapses, (long long)m->nv, (long long)nv0, (long long)off,
+            vm_surface_min_angle(m), amin0);
+    else
+      CHECK(st == VM_OK && r.border_collapses == 0 && m->nv == nv0 + 1 && off == 0 &&
+                vm_surface_min_angle(m) < 2,
+            "no border collapse: %lld vertices, smallest angle %g", (long long)m->nv,
+            vm_surface_min_angle(m));
+    vm_mesh_destroy(&m);
+  }
+}
+
 int main(void) {
   vm_ctx *ctx = NULL;
   vm_ctx_create(&ctx);
@@ -482,6 +534,7 @@ int main(void) {
   test_sphere(ctx);
   test_detect(ctx);
   test_stage(ctx);
+  test_border_collapse(ctx);
   vm_ctx_destroy(&ctx);
   return vmtest_end("test_symmetry");
 }
