@@ -9,9 +9,11 @@
 
 #include "cli.h"
 #include "varmesh/io.h"
+#include "varmesh/symmetry.h"
 
 typedef struct {
-  const char *in, *out;
+  const char *in, *out, *cut;
+  double cut_snap;
   int fin, fout, strict, mirror;
   vm_write_opts wo;
 } args;
@@ -33,6 +35,16 @@ static const vm_opt opts[] = {
      .ival = 1},
     {"--strict", NULL, VM_OPT_FLAG, A(strict), NULL,
      "exit 3, writing nothing, if the output format cannot carry everything", .ival = 1},
+    {"--cut", NULL, VM_OPT_STRING, A(cut), "AXIS=C[:+|:-]",
+     "cut a closed triangle surface by the plane x, y or z = C and keep one side (:+ the side "
+     "where the coordinate is above C, :- below; default the side the model reaches farther "
+     "into): a half model, its open border exactly in the plane",
+     .error = "expects a plane, e.g. y=0 or y=0:-"},
+    {"--cut-snap", NULL, VM_OPT_DOUBLE, A(cut_snap), "F",
+     "with --cut: where the plane would cut an edge within F of its length from an end, that "
+     "vertex is moved onto the plane instead (no needle beside the cut; the surface moves by "
+     "at most F of the edge there); default 0: only vertices within 1e-9 of the diagonal",
+     .lo = 0, .hi = 0.49},
     VM_CLI_OPT_QUIET("no warnings"),
     VM_CLI_OPT_VERBOSE("debug messages too"),
     {0}};
@@ -116,6 +128,29 @@ static int strict_trial(vm_cli *cli, const vm_mesh *m, const char *out, int fmt,
   return st;
 }
 
+/* --cut: m cut by the plane, one side kept (varmesh/symmetry.h), said on
+ * stderr. */
+static int cut(vm_cli *cli, vm_mesh *m, int axis, double level, int side, double snap) {
+  vm_cut_report r;
+  int st = vm_mesh_cut_plane(m, axis, level, side, snap, &r);
+  if (st < 0) return st;
+  char pl[64];
+  vm_axis_plane_format(axis, level, pl, sizeof pl);
+  vm_log(cli->ctx, VM_LOG_INFO,
+         "cut at %s, the %s side kept: %lld -> %lld triangles, %lld -> %lld vertices; %lld "
+         "triangles clipped, %lld edges split, %lld vertices within %.3g and %lld near a cut "
+         "snapped onto the plane, "
+         "%lld zero-area triangles left out; %lld border edges",
+         pl, r.side > 0 ? "+" : "-", (long long)r.nf_in, (long long)r.nf, (long long)r.nv_in,
+         (long long)r.nv, (long long)r.clipped, (long long)r.split_edges, (long long)r.snapped,
+         r.tol, (long long)r.snapped_near, (long long)r.degenerate, (long long)r.border_edges);
+  if (r.border_off)
+    vm_log(cli->ctx, VM_LOG_WARN,
+           "cut: %lld border edges are not in the plane %s (the input was not closed)",
+           (long long)r.border_off, pl);
+  return VM_OK;
+}
+
 int main(int argc, char **argv) {
   vm_cli cli;
   vm_cli_init(&cli, "vm-convert");
@@ -124,11 +159,22 @@ int main(int argc, char **argv) {
   int rc = vm_cli_parse(&cli, &spec, &a, argc - 1, argv + 1);
   if (rc != VM_CLI_RUN) goto done;
   rc = VM_EXIT_OK;
+  int axis = 0, side = 0;
+  double level = 0;
+  if (a.cut && vm_axis_plane_parse(cli.ctx, a.cut, &axis, &level, &side)) {
+    rc = vm_cli_usage_error(&cli, "--cut %s", vm_ctx_error(cli.ctx));
+    goto done;
+  }
+  if (a.cut_snap > 0 && !a.cut) {
+    rc = vm_cli_usage_error(&cli, "--cut-snap needs --cut");
+    goto done;
+  }
   if (a.fout == VM_FMT_AUTO && vm_format_from_path(a.out) == VM_FMT_AUTO) {
     rc = vm_cli_usage_error(&cli, "%s: cannot tell the output format; use --format", a.out);
     goto done;
   }
   int st = vm_mesh_read(cli.ctx, a.in, a.fin, &m);
+  if (st >= 0 && a.cut) st = cut(&cli, m, axis, level, side, a.cut_snap);
   if (st >= 0 && a.mirror) {
     vm_mesh *whole = NULL;
     if ((st = vm_mesh_mirror(cli.ctx, m, &whole)) >= 0) {

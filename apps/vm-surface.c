@@ -39,6 +39,14 @@ typedef struct {
   vm_write_opts wo;
 } args;
 
+static int opt_symmetry(vm_cli *cli, const vm_opt *opt, const char *val, void *a) {
+  vm_symmetry_opts *y = &((args *)a)->so.symmetry;
+  if (vm_axis_plane_parse(cli->ctx, val, &y->axis, &y->value, NULL))
+    return vm_cli_usage_error(cli, "%s %s", opt->name, vm_ctx_error(cli->ctx));
+  y->given = 1;
+  return VM_EXIT_OK;
+}
+
 static int opt_edge_length(vm_cli *cli, const vm_opt *opt, const char *val, void *a) {
   double x;
   if (vm_cli_double(cli, opt->name, val, 0, 1e300, &x)) return VM_EXIT_USAGE;
@@ -59,6 +67,13 @@ static const vm_opt opts[] = {
      .choices = tri},
     {"--open-ok", NULL, VM_OPT_FLAG, A(so.repair_opts.require_closed), NULL,
      "accept an open surface (borders become feature lines)", .ival = 0},
+    {"--symmetry", NULL, VM_OPT_CALL, 0, "AXIS=C",
+     "the input is a half model whose open border lies in the plane x, y or z = C (refused, "
+     "saying where, if a border vertex is farther than 1e-6 of the diagonal from it); by default "
+     "an open input whose border lies in one such plane is taken as a half model, said on "
+     "stderr. Its border stays open and in the plane bit for bit through every step (a feature "
+     "line); the output carries the attribute symmetry_plane",
+     .fn = opt_symmetry},
     {"--no-union", NULL, VM_OPT_FLAG, A(so.repair_opts.union_overlaps), NULL,
      "no union of closed parts: overlapping ones are refused, one inside another is a cavity "
      "(by default the repair replaces them by their union: an assembly's wing through its "
@@ -216,6 +231,25 @@ static void print_json(const args *a, const vm_mesh *m, const vm_surface_summary
            (long long)rr->healed, (long long)rr->heal_pairs);
     vm_json_double(stdout, rr->volume);
     printf("}");
+  }
+  if (s->symmetry.found) {
+    char pl[64];
+    printf(", \"symmetry\": {\"plane\": \"%s\", \"axis\": \"%c\", \"value\": ",
+           vm_axis_plane_format(s->symmetry.axis, s->symmetry.value, pl, sizeof pl),
+           'x' + s->symmetry.axis);
+    vm_json_double(stdout, s->symmetry.value);
+    printf(", \"given\": %s, \"side\": %d, \"border_edges_in\": %lld, \"loops_in\": %lld, "
+           "\"border_vertices_in\": %lld, \"snapped_in\": %lld, \"max_offset_in\": ",
+           s->symmetry.given ? "true" : "false", s->symmetry.side,
+           (long long)s->symmetry.border_edges, (long long)s->symmetry.loops,
+           (long long)s->symmetry.border_vertices, (long long)s->symmetry.snapped);
+    vm_json_double(stdout, s->symmetry.max_offset);
+    printf(", \"border_vertices\": %lld, \"off_plane\": %lld, \"resnapped\": %lld, "
+           "\"drift\": ",
+           (long long)s->symmetry_border, (long long)s->symmetry_off,
+           (long long)s->symmetry_resnapped);
+    vm_json_double(stdout, s->symmetry_drift);
+    printf(", \"reoriented\": %s}", s->symmetry_reoriented ? "true" : "false");
   }
   printf(", \"size\": \"%s\", \"needles\": %lld, \"remeshed\": %s",
          s->size_used == VM_SURFACE_SIZE_UNIFORM     ? "uniform"
@@ -387,6 +421,16 @@ static int write_report(vm_cli *cli, vm_report **report, vm_report_history *hist
                        (long long)rr->stitched, rr->border_edges ? "open" : "closed",
                        (long long)rr->components, (long long)rr->self_intersections,
                        (long long)rr->united);
+  if (st >= 0 && s->symmetry.found) {
+    char pl[64];
+    st = vm_report_row(*report, "half model",
+                       "symmetry plane %s (%s); %lld border vertices in it bit for bit (%lld in "
+                       "the input, %lld put onto it); %lld off it",
+                       vm_axis_plane_format(s->symmetry.axis, s->symmetry.value, pl, sizeof pl),
+                       s->symmetry.given ? "given" : "found", (long long)s->symmetry_border,
+                       (long long)s->symmetry.border_vertices, (long long)s->symmetry.snapped,
+                       (long long)s->symmetry_off);
+  }
   if (st >= 0 && s->remeshed)
     st = vm_report_row(
         *report, "remeshed", "%s%s%.3g, %lld -> %lld vertices", sizes[s->size_used],

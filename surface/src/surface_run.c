@@ -9,6 +9,7 @@
 
 #include "varmesh/features.h"
 #include "varmesh/project.h"
+#include "varmesh/surface_mesh.h"
 #include "vec3.h"
 
 vm_surface_opts vm_surface_opts_default(void) {
@@ -119,7 +120,12 @@ static int repair(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_
       (why == VM_REPAIR_OPEN || why == VM_REPAIR_NONMANIFOLD || why == VM_REPAIR_CROSSING)) {
     char msg[1024];
     snprintf(msg, sizeof msg, "%s", vm_ctx_error(ctx));
-    if (!wraps_refused(o, why)) {
+    if (why == VM_REPAIR_OPEN && s->symmetry.why[0]) {
+      vm_error(ctx, st,
+               "%s; not a half model either: %s (vm-surface --wrap 0.005 puts a closed surface "
+               "around such a model)",
+               msg, s->symmetry.why);
+    } else if (!wraps_refused(o, why)) {
       vm_error(ctx, st, "%s (vm-surface --wrap 0.005 puts a closed surface around such a model)",
                msg);
     } else {
@@ -249,6 +255,8 @@ static int clean(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_s
                  vm_surface_features *f) {
   vm_cleanup_opts co = o->cleanup_opts;
   co.angle = o->sliver_angle < 59 ? o->sliver_angle : 59;
+  /* a half model's border lies in its plane: collapsing along it keeps it there */
+  co.border_collapse = s->symmetry.found;
   if (!all_triangles(m)) {
     vm_log(ctx, VM_LOG_INFO, "remesh: slivers not removed: the surface has quads");
     return VM_OK;
@@ -257,11 +265,14 @@ static int clean(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *o, vm_surface_s
   if (st) return st;
   const vm_cleanup_report *c = &s->cleanup;
   s->cleaned = 1;
+  char bc[64] = "";
+  if (co.border_collapse)
+    snprintf(bc, sizeof bc, " (%lld along the border)", (long long)c->border_collapses);
   vm_log(ctx, VM_LOG_INFO,
-         "remesh: slivers: %lld flips, %lld collapses: %lld -> %lld vertices, %lld -> %lld "
+         "remesh: slivers: %lld flips, %lld collapses%s: %lld -> %lld vertices, %lld -> %lld "
          "triangles under %g deg; smallest angle %.2f -> %.2f deg (%.2f -> %.2f away from %lld "
          "feature corners, %lld of them cone points); surface moved <= %.3g",
-         (long long)c->flips, (long long)c->collapses, (long long)c->nv_in, (long long)c->nv,
+         (long long)c->flips, (long long)c->collapses, bc, (long long)c->nv_in, (long long)c->nv,
          (long long)c->below_in, (long long)c->below, co.angle, c->min_angle_in, c->min_angle,
          c->min_angle_free_in, c->min_angle_free, (long long)f->ncorner, (long long)s->cones,
          c->max_dev);
@@ -632,8 +643,9 @@ static int adapt(vm_ctx *ctx, vm_mesh *m, const vm_mesh *ref, const vm_surface_o
     const double *p = ref->xyz + 3 * (int64_t)ba, *q = ref->xyz + 3 * (int64_t)bb;
     s->open = 1;
     return vm_error(ctx, VM_ERR_FORMAT,
-                    "open surface: e.g. the border edge (%g, %g, %g)-(%g, %g, %g)", p[0], p[1],
-                    p[2], q[0], q[1], q[2]);
+                    "open surface: e.g. the border edge (%g, %g, %g)-(%g, %g, %g)%s%s", p[0], p[1],
+                    p[2], q[0], q[1], q[2], s->symmetry.why[0] ? "; not a half model either: " : "",
+                    s->symmetry.why);
   }
   vm_surface_projector *proj = NULL;
   int st = ref_projector(ctx, ref, o, &proj);
@@ -983,6 +995,72 @@ static int unblind(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s) {
   return VM_OK;
 }
 
+/* A half model's plane "y=0" into buf. */
+static const char *plane_name(const vm_surface_summary *s, char *buf, size_t n) {
+  return vm_axis_plane_format(s->symmetry.axis, s->symmetry.value, buf, n);
+}
+
+/* A half model's border kept in its plane after the step `what`: border
+ * vertices a step left off it by rounding (within the tolerance) put back
+ * bit for bit; farther ones said (none expected: every step keeps the
+ * border as a feature line). */
+static int keep_plane(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s, const char *what) {
+  if (!s->symmetry.found) return VM_OK;
+  int64_t snapped = 0, off = 0;
+  double drift = 0, at[3] = {0, 0, 0};
+  int st = vm_symmetry_keep(m, s->symmetry.axis, s->symmetry.value, s->symmetry.tol, &snapped,
+                            &drift, &off, at);
+  if (st < 0) return st;
+  s->symmetry_resnapped += snapped;
+  if (drift > s->symmetry_drift) s->symmetry_drift = drift;
+  if (snapped)
+    vm_log(ctx, VM_LOG_DEBUG, "%s: %lld border vertices put back onto the symmetry plane (%g off)",
+           what, (long long)snapped, drift);
+  if (off) {
+    char pl[64];
+    vm_log(ctx, VM_LOG_WARN,
+           "%s: %lld border vertices are off the symmetry plane %s by more than %.3g, e.g. (%g, "
+           "%g, %g)",
+           what, (long long)off, plane_name(s, pl, sizeof pl), s->symmetry.tol, at[0], at[1],
+           at[2]);
+  }
+  return VM_OK;
+}
+
+/* A half model after the repair: its border still in the plane, and
+ * facing away from the volume it bounds with the plane. */
+static int half_after_repair(vm_ctx *ctx, vm_mesh *m, vm_surface_summary *s) {
+  char pl[64];
+  plane_name(s, pl, sizeof pl);
+  int64_t off = 0;
+  double at[3] = {0, 0, 0};
+  int st = vm_symmetry_keep(m, s->symmetry.axis, s->symmetry.value, s->symmetry.tol, NULL, NULL,
+                            &off, at);
+  if (st < 0) return st;
+  if (off)
+    return vm_error(ctx, VM_ERR_FORMAT,
+                    "half model (symmetry plane %s): after the repair %lld border vertices are off "
+                    "the plane, e.g. (%g, %g, %g): the repair removed faces along the border",
+                    pl, (long long)off, at[0], at[1], at[2]);
+  if (vm_symmetry_half_volume(m, s->symmetry.axis, s->symmetry.value) < 0) {
+    for (int64_t e = 0; e < m->ne; e++) {
+      int32_t *c = m->conn + m->eoff[e];
+      int k = (int)(m->eoff[e + 1] - m->eoff[e]);
+      for (int i = 1, j = k - 1; i < j; i++, j--) {
+        int32_t t = c[i];
+        c[i] = c[j];
+        c[j] = t;
+      }
+    }
+    s->symmetry_reoriented = 1;
+    vm_log(ctx, VM_LOG_INFO,
+           "symmetry plane %s: the half model faced into the volume it bounds with the plane: "
+           "every face turned over",
+           pl);
+  }
+  return VM_OK;
+}
+
 static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_summary *summary) {
   vm_surface_summary local;
   vm_surface_summary *s = summary ? summary : &local;
@@ -1002,8 +1080,34 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
   int do_repair = o.step == VM_SURFACE_REPAIR || o.repair == VM_SURFACE_YES ||
                   (o.repair == VM_SURFACE_AUTO &&
                    (o.soup || o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_REMESH));
-  int st = o.wrap > 0 ? wrap(ctx, m, o.wrap, o.wrap_offset, s) : VM_OK;
+  /* a half model: its border open, in the plane, through every step */
+  int st = vm_symmetry_detect(m, &o.symmetry, &s->symmetry);
+  if (st < 0) return st;
+  if (s->symmetry.found) {
+    const vm_symmetry_report *y = &s->symmetry;
+    char pl[64];
+    plane_name(s, pl, sizeof pl);
+    if (o.wrap > 0)
+      return vm_error(ctx, VM_ERR_ARG,
+                      "a half model (symmetry plane %s) is not wrapped: the wrap would close its "
+                      "border in the plane",
+                      pl);
+    o.wrap = 0;
+    o.repair_opts.require_closed = 0;
+    vm_log(ctx, VM_LOG_INFO,
+           "symmetry plane %s (%s): a half model, %lld border edges in %lld loops, the wall on "
+           "its %s side; %lld border vertices put onto it exactly (at most %.3g off; tolerance "
+           "%.3g)",
+           pl,
+           y->given == 1   ? "given"
+           : y->given == 2 ? "the input's attribute " VM_SYMMETRY_PLANE_ATTR
+                           : "found: every border vertex lies in it",
+           (long long)y->border_edges, (long long)y->loops, y->side > 0 ? "+" : "-",
+           (long long)y->snapped, y->max_offset, y->tol);
+  }
+  st = o.wrap > 0 ? wrap(ctx, m, o.wrap, o.wrap_offset, s) : VM_OK;
   if (st >= 0 && do_repair) st = repair(ctx, m, &o, s);
+  if (st >= 0 && s->symmetry.found) st = half_after_repair(ctx, m, s);
   if (st < 0) return st;
   /* the repair and the remeshing (CGAL) cannot stop half-way: an interrupt
    * during them ends the run after them, with the mesh they made */
@@ -1043,6 +1147,7 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
     }
     if (st >= 0) s->self_intersections = refused ? n0 : n;
   }
+  if (st >= 0) st = keep_plane(ctx, m, s, "remesh");
   double *x0 = NULL;
   if (st >= 0 && (o.step == VM_SURFACE_ALL || o.step == VM_SURFACE_ADAPT)) {
     x0 = vm_alloc_array(ctx, 3 * (size_t)(m->nv > 0 ? m->nv : 1), sizeof *x0);
@@ -1089,6 +1194,8 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
              "adapt: none of the %lld elements the adaptation flipped is left reversed, and no "
              "triangles intersect (checked exactly)",
              (long long)flipped0);
+    if (b >= 0) b = keep_plane(ctx, m, s, "adapt");
+    if (b < 0) st = b;
   }
   /* the wall made fit for a finite-volume layer: the last step of all,
    * its vertices on the surface before the adaptation */
@@ -1100,6 +1207,7 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
       if (!b) memcpy(tmp->xyz, x0, 3 * (size_t)m->nv * sizeof *x0);
     }
     if (!b) b = ortho(ctx, m, input ? input : tmp ? tmp : m, &o, s);
+    if (b >= 0) b = keep_plane(ctx, m, s, "ortho");
     vm_mesh_destroy(&tmp);
     if (b < 0) st = b;
   }
@@ -1148,7 +1256,35 @@ static int run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts, vm_surface_
   vm_mesh_destroy(&input);
   if (st >= 0 && o.step != VM_SURFACE_CURVATURE && all_triangles(m)) {
     int b = unblind(ctx, m, s);
+    if (b >= 0) b = keep_plane(ctx, m, s, "unblind");
     if (b < 0) st = b;
+  }
+  /* the result's border: every vertex in the plane */
+  if (st >= 0 && s->symmetry.found) {
+    vm_surf_edges E;
+    int b = vm_surf_edges_build(ctx, m, &E);
+    if (b < 0) return b;
+    uint8_t *seen = vm_calloc(ctx, (size_t)(m->nv > 0 ? m->nv : 1), 1);
+    if (!seen) b = VM_ERR_NOMEM;
+    for (int64_t e = 0; seen && e < E.ne; e++)
+      for (int i = 0; E.nface[e] == 1 && i < 2; i++) {
+        int32_t v = E.ev[2 * e + i];
+        if (seen[v]) continue;
+        seen[v] = 1;
+        s->symmetry_border++;
+        s->symmetry_off += m->xyz[3 * (int64_t)v + s->symmetry.axis] != s->symmetry.value;
+      }
+    vm_free(ctx, seen);
+    vm_surf_edges_free(ctx, &E);
+    /* the plane for the later stages (a remeshing makes a new mesh) */
+    if (b >= 0) b = vm_mesh_set_symmetry_plane(m, s->symmetry.axis, s->symmetry.value);
+    if (b < 0) return b;
+    if (s->symmetry_off) {
+      char pl[64];
+      vm_log(ctx, VM_LOG_WARN, "%lld of the result's %lld border vertices are not in the plane %s",
+             (long long)s->symmetry_off, (long long)s->symmetry_border,
+             plane_name(s, pl, sizeof pl));
+    }
   }
   return st;
 }
@@ -1171,9 +1307,10 @@ int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,
     if (b < 0) return b;
   }
   int st = run(ctx, m, &o, s);
-  int64_t left = st >= 0 && orig && !s->wrapped && s->needles_in > 0 && all_triangles(m)
-                     ? needles(m, o.needle_angle)
-                     : 0;
+  int64_t left =
+      st >= 0 && orig && !s->wrapped && !s->symmetry.found && s->needles_in > 0 && all_triangles(m)
+          ? needles(m, o.needle_angle)
+          : 0;
   if (left > 0 && !vm_ctx_interrupted(ctx)) {
     double amin = vm_surface_min_angle(m);
     vm_log(ctx, VM_LOG_WARN,

@@ -17,6 +17,7 @@ vm_cleanup_opts vm_cleanup_opts_default(void) {
   o.max_dev = 0;
   o.max_dev_rel = 0.05;
   o.rounds = 20;
+  o.border_collapse = 0;
   return o;
 }
 
@@ -235,6 +236,7 @@ typedef struct {
   hmap fe;     /* feature edges */
   const uint8_t *vclass;
   double tol_abs, tol_rel, thr;
+  int border_collapse;
   int64_t bad_keys;
   /* scratch: the rings and neighbours of a collapse */
   int64_t fu[RING_MAX], fw[RING_MAX];
@@ -320,9 +322,15 @@ static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
   mv->dev = dev;
 }
 
+static void eval_collapse_border(cmesh *c, int32_t u, int32_t w, move *mv);
+
 /* collapse u onto w (u goes away, w stays where it is) */
 static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
   mv->kind = 0;
+  if (c->border_collapse && c->vborder[u] && c->vclass[u] == VM_FEATURE_LINE) {
+    eval_collapse_border(c, u, w, mv);
+    return;
+  }
   /* corners, feature-line and border vertices stay: the features keep
    * every vertex they have (removing one from a sharp trailing edge
    * changes its shape, and the layers built on it, more than the angle
@@ -389,6 +397,88 @@ static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
   mv->dev = dev;
 }
 
+/* The other end p of u's border edge that is not (u, w), or -1. */
+static int32_t border_other(const cmesh *c, const int64_t *Fu, int nu, int32_t u, int32_t w) {
+  for (int i = 0; i < nu; i++) {
+    const int32_t *x = c->t.tri + 3 * Fu[i];
+    for (int j = 0; j < 3; j++) {
+      int32_t a = x[j], b = x[(j + 1) % 3];
+      if (a == u && b != w && he_find(c, b, a) < 0) return b;
+      if (b == u && a != w && he_find(c, b, a) < 0) return a;
+    }
+  }
+  return -1;
+}
+
+/* collapse the border line vertex u onto its border neighbour w: the
+ * border p-u-w becomes p-w (it moves by u's distance from that segment,
+ * within the tolerances; in a plane if it was); u's one face on (u, w)
+ * goes */
+static void eval_collapse_border(cmesh *c, int32_t u, int32_t w, move *mv) {
+  int64_t h = he_find(c, u, w), t = he_find(c, w, u);
+  if ((h >= 0) == (t >= 0)) return; /* (u, w) must be a border edge */
+  if (!c->vborder[w]) return;
+  int64_t f0 = (h >= 0 ? h : t) / 3, hh = h >= 0 ? h : t;
+  int32_t c0 = c->t.tri[3 * f0 + (hh % 3 + 2) % 3];
+  int64_t *Fu = c->fu, *Fw = c->fw;
+  int nu = ring(c, u, Fu), nw = ring(c, w, Fw);
+  if (nu < 2 || nw < 0) return; /* u on one face only: its removal opens a hole */
+  int32_t *Nu = c->nu, *Nw = c->nw;
+  int ku = vm_tm_neighbours(&c->t, u, Fu, nu, Nu), kw = vm_tm_neighbours(&c->t, w, Fw, nw, Nw);
+  /* link condition for a border edge: the only common neighbour is c0 */
+  for (int i = 0; i < ku; i++)
+    if (Nu[i] != c0 && vm_tm_contains(Nw, kw, Nu[i])) return;
+  if (!vm_tm_contains(Nw, kw, c0)) return;
+  int32_t p = border_other(c, Fu, nu, u, w);
+  if (p < 0 || p == w) return;
+  const double *x = c->x;
+  /* how far the border moves: u's distance from the segment p-w */
+  double pw[3], pu[3];
+  vm_sub3(x + 3 * (int64_t)w, x + 3 * (int64_t)p, pw);
+  vm_sub3(x + 3 * (int64_t)u, x + 3 * (int64_t)p, pu);
+  double l2 = vm_dot3(pw, pw), s = l2 > 0 ? vm_dot3(pu, pw) / l2 : 0;
+  if (s <= 0 || s >= 1) return; /* u must lie between p and w along the border */
+  double q[3] = {pu[0] - s * pw[0], pu[1] - s * pw[1], pu[2] - s * pw[2]};
+  double bdev = vm_norm3(q) + (c->err[u] > c->err[w] ? c->err[u] : c->err[w]);
+  if (bdev > tol_for(c, sqrt(l2))) return;
+  double uw[3];
+  vm_sub3(x + 3 * (int64_t)u, x + 3 * (int64_t)w, uw);
+  double newmin = 180, dev = bdev;
+  int newbad = 0;
+  for (int i = 0; i < nu; i++) {
+    int64_t g = Fu[i];
+    if (g == f0) continue;
+    int32_t nt[3];
+    memcpy(nt, c->t.tri + 3 * g, sizeof nt);
+    double no[3], nn[3];
+    tri_normal(x, nt[0], nt[1], nt[2], no);
+    nt[vm_tm_index(nt, u)] = w;
+    tri_normal(x, nt[0], nt[1], nt[2], nn);
+    if (cos_between(no, nn) < 0.5) return;
+    double d = fabs(vm_dot3(uw, nn)) / vm_norm3(nn), lmax = 0;
+    for (int j = 0; j < 3; j++) {
+      double l = vm_dist3(x + 3 * (int64_t)nt[j], x + 3 * (int64_t)nt[(j + 1) % 3]);
+      if (l > lmax) lmax = l;
+    }
+    d += c->err[u] > c->err[w] ? c->err[u] : c->err[w];
+    if (d > tol_for(c, lmax)) return;
+    if (d > dev) dev = d;
+    double a = tri_min_deg(x, nt[0], nt[1], nt[2]);
+    if (a < newmin) newmin = a;
+    newbad += a < c->thr;
+  }
+  int oldbad = 0;
+  double oldmin = faces_min(c, Fu, nu, &oldbad);
+  mv->kind = 3;
+  mv->a = u;
+  mv->b = w;
+  mv->oldmin = oldmin;
+  mv->newmin = newmin;
+  mv->oldbad = oldbad;
+  mv->newbad = newbad;
+  mv->dev = dev;
+}
+
 static void raise_err(cmesh *c, int32_t v, double e) {
   if (e > c->err[v]) c->err[v] = e;
 }
@@ -404,9 +494,13 @@ static void apply_flip(cmesh *c, int32_t a, int32_t b, double dev) {
 
 static void apply_collapse(cmesh *c, int32_t u, int32_t w, double dev) {
   int64_t h = he_find(c, u, w), t = he_find(c, w, u);
-  int64_t f0 = h / 3, f1 = t / 3;
+  int64_t f0 = h >= 0 ? h / 3 : -1, f1 = t >= 0 ? t / 3 : -1;
   int64_t *Fu = c->fu;
   int nu = ring(c, u, Fu);
+  if (f0 < 0 || f1 < 0) { /* along the border: its edge p-u becomes p-w, a feature */
+    int32_t p = border_other(c, Fu, nu, u, w);
+    if (p >= 0 && hm_reserve(c->ctx, &c->fe, 1) == VM_OK) hm_put(&c->fe, ukey(p, w), 1);
+  }
   c->bad_keys += vm_tm_collapse(&c->t, c->fdead, Fu, nu, u, w);
   for (int i = 0; i < nu; i++)
     if (Fu[i] != f0 && Fu[i] != f1)
@@ -441,6 +535,7 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
   c.tol_abs = o.max_dev > 0 ? o.max_dev : 2.5e-4 * diag;
   c.tol_rel = o.max_dev_rel;
   c.thr = o.angle;
+  c.border_collapse = o.border_collapse;
   const size_t nv1 = (size_t)(c.nv > 0 ? c.nv : 1), nf1 = (size_t)c.nf;
   int st = VM_OK;
   c.t.tri = vm_alloc_array(ctx, 3 * nf1, sizeof *c.t.tri);
@@ -507,6 +602,7 @@ int vm_surface_cleanup(vm_mesh *m, vm_surface_features *f, const vm_cleanup_opts
         apply_flip(&c, best.a, best.b, best.dev);
         r.flips++;
       } else {
+        if (best.kind == 3) r.border_collapses++;
         apply_collapse(&c, best.a, best.b, best.dev);
         r.collapses++;
       }

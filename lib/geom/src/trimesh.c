@@ -40,9 +40,12 @@ int vm_tm_flip(vm_tm *t, int32_t a, int32_t b, int32_t cd[2]) {
 }
 
 int vm_tm_collapse(vm_tm *t, uint8_t *fdead, const int64_t *fu, int nu, int32_t u, int32_t w) {
-  int64_t f0 = vm_tm_he(t, u, w) / 3, f1 = vm_tm_he(t, w, u) / 3;
+  /* a border edge (u, w) has one face */
+  int64_t hu = vm_tm_he(t, u, w), hw = vm_tm_he(t, w, u);
+  int64_t f0 = hu >= 0 ? hu / 3 : -1, f1 = hw >= 0 ? hw / 3 : -1;
   for (int i = 0; i < nu; i++) vm_tm_keys(t, fu[i], 0);
-  fdead[f0] = fdead[f1] = 1;
+  if (f0 >= 0) fdead[f0] = 1;
+  if (f1 >= 0) fdead[f1] = 1;
   int dup = 0;
   for (int i = 0; i < nu; i++) {
     int64_t g = fu[i];

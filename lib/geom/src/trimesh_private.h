@@ -198,8 +198,8 @@ int vm_tm_flip_check(const vm_tm *t, const double *x, int32_t a, int32_t b, doub
 int vm_tm_flip(vm_tm *t, int32_t a, int32_t b, int32_t cd[2]);
 /* Collapse u onto w (the link condition checked by the caller): the faces
  * fu (nu: u's ring) lose u's directed edges, the two on the edge (u, w)
- * are marked in fdead, the others take w for u; the duplicate edges the
- * new faces met, as vm_tm_keys. u's own state is the caller's. */
+ * (one if it is a border edge) are marked in fdead, the others take w for u; the duplicate edges
+ * the new faces met, as vm_tm_keys. u's own state is the caller's. */
 int vm_tm_collapse(vm_tm *t, uint8_t *fdead, const int64_t *fu, int nu, int32_t u, int32_t w);
 /* The faces around v, in order (at most max; -1 if more). */
 int vm_tm_ring(const vm_tm *t, int32_t v, int64_t *out, int max);

@@ -14,6 +14,7 @@
 #include "varmesh/graded.h"
 #include "varmesh/ortho2d.h"
 #include "varmesh/repair.h"
+#include "varmesh/symmetry.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -83,6 +84,15 @@ typedef struct vm_surface_opts {
                                  at VM_SURFACE_WRAP_DEFAULT; 0: never */
   double wrap_offset;         /* how far outside the input the wrap lies, a fraction
                                  of alpha in (0, 1] (default VM_SURFACE_WRAP_OFFSET) */
+  vm_symmetry_opts symmetry;  /* half models (varmesh/symmetry.h): given 0 (default):
+                                 an open input whose border lies in one plane x, y or
+                                 z = C (or the plane its attribute symmetry_plane
+                                 names) is a half model; given 1: the plane is axis,
+                                 value. A half model is never wrapped nor closed: its
+                                 border stays open, in the plane bit for bit, through
+                                 every step (a feature line: its vertices slide along
+                                 it, its corners stay), and the result carries the
+                                 attribute symmetry_plane */
 } vm_surface_opts;
 
 /* The wrap's alpha over the bounding box's diagonal where the stage wraps
@@ -164,6 +174,16 @@ typedef struct vm_surface_summary {
   double deviation_feature_at[3];
   int64_t deviation_features; /* feature vertices measured */
   int64_t corners_moved;      /* input corners and cone points not kept bit for bit */
+  /* half models: the plane found (or given) on the input, its border vertices
+   * snapped onto it (vm_symmetry_detect); why not, for an open input */
+  vm_symmetry_report symmetry;
+  int symmetry_reoriented;    /* the half model was turned to face away from the
+                                 volume it bounds with the plane */
+  int64_t symmetry_border;    /* border vertices of the result (all in the plane) */
+  int64_t symmetry_resnapped; /* border vertices a step left off the plane by rounding
+                                 (within the tolerance), put back on it */
+  double symmetry_drift;      /* the farthest of them was that far off */
+  int64_t symmetry_off;       /* border vertices of the result farther off (0; a warning) */
 } vm_surface_summary;
 
 /* Run opts->step on the surface m (dim 3, triangles and/or quads) in
@@ -176,6 +196,8 @@ typedef struct vm_surface_summary {
  * adapted surface intersects itself or an element reversed, the vertices
  * there go back to where they were before the adaptation, with growing
  * rings of neighbours, until none is left (a warning).
+ * A half model (opts->symmetry, varmesh/symmetry.h) keeps its border open
+ * and in its plane bit for bit; summary->symmetry says what was found.
  * Returns VM_OK; VM_WARN_INVERTED if an element's orientation reversed
  * or triangles intersect after that (summary->adapt.flipped,
  * summary->self_intersections); VM_ERR_INTERRUPTED (the
@@ -183,7 +205,8 @@ typedef struct vm_surface_summary {
  * during the repair or the remeshing, which cannot stop half-way, the mesh
  * they made: the run ends after them); VM_ERR_ARG (not a
  * surface mesh, bad options), VM_ERR_FORMAT (what the repair refused, an
- * open surface the repair did not see: summary->open), VM_ERR_NOMEM,
+ * open surface the repair did not see: summary->open, a half model
+ * vm_symmetry_detect refused), VM_ERR_NOMEM,
  * VM_ERR_BACKEND, with the error text on the context. summary may be
  * NULL. */
 int vm_surface_run(vm_ctx *ctx, vm_mesh *m, const vm_surface_opts *opts,

@@ -19,12 +19,16 @@ extern "C" {
 #endif
 
 typedef struct vm_cleanup_opts {
-  double angle;       /* triangles with a smaller angle (degrees) are worked on (default 15) */
-  double max_dev;     /* a move may change the surface by at most this much (absolute;
-                         <= 0: 2.5e-4 of the bounding-box diagonal, the default) ... */
-  double max_dev_rel; /* ... and by at most this fraction of the edge it works on
-                         (default 0.05) */
-  int rounds;         /* passes over the bad triangles (default 20) */
+  double angle;        /* triangles with a smaller angle (degrees) are worked on (default 15) */
+  double max_dev;      /* a move may change the surface by at most this much (absolute;
+                          <= 0: 2.5e-4 of the bounding-box diagonal, the default) ... */
+  double max_dev_rel;  /* ... and by at most this fraction of the edge it works on
+                          (default 0.05) */
+  int rounds;          /* passes over the bad triangles (default 20) */
+  int border_collapse; /* 1: a border vertex that is no corner may also be collapsed onto
+                          its neighbour along the border, the border moving by at most the
+                          tolerances (a half model, whose border lies in its symmetry
+                          plane: it stays in it); default 0: border vertices stay */
 } vm_cleanup_opts;
 
 vm_cleanup_opts vm_cleanup_opts_default(void);
@@ -32,7 +36,8 @@ vm_cleanup_opts vm_cleanup_opts_default(void);
 typedef struct vm_cleanup_report {
   int64_t nv_in, nf_in, nv, nf;
   int64_t flips, collapses;
-  int64_t below_in, below; /* triangles with an angle below opts.angle */
+  int64_t border_collapses; /* of the collapses, along the border (opts border_collapse) */
+  int64_t below_in, below;  /* triangles with an angle below opts.angle */
   double min_angle_in, min_angle;
   /* the same, not counting the angles at corners of the features (where
    * the input's own corner angle bounds what any triangulation can do) */
