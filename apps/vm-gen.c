@@ -11,6 +11,7 @@
 #include "varmesh/shapes.h"
 #include "varmesh/rotcube.h"
 #include "varmesh/io.h"
+#include "varmesh/symmetry.h"
 
 /* "pi", "pi/2", "7pi/8", "3*pi/8", or a plain number. */
 static int parse_angle(const char *s, double *out) {
@@ -92,6 +93,11 @@ static const vm_opt opts[] = {
      "wing span, 0.35..2.5 times the length (default 0.9 L)", .lo = 1e-6, .hi = 1e6},
     {"--sweep", NULL, VM_OPT_DOUBLE, A(ao.sweep_deg), "D",
      "wing leading-edge sweep in degrees, 0..50 (default 28)", .lo = 0, .hi = 50},
+    {"--half", NULL, VM_OPT_FLAG, A(half), NULL,
+     "a half model instead: the aircraft cut by its symmetry plane y = 0 (vm_mesh_cut_plane, "
+     "the side y >= 0 kept), its open border exactly in the plane, which the mesh names "
+     "(attribute symmetry_plane)",
+     .ival = 1},
     {"--components", NULL, VM_OPT_FLAG, A(ao.tag_components), NULL,
      "add the int cell field 'component' (0 fuselage, 1-2 wings, 3-4 stabilizers, 5 fin)",
      .ival = 1},
@@ -165,14 +171,14 @@ int main(int argc, char **argv) {
     goto done;
   }
   int grc;
-  if (a.half && !sphere) {
-    rc = vm_cli_usage_error(&cli, "--half is for vm-gen sphere");
+  if (a.half && !sphere && !plane) {
+    rc = vm_cli_usage_error(&cli, "--half is for vm-gen sphere and vm-gen aircraft");
     goto done;
   }
   if (sphere && a.half) {
     grc = vm_mesh_create(cli.ctx, &m);
     if (grc == VM_OK) grc = vm_gen_hemisphere(m, a.radius, 2 << a.level);
-    if (grc == VM_OK) grc = vm_mesh_set_attr(m, VM_ATTR_SYMMETRY_PLANE, "z=0");
+    if (grc == VM_OK) grc = vm_mesh_set_symmetry_plane(m, 2, 0);
   } else if (sphere) {
     grc = vm_mesh_create(cli.ctx, &m);
     if (grc == VM_OK) grc = vm_gen_icosphere(m, NULL, a.radius, a.level, 0, NULL);
@@ -183,6 +189,8 @@ int main(int argc, char **argv) {
   } else {
     grc =
         plane ? vm_gen_aircraft(cli.ctx, &a.ao, &m) : vm_gen_rotated_cube(cli.ctx, &a.o, &m, NULL);
+    if (grc == VM_OK && plane && a.half && (grc = vm_mesh_cut_plane(m, 1, 0, 1, 0, NULL)) == VM_OK)
+      grc = vm_mesh_set_symmetry_plane(m, 1, 0);
   }
   if (grc < 0 || vm_mesh_write(cli.ctx, m, a.out, VM_FMT_AUTO, &a.wo) < 0) {
     rc = vm_cli_input_error(&cli, NULL);

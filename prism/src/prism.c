@@ -648,6 +648,15 @@ int vm_prism_create(vm_ctx *ctx, const vm_mesh *wall, const vm_prism_opts *opts,
   vm_prism_opts o = opts ? *opts : vm_prism_opts_default();
   int st = check_opts(ctx, &o);
   if (st) return st;
+  /* a wall that names its symmetry plane (the surface stage's output): that
+   * plane, unless the options ask otherwise */
+  int sax;
+  double sval;
+  if (o.symmetry_axis == 0 && (st = vm_mesh_get_symmetry_plane(wall, &sax, &sval)) != 0) {
+    if (st < 0) return st;
+    o.symmetry_axis = sax + 1;
+    o.symmetry_value = sval;
+  }
   int64_t nt = 0;
   for (int64_t e = 0; e < wall->ne; e++)
     nt += wall->etype[e] == VM_TRI ? 1 : wall->etype[e] == VM_QUAD ? 2 : 0;

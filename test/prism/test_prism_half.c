@@ -272,8 +272,8 @@ static void concentric(vm_ctx *ctx) {
   CHECK(bad == 0, "%lld faces on the plane not quads in it facing -z", (long long)bad);
   CHECK(ncell == r.prisms && ntri == 2 * r.wall_triangles, "cells %lld, triangles %lld",
         (long long)ncell, (long long)ntri);
-  const char *plane = vm_mesh_get_attr(res, VM_ATTR_SYMMETRY_PLANE);
-  CHECK(plane && !strcmp(plane, "z=0"), "attribute %s = %s", VM_ATTR_SYMMETRY_PLANE,
+  const char *plane = vm_mesh_get_attr(res, VM_SYMMETRY_PLANE_ATTR);
+  CHECK(plane && !strcmp(plane, "z=0"), "attribute %s = %s", VM_SYMMETRY_PLANE_ATTR,
         plane ? plane : "(none)");
   fill_half(ctx, res, 0);
   fill_half(ctx, res, 1);

@@ -584,7 +584,7 @@ typedef struct {
  * exactly two of its triangles; or a half model's, whose edges on one
  * triangle (its border, returned in *bed as nb pairs a -> b, in their
  * triangle's order) all lie in the symmetry plane (the input's attribute
- * VM_ATTR_SYMMETRY_PLANE, "y=0", or the plane x, y or z = const they all
+ * VM_SYMMETRY_PLANE_ATTR, "y=0", or the plane x, y or z = const they all
  * lie in, bit for bit): *sp, the layer on one side of it. */
 static int check_closed(vm_ctx *ctx, const vm_mesh *m, const envelope *E, sym_plane *sp,
                         int32_t **bed, int64_t *nb) {
@@ -640,12 +640,10 @@ static int check_closed(vm_ctx *ctx, const vm_mesh *m, const envelope *E, sym_pl
     b[2 * k] = E->fv[c];
     b[2 * k + 1] = E->fv[3 * (c / 3) + (c % 3 + 1) % 3];
   }
-  const char *a = vm_mesh_get_attr(m, VM_ATTR_SYMMETRY_PLANE);
   const char *axn = "xyz";
-  if (a && a[0] && strchr(axn, a[0]) && a[1] == '=') {
-    char *end = NULL;
-    sp->c = strtod(a + 2, &end);
-    sp->ax = end && end != a + 2 && !*end && isfinite(sp->c) ? (int)(strchr(axn, a[0]) - axn) : -1;
+  if (vm_mesh_get_symmetry_plane(m, &sp->ax, &sp->c) <= 0) {
+    vm_ctx_clear_error(ctx);
+    sp->ax = -1;
   }
   for (int x = 0; x < 3 && sp->ax < 0; x++) {
     int all = 1;

@@ -1,9 +1,60 @@
-/* lib/core/src/mirror.c: a half model and its mirror image as one mesh
- * (vm_mesh_mirror, varmesh/mesh.h). */
+/* lib/core/src/mirror.c: half models (varmesh/mesh.h): the symmetry plane
+ * as a mesh attribute and its syntax, and a half model and its mirror
+ * image as one mesh (vm_mesh_mirror). */
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "varmesh/mesh.h"
+
+int vm_axis_plane_parse(vm_ctx *ctx, const char *s, int *axis, double *value, int *side) {
+  const char *what = side ? "x=C, y=C or z=C, optionally :+ or :-" : "x=C, y=C or z=C";
+  if (!s) s = "";
+  int a = tolower((unsigned char)s[0]) - 'x';
+  if (a < 0 || a > 2 || s[1] != '=')
+    return ctx ? vm_error(ctx, VM_ERR_ARG, "'%s': expected %s", s, what) : VM_ERR_ARG;
+  char *end = NULL;
+  double c = strtod(s + 2, &end);
+  int sd = 0;
+  if (end != s + 2 && side && end[0] == ':' && (end[1] == '+' || end[1] == '-') && !end[2]) {
+    sd = end[1] == '+' ? 1 : -1;
+    end += 2;
+  }
+  if (end == s + 2 || *end || !isfinite(c))
+    return ctx ? vm_error(ctx, VM_ERR_ARG, "'%s': expected %s", s, what) : VM_ERR_ARG;
+  *axis = a;
+  *value = c;
+  if (side) *side = sd;
+  return VM_OK;
+}
+
+char *vm_axis_plane_format(int axis, double value, char *buf, size_t n) {
+  char ax = (char)('x' + (axis >= 0 && axis <= 2 ? axis : 0));
+  for (int prec = 1; prec <= 17; prec++) {
+    snprintf(buf, n, "%c=%.*g", ax, prec, value == 0 ? 0.0 : value);
+    if (strtod(buf + 2, NULL) == value) break;
+  }
+  return buf;
+}
+
+int vm_mesh_get_symmetry_plane(const vm_mesh *m, int *axis, double *value) {
+  const char *s = vm_mesh_get_attr(m, VM_SYMMETRY_PLANE_ATTR);
+  if (!s) return 0;
+  if (vm_axis_plane_parse(NULL, s, axis, value, NULL))
+    return vm_error(m->ctx, VM_ERR_FORMAT, "attribute %s = '%s': expected x=C, y=C or z=C",
+                    VM_SYMMETRY_PLANE_ATTR, s);
+  return 1;
+}
+
+int vm_mesh_set_symmetry_plane(vm_mesh *m, int axis, double value) {
+  if (axis < 0 || axis > 2 || !isfinite(value))
+    return vm_error(m->ctx, VM_ERR_ARG, "symmetry plane: axis %d, value %g", axis, value);
+  char buf[64];
+  return vm_mesh_set_attr(m, VM_SYMMETRY_PLANE_ATTR, vm_axis_plane_format(axis, value, buf, 64));
+}
+
 
 /* The corner order of each type's mirror image that keeps its orientation
  * (a reflection turns it): the image of corner i is corner perm[i]. */
@@ -23,16 +74,15 @@ static const int *turned(int type) {
 
 int vm_mesh_mirror(vm_ctx *ctx, const vm_mesh *m, vm_mesh **out) {
   *out = NULL;
-  const char *a = vm_mesh_get_attr(m, VM_ATTR_SYMMETRY_PLANE);
-  const char *axn = "xyz", *ax_at = a && a[0] ? strchr(axn, a[0]) : NULL;
-  char *end = NULL;
-  double c = ax_at && a[1] == '=' ? strtod(a + 2, &end) : 0;
-  if (!ax_at || a[1] != '=' || !end || end == a + 2 || *end)
+  int ax;
+  double c;
+  int got = vm_mesh_get_symmetry_plane(m, &ax, &c);
+  if (got < 0) return got;
+  if (!got)
     return vm_error(ctx, VM_ERR_ARG,
                     "mirror: the mesh names no symmetry plane (attribute '%s' = 'y=0' or the "
                     "like): it is not a half model",
-                    VM_ATTR_SYMMETRY_PLANE);
-  int ax = (int)(ax_at - axn);
+                    VM_SYMMETRY_PLANE_ATTR);
   int64_t nv = m->nv, ne = m->ne;
   /* the image of vertex v: itself in the plane, else nv + (its rank
    * among those off it) */
@@ -107,7 +157,7 @@ int vm_mesh_mirror(vm_ctx *ctx, const vm_mesh *m, vm_mesh **out) {
   }
   vm_free(ctx, src);
   for (int i = 0; i < m->nattr && !st; i++)
-    if (strcmp(m->attrs[i].key, VM_ATTR_SYMMETRY_PLANE))
+    if (strcmp(m->attrs[i].key, VM_SYMMETRY_PLANE_ATTR))
       st = vm_mesh_set_attr(o, m->attrs[i].key, m->attrs[i].value);
   if (st) goto fail;
   vm_free(ctx, img);

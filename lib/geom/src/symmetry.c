@@ -11,51 +11,6 @@
 #include "trimesh_private.h"
 #include "varmesh/surface_mesh.h"
 
-int vm_axis_plane_parse(vm_ctx *ctx, const char *s, int *axis, double *value, int *side) {
-  const char *what = side ? "x=C, y=C or z=C, optionally :+ or :-" : "x=C, y=C or z=C";
-  if (!s) s = "";
-  int a = tolower((unsigned char)s[0]) - 'x';
-  if (a < 0 || a > 2 || s[1] != '=')
-    return ctx ? vm_error(ctx, VM_ERR_ARG, "'%s': expected %s", s, what) : VM_ERR_ARG;
-  char *end = NULL;
-  double c = strtod(s + 2, &end);
-  int sd = 0;
-  if (end != s + 2 && side && end[0] == ':' && (end[1] == '+' || end[1] == '-') && !end[2]) {
-    sd = end[1] == '+' ? 1 : -1;
-    end += 2;
-  }
-  if (end == s + 2 || *end || !isfinite(c))
-    return ctx ? vm_error(ctx, VM_ERR_ARG, "'%s': expected %s", s, what) : VM_ERR_ARG;
-  *axis = a;
-  *value = c;
-  if (side) *side = sd;
-  return VM_OK;
-}
-
-char *vm_axis_plane_format(int axis, double value, char *buf, size_t n) {
-  char ax = (char)('x' + (axis >= 0 && axis <= 2 ? axis : 0));
-  for (int prec = 1; prec <= 17; prec++) {
-    snprintf(buf, n, "%c=%.*g", ax, prec, value == 0 ? 0.0 : value);
-    if (strtod(buf + 2, NULL) == value) break;
-  }
-  return buf;
-}
-
-int vm_mesh_get_symmetry_plane(const vm_mesh *m, int *axis, double *value) {
-  const char *s = vm_mesh_get_attr(m, VM_SYMMETRY_PLANE_ATTR);
-  if (!s) return 0;
-  if (vm_axis_plane_parse(NULL, s, axis, value, NULL))
-    return vm_error(m->ctx, VM_ERR_FORMAT, "attribute %s = '%s': expected x=C, y=C or z=C",
-                    VM_SYMMETRY_PLANE_ATTR, s);
-  return 1;
-}
-
-int vm_mesh_set_symmetry_plane(vm_mesh *m, int axis, double value) {
-  if (axis < 0 || axis > 2 || !isfinite(value))
-    return vm_error(m->ctx, VM_ERR_ARG, "symmetry plane: axis %d, value %g", axis, value);
-  char buf[64];
-  return vm_mesh_set_attr(m, VM_SYMMETRY_PLANE_ATTR, vm_axis_plane_format(axis, value, buf, 64));
-}
 
 /* ---- the cut ---- */
 

@@ -439,12 +439,10 @@ static int near_wall_slices(vm_report *r, const char *prefix, const char *label,
   }
   /* a half model: its symmetry plane, the layer's cells and the tets on it
    * (cut a hair inside the domain) */
-  const char *sp = vm_mesh_get_attr(m, VM_ATTR_SYMMETRY_PLANE);
-  const char *axn = "xyz", *at = sp && sp[0] ? strchr(axn, sp[0]) : NULL;
-  char *end = NULL;
-  double c = at && sp[1] == '=' ? strtod(sp + 2, &end) : NAN;
-  if (st >= 0 && at && end && end != sp + 2 && !*end && isfinite(c)) {
-    int ax = (int)(at - axn);
+  const char *axn = "xyz";
+  int ax;
+  double c;
+  if (st >= 0 && vm_mesh_get_symmetry_plane(m, &ax, &c) > 0) {
     double side = hi[ax] - c >= c - lo[ax] ? 1 : -1;
     double v = c + side * 1e-7 * ext;
     snprintf(name, sizeof name, "%ssymmetry", prefix);

@@ -135,16 +135,39 @@ int vm_mesh_remove_field(vm_mesh *m, const char *name, int location);
 /* Items of a field: m->nv or m->ne. */
 int64_t vm_field_count(const vm_mesh *m, const vm_field *f);
 
-/* A half model's symmetry plane, a mesh attribute the stages write and
- * read: "y=0" (the axis x, y or z, '=', the coordinate, 17 significant
- * digits): the model is the mirror image's other half, its open boundary
- * in that plane. */
-#define VM_ATTR_SYMMETRY_PLANE "symmetry_plane"
+/* ---- half models: a symmetry plane x, y or z = C ---- */
+/* The key of the mesh attribute that names a half model's symmetry plane;
+ * its value is "x=C", "y=C" or "z=C", C printed so that strtod gives the
+ * same double back ("y=0", "z=-1.25"). */
+#define VM_SYMMETRY_PLANE_ATTR "symmetry_plane"
+
+/* Vertices within this fraction of the bounding box's diagonal of the
+ * plane are on it (the cut snaps them; the surface stage takes a border
+ * this close as planar and snaps it). */
+#define VM_SYMMETRY_TOL_REL 1e-9
+
+/* Parse an axis-aligned plane "x=C", "y=C" or "z=C" (the axis letter in
+ * either case, C a finite number), with a side after it, ":+" or ":-",
+ * when side is not NULL (no suffix: *side = 0). Returns VM_OK, or
+ * VM_ERR_ARG with a message on ctx (ctx may be NULL). */
+int vm_axis_plane_parse(vm_ctx *ctx, const char *s, int *axis, double *value, int *side);
+
+/* "y=0" into buf (n bytes, at least 40): the shortest %g that gives the
+ * same double back. Returns buf. */
+char *vm_axis_plane_format(int axis, double value, char *buf, size_t n);
+
+/* The symmetry plane m carries (its attribute VM_SYMMETRY_PLANE_ATTR):
+ * 1 and *axis (0, 1, 2), *value; 0 if it has none; VM_ERR_FORMAT (with a
+ * message) if the attribute is malformed. */
+int vm_mesh_get_symmetry_plane(const vm_mesh *m, int *axis, double *value);
+/* Set (replace) that attribute. VM_OK, VM_ERR_ARG, VM_ERR_NOMEM. */
+int vm_mesh_set_symmetry_plane(vm_mesh *m, int axis, double value);
+
 /* Attributes. set replaces an existing key; get returns NULL if absent. */
 int vm_mesh_set_attr(vm_mesh *m, const char *key, const char *value);
 const char *vm_mesh_get_attr(const vm_mesh *m, const char *key);
 
-/* A half model (attribute VM_ATTR_SYMMETRY_PLANE) and its mirror image in
+/* A half model (attribute VM_SYMMETRY_PLANE_ATTR) and its mirror image in
  * that plane as one mesh: the vertices in the plane shared (bit for bit:
  * those whose coordinate across it is the plane's), the others and every
  * element doubled (the image's corners reordered so that it keeps its

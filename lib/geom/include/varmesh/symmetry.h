@@ -16,32 +16,9 @@
 extern "C" {
 #endif
 
-/* The key of the mesh attribute that names a half model's symmetry plane;
- * its value is "x=C", "y=C" or "z=C", C printed so that strtod gives the
- * same double back ("y=0", "z=-1.25"). */
-#define VM_SYMMETRY_PLANE_ATTR "symmetry_plane"
-
-/* Vertices within this fraction of the bounding box's diagonal of the
- * plane are on it (the cut snaps them; the surface stage takes a border
- * this close as planar and snaps it). */
-#define VM_SYMMETRY_TOL_REL 1e-9
-
-/* Parse an axis-aligned plane "x=C", "y=C" or "z=C" (the axis letter in
- * either case, C a finite number), with a side after it, ":+" or ":-",
- * when side is not NULL (no suffix: *side = 0). Returns VM_OK, or
- * VM_ERR_ARG with a message on ctx (ctx may be NULL). */
-int vm_axis_plane_parse(vm_ctx *ctx, const char *s, int *axis, double *value, int *side);
-
-/* "y=0" into buf (n bytes, at least 40): the shortest %g that gives the
- * same double back. Returns buf. */
-char *vm_axis_plane_format(int axis, double value, char *buf, size_t n);
-
-/* The symmetry plane m carries (its attribute VM_SYMMETRY_PLANE_ATTR):
- * 1 and *axis (0, 1, 2), *value; 0 if it has none; VM_ERR_FORMAT (with a
- * message) if the attribute is malformed. */
-int vm_mesh_get_symmetry_plane(const vm_mesh *m, int *axis, double *value);
-/* Set (replace) that attribute. VM_OK, VM_ERR_ARG, VM_ERR_NOMEM. */
-int vm_mesh_set_symmetry_plane(vm_mesh *m, int axis, double value);
+/* The plane's attribute (VM_SYMMETRY_PLANE_ATTR), its syntax
+ * (vm_axis_plane_parse, vm_axis_plane_format) and a half model's mirror
+ * image (vm_mesh_mirror) are in varmesh/mesh.h. */
 
 typedef struct vm_cut_report {
   int axis;

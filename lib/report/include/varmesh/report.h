@@ -136,7 +136,7 @@ int vm_report_slice_window(vm_report *r, const char *name, const char *caption, 
  * has it: prism layers), for a mesh out to a far field (boundaries named
  * "wall" and "farfield") the same two zoomed on the wall ("<prefix>slice-near",
  * "<prefix>slice-near-layer"; a half model, its symmetry plane named in the
- * attribute VM_ATTR_SYMMETRY_PLANE, also the cells on that plane,
+ * attribute VM_SYMMETRY_PLANE_ATTR, also the cells on that plane,
  * "<prefix>symmetry"), and a rendered
  * surface if there are triangles or quads in 3D, coloured by
  * `surface_field` (NULL: "mean_curvature_filtered" or else "mean_curvature"
