@@ -305,8 +305,9 @@ static void side_quad(const double *x, int i, double *f) {
 }
 
 /* The largest OpenFOAM skewness over the faces of triangle t's cells (every
- * layer) seen from t: the faces between layers, the outer face, and the
- * side faces shared with the edge neighbours' cells (t's cell the owner).
+ * layer) seen from t: the faces between layers, the outer face, the
+ * side faces shared with the edge neighbours' cells (t's cell the owner)
+ * and a half model's side faces on its symmetry plane.
  * cc: every cell's centre (cell_centre), or NULL. With o70 (not NULL), the
  * same pass also adds to *o70 the faces beyond 70 degrees of OpenFOAM's
  * non-orthogonality and lowers *cmin to their least cosine, each face of
@@ -345,9 +346,13 @@ static double tri_faces(const vm_prism *p, int64_t t, const double *cc, int64_t 
       worst = q > worst ? q : worst;
     }
     for (int i = 0; i < 3; i++) {
-      if (nb[i] < 0) continue;
       double f[12];
       side_quad(x, i, f);
+      if (nb[i] < 0) { /* a half model's face on its symmetry plane: a boundary face */
+        double q = pr_foam_boundary_skew(f, 4, cp);
+        worst = q > worst ? q : worst;
+        continue;
+      }
       cell_centre(p, cc, nb[i], k, cn);
       double q = pr_foam_skew(f, 4, cp, cn);
       worst = q > worst ? q : worst;

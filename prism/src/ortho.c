@@ -1045,6 +1045,11 @@ int pr_foam_figures(const vm_prism *p, const double *L, int nlev, int64_t *over7
        * triangles */
       int64_t u = f == 1 ? t : f >= 2 ? nbt[3 * t + f - 2] : -1;
       int j = f == 1 ? k + 1 : k;
+      if (u < 0 && f >= 2) { /* a half model's face on its symmetry plane */
+        double sk = pr_foam_boundary_skew(y, n, cc + 3 * c);
+        skew = sk > skew ? sk : skew;
+        continue;
+      }
       if (u < 0 || (f >= 2 && u < t)) continue;
       const double *cn = cc + 3 * (u * nl + j);
       double cs = pr_foam_ortho_cos(y, n, cc + 3 * c, cn);

@@ -286,7 +286,7 @@ int vm_prism_result(vm_prism *p, vm_mesh **out) {
       (st = vm_mesh_set_attr(m, "gmsh:physical_name:3:3", "layer")))
     goto fail;
   if (p->sym_ax >= 0 && ((st = vm_mesh_set_attr(m, "gmsh:physical_name:2:4", "symmetry")) ||
-                          (st = vm_mesh_set_symmetry_plane(m, p->sym_ax, p->sym_val))))
+                         (st = vm_mesh_set_symmetry_plane(m, p->sym_ax, p->sym_val))))
     goto fail;
   vm_free(ctx, vid);
   *out = m;

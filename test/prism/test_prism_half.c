@@ -152,8 +152,8 @@ static void fill_half(vm_ctx *ctx, const vm_mesh *layer, int sphere) {
           "%s: whole: %lld symmetry faces, %lld boundary faces (the half's %lld off the plane, "
           "twice)",
           name, (long long)wsym, (long long)wb, (long long)(nb - nsymf));
-    CHECK(chk_corner_inverted(whole) == 0 && tneg == 0, "%s: whole: every cell positive (%lld tets)",
-          name, (long long)tneg);
+    CHECK(chk_corner_inverted(whole) == 0 && tneg == 0,
+          "%s: whole: every cell positive (%lld tets)", name, (long long)tneg);
     vm_free(ctx, wfv);
     vm_free(ctx, wnv);
   }

@@ -55,7 +55,6 @@ int vm_mesh_set_symmetry_plane(vm_mesh *m, int axis, double value) {
   return vm_mesh_set_attr(m, VM_SYMMETRY_PLANE_ATTR, vm_axis_plane_format(axis, value, buf, 64));
 }
 
-
 /* The corner order of each type's mirror image that keeps its orientation
  * (a reflection turns it): the image of corner i is corner perm[i]. */
 static const int *turned(int type) {

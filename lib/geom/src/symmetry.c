@@ -11,7 +11,6 @@
 #include "trimesh_private.h"
 #include "varmesh/surface_mesh.h"
 
-
 /* ---- the cut ---- */
 
 typedef struct {
