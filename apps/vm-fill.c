@@ -90,7 +90,10 @@ static const vm_cli_spec spec = {
     "named 'farfield'. Then the tets next to the layer are optimized by the\n"
     "variational method (shape measure; the layer and the far field fixed), and\n"
     "where a face or tet is near the limits of OpenFOAM's checkMesh, its vertices\n"
-    "move (the finite-volume relief).\n",
+    "move (the finite-volume relief). A half model's layer (its outer surface open,\n"
+    "its border in a plane x, y or z = const: vm-prism's output on a cut wall) is\n"
+    "filled in its half: a half far field and the symmetry plane between it and the\n"
+    "layer, named 'symmetry' with the layer's faces there.\n",
     opts,
     "exit: 0 ok; 1 bad input (no envelope, quadrilaterals on it, a far field cutting the\n"
     "layer), Gmsh failing or not keeping the envelope, or I/O; 2 usage; 4 interrupted\n"
