@@ -126,9 +126,12 @@ static double tri_skew(const vm_prism *p, const double *L, int64_t t, int nl) {
         sk = pr_foam_boundary_skew(y, n, cp);
       } else {
         int64_t u = f <= 1 ? t : pr_tri_across(p, t, f - 2);
-        if (u < 0) continue;
-        centre(p, L, u, f == 0 ? k - 1 : f == 1 ? k + 1 : k, cn);
-        sk = pr_foam_skew(y, n, cp, cn);
+        if (u < 0) { /* a half model's face on its symmetry plane */
+          sk = pr_foam_boundary_skew(y, n, cp);
+        } else {
+          centre(p, L, u, f == 0 ? k - 1 : f == 1 ? k + 1 : k, cn);
+          sk = pr_foam_skew(y, n, cp, cn);
+        }
       }
       worst = sk > worst ? sk : worst;
     }

@@ -255,8 +255,9 @@ static int eval_around(const vm_prism *p, const hood *h, double c0, const double
   for (int c = 0; c < h->n; c++)
     for (int f = 0; f < 5; f++) {
       if (h->nb[c][f] == -1) {
-        /* the wall and the outer surface: their skewness only */
-        if (full && f < 2) {
+        /* the wall, the outer surface and a half model's faces on its
+         * symmetry plane: their skewness only */
+        if (full) {
           double y[12];
           int n = face_of(x[c], f, y);
           double s = pr_foam_boundary_skew(y, n, cc[c]);
