@@ -324,6 +324,54 @@ static void eval_flip(const cmesh *c, int32_t a, int32_t b, move *mv) {
 
 static void eval_collapse_border(cmesh *c, int32_t u, int32_t w, move *mv);
 
+/* u collapsed onto w, judged on u's faces but f0 and f1 (those that go):
+ * none turned by 60 degrees or more, none moved beyond the tolerance
+ * (the deviation from dev0 up); if so, mv becomes the move of `kind`
+ * with the smallest angles of those faces before and after and their
+ * counts below the threshold. */
+static void judge_collapse(cmesh *c, int32_t u, int32_t w, const int64_t *Fu, int nu, int64_t f0,
+                           int64_t f1, double dev0, int kind, move *mv) {
+  const double *x = c->x;
+  double uw[3];
+  vm_sub3(x + 3 * (int64_t)u, x + 3 * (int64_t)w, uw);
+  double newmin = 180, dev = dev0;
+  int newbad = 0;
+  for (int i = 0; i < nu; i++) {
+    int64_t g = Fu[i];
+    if (g == f0 || g == f1) continue;
+    int32_t nt[3];
+    memcpy(nt, c->t.tri + 3 * g, sizeof nt);
+    double no[3], nn[3];
+    tri_normal(x, nt[0], nt[1], nt[2], no);
+    nt[vm_tm_index(nt, u)] = w;
+    tri_normal(x, nt[0], nt[1], nt[2], nn);
+    if (cos_between(no, nn) < 0.5) return;
+    double d = fabs(vm_dot3(uw, nn)) / vm_norm3(nn), lmax = 0;
+    for (int j = 0; j < 3; j++) {
+      double l = vm_dist3(x + 3 * (int64_t)nt[j], x + 3 * (int64_t)nt[(j + 1) % 3]);
+      if (l > lmax) lmax = l;
+    }
+    d += c->err[u] > c->err[w] ? c->err[u] : c->err[w];
+    if (d > tol_for(c, lmax)) return;
+    if (d > dev) dev = d;
+    double a = tri_min_deg(x, nt[0], nt[1], nt[2]);
+    if (a < newmin) newmin = a;
+    newbad += a < c->thr;
+  }
+  /* the faces that change: u's (w's others stay as they are, so the
+   * smallest angle of the whole surface cannot fall if these improve) */
+  int oldbad = 0;
+  double oldmin = faces_min(c, Fu, nu, &oldbad);
+  mv->kind = kind;
+  mv->a = u;
+  mv->b = w;
+  mv->oldmin = oldmin;
+  mv->newmin = newmin;
+  mv->oldbad = oldbad;
+  mv->newbad = newbad;
+  mv->dev = dev;
+}
+
 /* collapse u onto w (u goes away, w stays where it is) */
 static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
   mv->kind = 0;
@@ -354,47 +402,7 @@ static void eval_collapse(cmesh *c, int32_t u, int32_t w, move *mv) {
     }
   if (common != 2 || c0 == d0) return;
   if (ku < 3 || kw < 3) return;
-  const double *x = c->x;
-  double uw[3];
-  vm_sub3(x + 3 * (int64_t)u, x + 3 * (int64_t)w, uw);
-  double newmin = 180, dev = 0;
-  int newbad = 0;
-  for (int i = 0; i < nu; i++) {
-    int64_t g = Fu[i];
-    if (g == f0 || g == f1) continue;
-    int32_t nt[3];
-    memcpy(nt, c->t.tri + 3 * g, sizeof nt);
-    double no[3], nn[3];
-    tri_normal(x, nt[0], nt[1], nt[2], no);
-    nt[vm_tm_index(nt, u)] = w;
-    tri_normal(x, nt[0], nt[1], nt[2], nn);
-    if (cos_between(no, nn) < 0.5) return;
-    double ln = vm_norm3(nn);
-    double d = fabs(vm_dot3(uw, nn)) / ln;
-    double lmax = 0;
-    for (int j = 0; j < 3; j++) {
-      double l = vm_dist3(x + 3 * (int64_t)nt[j], x + 3 * (int64_t)nt[(j + 1) % 3]);
-      if (l > lmax) lmax = l;
-    }
-    d += c->err[u] > c->err[w] ? c->err[u] : c->err[w];
-    if (d > tol_for(c, lmax)) return;
-    if (d > dev) dev = d;
-    double a = tri_min_deg(x, nt[0], nt[1], nt[2]);
-    if (a < newmin) newmin = a;
-    newbad += a < c->thr;
-  }
-  /* the faces that change: u's (w's others stay as they are, so the
-   * smallest angle of the whole surface cannot fall if these improve) */
-  int oldbad = 0;
-  double oldmin = faces_min(c, Fu, nu, &oldbad);
-  mv->kind = 2;
-  mv->a = u;
-  mv->b = w;
-  mv->oldmin = oldmin;
-  mv->newmin = newmin;
-  mv->oldbad = oldbad;
-  mv->newbad = newbad;
-  mv->dev = dev;
+  judge_collapse(c, u, w, Fu, nu, f0, f1, 0, 2, mv);
 }
 
 /* The other end p of u's border edge that is not (u, w), or -1. */
@@ -441,42 +449,7 @@ static void eval_collapse_border(cmesh *c, int32_t u, int32_t w, move *mv) {
   double q[3] = {pu[0] - s * pw[0], pu[1] - s * pw[1], pu[2] - s * pw[2]};
   double bdev = vm_norm3(q) + (c->err[u] > c->err[w] ? c->err[u] : c->err[w]);
   if (bdev > tol_for(c, sqrt(l2))) return;
-  double uw[3];
-  vm_sub3(x + 3 * (int64_t)u, x + 3 * (int64_t)w, uw);
-  double newmin = 180, dev = bdev;
-  int newbad = 0;
-  for (int i = 0; i < nu; i++) {
-    int64_t g = Fu[i];
-    if (g == f0) continue;
-    int32_t nt[3];
-    memcpy(nt, c->t.tri + 3 * g, sizeof nt);
-    double no[3], nn[3];
-    tri_normal(x, nt[0], nt[1], nt[2], no);
-    nt[vm_tm_index(nt, u)] = w;
-    tri_normal(x, nt[0], nt[1], nt[2], nn);
-    if (cos_between(no, nn) < 0.5) return;
-    double d = fabs(vm_dot3(uw, nn)) / vm_norm3(nn), lmax = 0;
-    for (int j = 0; j < 3; j++) {
-      double l = vm_dist3(x + 3 * (int64_t)nt[j], x + 3 * (int64_t)nt[(j + 1) % 3]);
-      if (l > lmax) lmax = l;
-    }
-    d += c->err[u] > c->err[w] ? c->err[u] : c->err[w];
-    if (d > tol_for(c, lmax)) return;
-    if (d > dev) dev = d;
-    double a = tri_min_deg(x, nt[0], nt[1], nt[2]);
-    if (a < newmin) newmin = a;
-    newbad += a < c->thr;
-  }
-  int oldbad = 0;
-  double oldmin = faces_min(c, Fu, nu, &oldbad);
-  mv->kind = 3;
-  mv->a = u;
-  mv->b = w;
-  mv->oldmin = oldmin;
-  mv->newmin = newmin;
-  mv->oldbad = oldbad;
-  mv->newbad = newbad;
-  mv->dev = dev;
+  judge_collapse(c, u, w, Fu, nu, f0, -1, bdev, 3, mv);
 }
 
 static void raise_err(cmesh *c, int32_t v, double e) {
